@@ -1,0 +1,2 @@
+//! The `flatland` command line.
+fn main() {}
