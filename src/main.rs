@@ -1,2 +1,37 @@
-//! The `flatland` command line.
-fn main() {}
+//! The `flatland` command line: one module per subcommand in `src/cmd/`.
+
+use anyhow::Result;
+use clap::{Parser, Subcommand};
+
+mod cmd;
+
+/// Learn the Flatland radiosity kernel with supervised growing cell structures (Bohn 1996).
+#[derive(Parser)]
+#[command(name = "flatland", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Validate a scene file and print a summary.
+    Check(cmd::check::Args),
+    /// Evaluate the exact kernel k(s,t) (or zeta with --weighted) on an RxR grid, to CSV or PNG.
+    Kernel(cmd::kernel::Args),
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let result: Result<()> = match cli.command {
+        Some(Command::Check(args)) => cmd::check::run(&args),
+        Some(Command::Kernel(args)) => cmd::kernel::run(&args),
+        None => cmd::default_job(),
+    };
+    if let Err(err) = result {
+        // One line, the whole cause chain, no backtrace.
+        let chain: Vec<String> = err.chain().map(|c| c.to_string()).collect();
+        eprintln!("error: {}", chain.join(": "));
+        std::process::exit(1);
+    }
+}
