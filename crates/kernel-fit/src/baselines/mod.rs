@@ -1,0 +1,1 @@
+//! Baselines the SGCS fit is compared against (filled in by the benchmark issue).
