@@ -1,0 +1,305 @@
+//! Spatial index over the cells' positions: a bounding-volume k-d tree with conservative bounds.
+//!
+//! The tree is built by median splits along the widest axis. Between rebuilds it is kept
+//! *conservative*, never exact: when a cell moves, its leaf's box and the boxes above it grow to
+//! contain the new position; when a cell's width `δ_c` grows, the nodes' `max_width` grow. Boxes and
+//! widths never shrink until the next rebuild, so pruning with them never drops a cell that
+//! belongs to a result: queries are exact, only their cost degrades, and a periodic rebuild
+//! restores it. Results never depend on the tree's shape (callers sort by cell id), so when and
+//! how the tree is rebuilt cannot change a network's behaviour.
+
+const LEAF_SIZE: usize = 8;
+const NONE: u32 = u32::MAX;
+
+#[derive(Clone, Debug)]
+enum Kind {
+    Inner { left: u32, right: u32 },
+    Leaf { cells: Vec<u32> },
+}
+
+#[derive(Clone, Debug)]
+struct Node {
+    parent: u32,
+    max_width: f64,
+    kind: Kind,
+}
+
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Index {
+    n: usize,
+    nodes: Vec<Node>,
+    /// Per node `2n` values: lower corner then upper corner.
+    bounds: Vec<f64>,
+    leaf_of: Vec<u32>,
+    built_len: usize,
+    steps_since_build: u64,
+}
+
+impl Index {
+    /// Builds the tree over all cells.
+    pub(crate) fn build(n: usize, pos: &[f64], width: &[f64]) -> Index {
+        let len = width.len();
+        let mut index = Index {
+            n,
+            nodes: Vec::with_capacity(2 * len / LEAF_SIZE + 2),
+            bounds: Vec::new(),
+            leaf_of: vec![NONE; len],
+            built_len: len,
+            steps_since_build: 0,
+        };
+        let mut ids: Vec<u32> = (0..len as u32).collect();
+        index.build_node(&mut ids, NONE, pos, width);
+        index
+    }
+
+    fn build_node(&mut self, ids: &mut [u32], parent: u32, pos: &[f64], width: &[f64]) -> u32 {
+        let n = self.n;
+        let me = self.nodes.len() as u32;
+        let mut lo = vec![f64::INFINITY; n];
+        let mut hi = vec![f64::NEG_INFINITY; n];
+        let mut max_width = 0.0f64;
+        for &c in ids.iter() {
+            let p = &pos[c as usize * n..(c as usize + 1) * n];
+            for d in 0..n {
+                lo[d] = lo[d].min(p[d]);
+                hi[d] = hi[d].max(p[d]);
+            }
+            max_width = max_width.max(width[c as usize]);
+        }
+        self.bounds.extend_from_slice(&lo);
+        self.bounds.extend_from_slice(&hi);
+        self.nodes.push(Node {
+            parent,
+            max_width,
+            kind: Kind::Leaf { cells: Vec::new() },
+        });
+        if ids.len() <= LEAF_SIZE {
+            for &c in ids.iter() {
+                self.leaf_of[c as usize] = me;
+            }
+            self.nodes[me as usize].kind = Kind::Leaf {
+                cells: ids.to_vec(),
+            };
+            return me;
+        }
+        let axis = (0..n)
+            .max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b])))
+            .unwrap_or(0);
+        let mid = ids.len() / 2;
+        ids.select_nth_unstable_by(mid, |&a, &b| {
+            pos[a as usize * n + axis]
+                .total_cmp(&pos[b as usize * n + axis])
+                .then(a.cmp(&b))
+        });
+        let (left_ids, right_ids) = ids.split_at_mut(mid);
+        let left = self.build_node(left_ids, me, pos, width);
+        let right = self.build_node(right_ids, me, pos, width);
+        self.nodes[me as usize].kind = Kind::Inner { left, right };
+        me
+    }
+
+    /// Whether the tree has degraded enough (growth or drift) to be worth rebuilding.
+    pub(crate) fn wants_rebuild(&self, len: usize) -> bool {
+        len > self.built_len + self.built_len / 4 + 8
+            || self.steps_since_build > 1_000 + 8 * self.built_len as u64
+    }
+
+    pub(crate) fn tick(&mut self) {
+        self.steps_since_build += 1;
+    }
+
+    fn lo(&self, node: u32) -> &[f64] {
+        let k = node as usize * 2 * self.n;
+        &self.bounds[k..k + self.n]
+    }
+
+    fn hi(&self, node: u32) -> &[f64] {
+        let k = node as usize * 2 * self.n;
+        &self.bounds[k + self.n..k + 2 * self.n]
+    }
+
+    /// Squared distance from `x` to the node's box.
+    fn box_dist_sq(&self, node: u32, x: &[f64]) -> f64 {
+        let (lo, hi) = (self.lo(node), self.hi(node));
+        let mut s = 0.0;
+        for d in 0..self.n {
+            let v = if x[d] < lo[d] {
+                lo[d] - x[d]
+            } else if x[d] > hi[d] {
+                x[d] - hi[d]
+            } else {
+                0.0
+            };
+            s += v * v;
+        }
+        s
+    }
+
+    /// Grows the boxes from `c`'s leaf upwards so they contain `p` (the cell's new position).
+    pub(crate) fn moved(&mut self, c: usize, p: &[f64]) {
+        let n = self.n;
+        let mut node = self.leaf_of[c];
+        while node != NONE {
+            let k = node as usize * 2 * n;
+            let mut grew = false;
+            for d in 0..n {
+                if p[d] < self.bounds[k + d] {
+                    self.bounds[k + d] = p[d];
+                    grew = true;
+                }
+                if p[d] > self.bounds[k + n + d] {
+                    self.bounds[k + n + d] = p[d];
+                    grew = true;
+                }
+            }
+            if !grew {
+                break; // every ancestor's box contains this one
+            }
+            node = self.nodes[node as usize].parent;
+        }
+    }
+
+    /// Raises `max_width` from `c`'s leaf upwards to at least `w`.
+    pub(crate) fn widened(&mut self, c: usize, w: f64) {
+        let mut node = self.leaf_of[c];
+        while node != NONE && self.nodes[node as usize].max_width < w {
+            self.nodes[node as usize].max_width = w;
+            node = self.nodes[node as usize].parent;
+        }
+    }
+
+    /// Adds the new cell `c` (its id is the next one) to the leaf of cell `near`.
+    pub(crate) fn insert(&mut self, c: usize, near: usize, p: &[f64], w: f64) {
+        debug_assert_eq!(c, self.leaf_of.len());
+        let leaf = self.leaf_of[near];
+        self.leaf_of.push(leaf);
+        if let Kind::Leaf { cells } = &mut self.nodes[leaf as usize].kind {
+            cells.push(c as u32);
+        }
+        self.moved(c, p);
+        self.widened(c, w);
+    }
+
+    /// The nearest cell to `x`; ties go to the lowest id (so the answer is the brute-force one).
+    pub(crate) fn nearest(&self, x: &[f64], pos: &[f64], stack: &mut Vec<u32>) -> usize {
+        let n = self.n;
+        let mut best = (f64::INFINITY, usize::MAX);
+        stack.clear();
+        stack.push(0);
+        while let Some(node) = stack.pop() {
+            if self.box_dist_sq(node, x) > best.0 {
+                continue;
+            }
+            match &self.nodes[node as usize].kind {
+                Kind::Leaf { cells } => {
+                    for &c in cells {
+                        let c = c as usize;
+                        let d2 = dist_sq(&pos[c * n..(c + 1) * n], x);
+                        if d2 < best.0 || (d2 == best.0 && c < best.1) {
+                            best = (d2, c);
+                        }
+                    }
+                }
+                Kind::Inner { left, right } => {
+                    let (dl, dr) = (self.box_dist_sq(*left, x), self.box_dist_sq(*right, x));
+                    // Push the farther child first so the nearer one is searched first.
+                    if dl <= dr {
+                        stack.push(*right);
+                        stack.push(*left);
+                    } else {
+                        stack.push(*left);
+                        stack.push(*right);
+                    }
+                }
+            }
+        }
+        best.1
+    }
+
+    /// Appends `(c, |x − w_c|²)` for every cell with `|x − w_c|² ≤ reach_sq · δ_c²`, in tree order.
+    pub(crate) fn within(
+        &self,
+        x: &[f64],
+        pos: &[f64],
+        width: &[f64],
+        reach_sq: f64,
+        stack: &mut Vec<u32>,
+        found: &mut Vec<(u32, f64)>,
+    ) {
+        let n = self.n;
+        stack.clear();
+        stack.push(0);
+        while let Some(node) = stack.pop() {
+            let nd = &self.nodes[node as usize];
+            let mw = nd.max_width;
+            if self.box_dist_sq(node, x) > reach_sq * (mw * mw) {
+                continue;
+            }
+            match &nd.kind {
+                Kind::Leaf { cells } => {
+                    for &c in cells {
+                        let ci = c as usize;
+                        let d2 = dist_sq(&pos[ci * n..(ci + 1) * n], x);
+                        if is_active(d2, width[ci], reach_sq) {
+                            found.push((c, d2));
+                        }
+                    }
+                }
+                Kind::Inner { left, right } => {
+                    stack.push(*right);
+                    stack.push(*left);
+                }
+            }
+        }
+    }
+
+    /// Checks that every cell is in exactly one leaf and that boxes and widths are conservative.
+    pub(crate) fn check(&self, pos: &[f64], width: &[f64]) -> Result<(), String> {
+        let n = self.n;
+        let len = width.len();
+        if self.leaf_of.len() != len {
+            return Err(format!(
+                "index knows {} cells, network has {len}",
+                self.leaf_of.len()
+            ));
+        }
+        let mut seen = vec![false; len];
+        for (i, nd) in self.nodes.iter().enumerate() {
+            if let Kind::Leaf { cells } = &nd.kind {
+                for &c in cells {
+                    let c = c as usize;
+                    if c >= len || seen[c] || self.leaf_of[c] as usize != i {
+                        return Err(format!("index: cell {c} misplaced in leaf {i}"));
+                    }
+                    seen[c] = true;
+                    // Every ancestor must bound the cell.
+                    let mut node = i as u32;
+                    while node != NONE {
+                        let p = &pos[c * n..(c + 1) * n];
+                        if self.box_dist_sq(node, p) > 0.0
+                            || self.nodes[node as usize].max_width < width[c]
+                        {
+                            return Err(format!("index: node {node} does not bound cell {c}"));
+                        }
+                        node = self.nodes[node as usize].parent;
+                    }
+                }
+            }
+        }
+        if let Some(c) = seen.iter().position(|s| !s) {
+            return Err(format!("index: cell {c} is in no leaf"));
+        }
+        Ok(())
+    }
+}
+
+/// The activation test shared by the tree and the brute-force path, so both select the same cells.
+#[inline]
+pub(crate) fn is_active(d2: f64, width: f64, reach_sq: f64) -> bool {
+    d2 <= reach_sq * (width * width)
+}
+
+#[inline]
+pub(crate) fn dist_sq(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum()
+}

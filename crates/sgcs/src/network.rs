@@ -1,0 +1,1038 @@
+//! The network: cells, topology, one learning step, growth, queries.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+use crate::index::{Index, dist_sq};
+use crate::{InsertRule, OutputRule, Params, SgcsError};
+
+/// A cell's index. Stable: cells are never removed, a new cell gets id `len() - 1`.
+pub type CellId = usize;
+
+/// Dimension `k` of the simplices the cell graph is made of (triangles).
+pub const SIMPLEX_DIM: usize = 2;
+
+/// Version of the JSON format written by [`Network::to_json`].
+pub const FORMAT_VERSION: u32 = 1;
+
+const FORMAT_NAME: &str = "sgcs-network";
+
+/// Widths are floored here so `M_c` stays defined when cells coincide (`0/0`).
+pub(crate) const MIN_WIDTH: f64 = 1e-100;
+
+/// Largest magnitude accepted in inputs and targets: squares stay finite.
+const MAX_ABS_VALUE: f64 = 1e100;
+
+/// What one learning step did: the hook for callers keeping their own per-cell statistics.
+#[derive(Clone, Copy, Debug)]
+pub struct StepOutcome {
+    /// The best matching unit of the sample (before the step moved it).
+    pub bmu: CellId,
+    /// `|ζ − κ(ξ)|²`, the error before the update.
+    pub error_sq: f64,
+    /// The cell inserted at the end of this step, if any (always `len() - 1`).
+    pub inserted: Option<CellId>,
+}
+
+/// A supervised growing cell structures network `Rⁿ → Rᵐ`. See the crate docs.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(try_from = "NetworkData", into = "NetworkData")]
+pub struct Network {
+    params: Params,
+    n: usize,
+    m: usize,
+    /// Positions `w_c`, `len · n`.
+    pos: Vec<f64>,
+    /// Output weights `v_c`, `len · m`.
+    out: Vec<f64>,
+    /// Sorted neighbour lists.
+    nbrs: Vec<Vec<CellId>>,
+    /// Triangles, each sorted ascending.
+    tris: Vec<[CellId; 3]>,
+    /// Indices into `tris` per cell (derived).
+    cell_tris: Vec<Vec<usize>>,
+    /// `δ_c` (derived from `pos` and `nbrs`).
+    width: Vec<f64>,
+    /// `τ_err / τ_cnt`: the decayed mean squared error of the samples the cell won.
+    err_mean: Vec<f64>,
+    /// `τ_cnt` as of step `stamp[c]`.
+    cnt: Vec<f64>,
+    stamp: Vec<u64>,
+    steps: u64,
+    index: Index,
+    scratch: Scratch,
+}
+
+#[derive(Clone, Debug, Default)]
+struct Scratch {
+    stack: Vec<u32>,
+    found: Vec<(u32, f64)>,
+    kappa: Vec<f64>,
+    touched: Vec<CellId>,
+}
+
+fn check_values(what: &'static str, v: &[f64], expected: usize) -> Result<(), SgcsError> {
+    if v.len() != expected {
+        return Err(SgcsError::Dimension {
+            what,
+            expected,
+            got: v.len(),
+        });
+    }
+    match v.iter().find(|x| x.is_nan() || x.abs() > MAX_ABS_VALUE) {
+        Some(&value) => Err(SgcsError::NonFinite { what, value }),
+        None => Ok(()),
+    }
+}
+
+/// `(1 − α)^dt` without subnormals: values below `e^-700` are 0.
+fn decay(ln_keep: f64, dt: u64) -> f64 {
+    if dt == 0 {
+        return 1.0;
+    }
+    let e = dt as f64 * ln_keep;
+    if e < -700.0 { 0.0 } else { e.exp() }
+}
+
+/// `exp(−d²/δ²)`, 0 where it would be subnormal.
+#[inline]
+fn activation(d2: f64, width: f64) -> f64 {
+    let a = d2 / (width * width);
+    if a > 700.0 { 0.0 } else { (-a).exp() }
+}
+
+impl Network {
+    /// A network of one triangle with corners `simplex` (`k + 1 = 3` points of length
+    /// `input_dim`, distinct), zero output weights and empty counters.
+    pub fn new(
+        params: Params,
+        input_dim: usize,
+        output_dim: usize,
+        simplex: &[Vec<f64>],
+    ) -> Result<Network, SgcsError> {
+        params.validate()?;
+        if input_dim == 0 || output_dim == 0 {
+            return Err(SgcsError::InvalidSimplex(format!(
+                "input_dim ({input_dim}) and output_dim ({output_dim}) must be at least 1"
+            )));
+        }
+        if simplex.len() != SIMPLEX_DIM + 1 {
+            return Err(SgcsError::InvalidSimplex(format!(
+                "needs {} points, got {}",
+                SIMPLEX_DIM + 1,
+                simplex.len()
+            )));
+        }
+        let mut pos = Vec::with_capacity(3 * input_dim);
+        for p in simplex {
+            check_values("simplex point", p, input_dim)?;
+            pos.extend_from_slice(p);
+        }
+        for (a, b) in [(0, 1), (0, 2), (1, 2)] {
+            if simplex[a] == simplex[b] {
+                return Err(SgcsError::InvalidSimplex(format!(
+                    "points {a} and {b} coincide"
+                )));
+            }
+        }
+        let tris = vec![[0, 1, 2]];
+        Network::assemble(
+            params,
+            input_dim,
+            output_dim,
+            pos,
+            vec![0.0; 3 * output_dim],
+            tris,
+            vec![0.0; 3],
+            vec![0.0; 3],
+            vec![0; 3],
+            0,
+        )
+    }
+
+    /// Builds the derived state (neighbours, widths, index) from the primary state.
+    #[allow(clippy::too_many_arguments)]
+    fn assemble(
+        params: Params,
+        n: usize,
+        m: usize,
+        pos: Vec<f64>,
+        out: Vec<f64>,
+        tris: Vec<[CellId; 3]>,
+        err_mean: Vec<f64>,
+        cnt: Vec<f64>,
+        stamp: Vec<u64>,
+        steps: u64,
+    ) -> Result<Network, SgcsError> {
+        let len = err_mean.len();
+        let mut nbrs = vec![Vec::new(); len];
+        let mut cell_tris = vec![Vec::new(); len];
+        for (t, tri) in tris.iter().enumerate() {
+            for &c in tri {
+                if c >= len {
+                    return Err(SgcsError::Corrupt(format!(
+                        "triangle {t} names cell {c} of {len}"
+                    )));
+                }
+                cell_tris[c].push(t);
+            }
+            for (a, b) in [(0, 1), (0, 2), (1, 2)] {
+                nbrs[tri[a]].push(tri[b]);
+                nbrs[tri[b]].push(tri[a]);
+            }
+        }
+        for l in &mut nbrs {
+            l.sort_unstable();
+            l.dedup();
+        }
+        let mut net = Network {
+            params,
+            n,
+            m,
+            pos,
+            out,
+            nbrs,
+            tris,
+            cell_tris,
+            width: vec![MIN_WIDTH; len],
+            err_mean,
+            cnt,
+            stamp,
+            steps,
+            index: Index::default(),
+            scratch: Scratch::default(),
+        };
+        for c in 0..len {
+            net.width[c] = net.compute_width(c);
+        }
+        net.index = Index::build(n, &net.pos, &net.width);
+        Ok(net)
+    }
+
+    /// The learning parameters.
+    pub fn params(&self) -> &Params {
+        &self.params
+    }
+
+    /// Replaces the parameters (e.g. live from a viewer) after validating them.
+    pub fn set_params(&mut self, p: Params) -> Result<(), SgcsError> {
+        p.validate()?;
+        self.params = p;
+        Ok(())
+    }
+
+    /// `n`, the input dimension.
+    pub fn input_dim(&self) -> usize {
+        self.n
+    }
+
+    /// `m`, the output dimension.
+    pub fn output_dim(&self) -> usize {
+        self.m
+    }
+
+    /// The number of cells.
+    pub fn len(&self) -> usize {
+        self.width.len()
+    }
+
+    /// Always false: a network has at least one simplex. (For clippy's `len_without_is_empty`.)
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Learning steps taken so far.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    /// One learning step on the sample `(xi, zeta)`, including an insertion every `λ` steps.
+    ///
+    /// # Panics
+    /// If a length is wrong or a value is non-finite or beyond `1e100`; see [`Network::try_step`].
+    pub fn step(&mut self, xi: &[f64], zeta: &[f64]) -> StepOutcome {
+        self.try_step(xi, zeta)
+            .unwrap_or_else(|e| panic!("sgcs step: {e}"))
+    }
+
+    /// [`Network::step`] that returns an error instead of panicking on a bad sample (and then
+    /// leaves the network unchanged).
+    pub fn try_step(&mut self, xi: &[f64], zeta: &[f64]) -> Result<StepOutcome, SgcsError> {
+        check_values("xi", xi, self.n)?;
+        check_values("zeta", zeta, self.m)?;
+        let (n, m) = (self.n, self.m);
+        self.steps += 1;
+        let now = self.steps;
+        self.index.tick();
+        if self.index.wants_rebuild(self.len()) {
+            self.index = Index::build(n, &self.pos, &self.width);
+        }
+        let mut sc = std::mem::take(&mut self.scratch);
+
+        // Best matching unit and the activations above the cutoff, in id order.
+        let s = self.index.nearest(xi, &self.pos, &mut sc.stack);
+        self.collect_active(xi, &mut sc.stack, &mut sc.found);
+
+        // Output and error.
+        sc.kappa.clear();
+        sc.kappa.resize(m, 0.0);
+        let mut sum_m2 = 0.0;
+        for &(c, a) in &sc.found {
+            let v = &self.out[c as usize * m..(c as usize + 1) * m];
+            for j in 0..m {
+                sc.kappa[j] += v[j] * a;
+            }
+            sum_m2 += a * a;
+        }
+        let mut error_sq = 0.0;
+        for j in 0..m {
+            sc.kappa[j] = zeta[j] - sc.kappa[j]; // now the error ζ − κ
+            error_sq += sc.kappa[j] * sc.kappa[j];
+        }
+
+        // Output weights (delta rule, normalised by default).
+        let gain = match self.params.output_rule {
+            OutputRule::Normalized => self.params.eta / sum_m2.max(1.0),
+            OutputRule::Plain => self.params.eta,
+        };
+        for &(c, a) in &sc.found {
+            let v = &mut self.out[c as usize * m..(c as usize + 1) * m];
+            for j in 0..m {
+                v[j] += gain * sc.kappa[j] * a;
+            }
+        }
+
+        // Resource counters of the BMU (everyone else decays lazily).
+        self.touch(s, error_sq, now);
+
+        // Move the BMU and its neighbours; widths change for them and their neighbours.
+        self.move_cell(s, xi, self.params.eps_b);
+        sc.touched.clear();
+        sc.touched.push(s);
+        for i in 0..self.nbrs[s].len() {
+            let b = self.nbrs[s][i];
+            self.move_cell(b, xi, self.params.eps_n);
+            sc.touched.push(b);
+            sc.touched.extend_from_slice(&self.nbrs[b]);
+        }
+        sc.touched.sort_unstable();
+        sc.touched.dedup();
+        for &c in &sc.touched {
+            self.refresh_width(c);
+        }
+        self.scratch = sc;
+
+        let inserted = if now.is_multiple_of(u64::from(self.params.lambda)) {
+            self.insert(now)
+        } else {
+            None
+        };
+        Ok(StepOutcome {
+            bmu: s,
+            error_sq,
+            inserted,
+        })
+    }
+
+    fn move_cell(&mut self, c: CellId, xi: &[f64], rate: f64) {
+        if rate == 0.0 {
+            return;
+        }
+        let n = self.n;
+        let w = &mut self.pos[c * n..(c + 1) * n];
+        for d in 0..n {
+            w[d] += rate * (xi[d] - w[d]);
+        }
+        self.index.moved(c, &self.pos[c * n..(c + 1) * n]);
+    }
+
+    fn compute_width(&self, c: CellId) -> f64 {
+        let n = self.n;
+        let w = &self.pos[c * n..(c + 1) * n];
+        let nb = &self.nbrs[c];
+        let sum: f64 = nb
+            .iter()
+            .map(|&b| dist_sq(w, &self.pos[b * n..(b + 1) * n]).sqrt())
+            .sum();
+        (sum / nb.len() as f64).max(MIN_WIDTH)
+    }
+
+    fn refresh_width(&mut self, c: CellId) {
+        let w = self.compute_width(c);
+        if w > self.width[c] {
+            self.index.widened(c, w);
+        }
+        self.width[c] = w;
+    }
+
+    fn ln_keep(&self) -> f64 {
+        (-self.params.alpha).ln_1p()
+    }
+
+    /// `τ_cnt` of `c` decayed to step `now`.
+    fn count_at(&self, c: CellId, now: u64) -> f64 {
+        self.cnt[c] * decay(self.ln_keep(), now.saturating_sub(self.stamp[c]))
+    }
+
+    /// Adds one sample with squared error `e2` to `c`'s counters at step `now`.
+    fn touch(&mut self, c: CellId, e2: f64, now: u64) {
+        let cnt = self.count_at(c, now) + 1.0;
+        self.err_mean[c] += (e2 - self.err_mean[c]) / cnt;
+        self.cnt[c] = cnt;
+        self.stamp[c] = now;
+    }
+
+    /// Appends the active cells `(c, M_c(xi))` to `found`, sorted by id.
+    fn collect_active(&self, xi: &[f64], stack: &mut Vec<u32>, found: &mut Vec<(u32, f64)>) {
+        found.clear();
+        let reach_sq = self.params.reach_sq();
+        self.index
+            .within(xi, &self.pos, &self.width, reach_sq, stack, found);
+        found.sort_unstable_by_key(|e| e.0);
+        for e in found.iter_mut() {
+            e.1 = activation(e.1, self.width[e.0 as usize]);
+        }
+    }
+
+    /// The same as `collect_active`, by visiting every cell (for tests).
+    #[cfg(test)]
+    pub(crate) fn collect_active_brute(&self, xi: &[f64], found: &mut Vec<(u32, f64)>) {
+        found.clear();
+        let reach_sq = self.params.reach_sq();
+        let n = self.n;
+        for c in 0..self.len() {
+            let d2 = dist_sq(&self.pos[c * n..(c + 1) * n], xi);
+            if crate::index::is_active(d2, self.width[c], reach_sq) {
+                found.push((c as u32, activation(d2, self.width[c])));
+            }
+        }
+    }
+
+    fn active(&self, xi: &[f64]) -> Vec<(u32, f64)> {
+        assert_eq!(xi.len(), self.n, "sgcs: xi has the wrong length");
+        let mut stack = Vec::new();
+        let mut found = Vec::new();
+        self.collect_active(xi, &mut stack, &mut found);
+        found
+    }
+
+    /// The network output `κ(ξ) = Σ_c v_c M_c(ξ)` into `out` (length `m`).
+    ///
+    /// # Panics
+    /// If `xi.len() != n` or `out.len() != m`.
+    pub fn predict(&self, xi: &[f64], out: &mut [f64]) {
+        assert_eq!(out.len(), self.m, "sgcs: output slice has the wrong length");
+        out.fill(0.0);
+        let m = self.m;
+        for (c, a) in self.active(xi) {
+            let v = &self.out[c as usize * m..(c as usize + 1) * m];
+            for j in 0..m {
+                out[j] += v[j] * a;
+            }
+        }
+    }
+
+    /// `κ(ξ)` of a network with one output (the first output otherwise).
+    pub fn predict1(&self, xi: &[f64]) -> f64 {
+        let m = self.m;
+        self.active(xi)
+            .iter()
+            .map(|&(c, a)| self.out[c as usize * m] * a)
+            .sum()
+    }
+
+    /// The network activation `D_A(ξ) = Σ_c M_c(ξ)`.
+    pub fn activation_sum(&self, xi: &[f64]) -> f64 {
+        self.active(xi).iter().map(|e| e.1).sum()
+    }
+
+    /// `(D_A(ξ), D_ACC(ξ))`: the activation of all cells and of the cells flagged in `critical`
+    /// (length `len()`, e.g. from [`Network::critical_cells`]), in one pass.
+    pub fn activation_sums(&self, xi: &[f64], critical: &[bool]) -> (f64, f64) {
+        assert_eq!(
+            critical.len(),
+            self.len(),
+            "sgcs: critical has the wrong length"
+        );
+        let mut all = 0.0;
+        let mut crit = 0.0;
+        for (c, a) in self.active(xi) {
+            all += a;
+            if critical[c as usize] {
+                crit += a;
+            }
+        }
+        (all, crit)
+    }
+
+    /// The critical cells `τ_c > ω · mean(τ)` (none while every `τ` is 0).
+    pub fn critical_cells(&self, omega: f64) -> Vec<bool> {
+        let tau: Vec<f64> = (0..self.len()).map(|c| self.resource(c)).collect();
+        let mean = tau.iter().sum::<f64>() / tau.len() as f64;
+        tau.iter().map(|&t| t > omega * mean).collect()
+    }
+
+    /// The best matching unit `argmin_c |w_c − ξ|` (the lowest id on ties).
+    pub fn bmu(&self, xi: &[f64]) -> CellId {
+        assert_eq!(xi.len(), self.n, "sgcs: xi has the wrong length");
+        self.index.nearest(xi, &self.pos, &mut Vec::new())
+    }
+
+    /// `w_c`, the cell's position.
+    pub fn position(&self, c: CellId) -> &[f64] {
+        &self.pos[c * self.n..(c + 1) * self.n]
+    }
+
+    /// `v_c`, the cell's output weight.
+    pub fn output(&self, c: CellId) -> &[f64] {
+        &self.out[c * self.m..(c + 1) * self.m]
+    }
+
+    /// `δ_c`, the mean length of the cell's edges (floored at `1e-100`).
+    pub fn width(&self, c: CellId) -> f64 {
+        self.width[c]
+    }
+
+    /// The resource `τ_c = τ_err,c / τ_cnt,c · |F_c|` with `|F_c| = δ_c^k` (0 for a cell never hit).
+    pub fn resource(&self, c: CellId) -> f64 {
+        self.err_mean[c] * self.volume(c)
+    }
+
+    /// `τ_err,c / τ_cnt,c`: the decayed mean squared error of the samples `c` won.
+    pub fn mean_error(&self, c: CellId) -> f64 {
+        self.err_mean[c]
+    }
+
+    /// `|F_c| = δ_c^k`.
+    fn volume(&self, c: CellId) -> f64 {
+        self.width[c].powi(SIMPLEX_DIM as i32)
+    }
+
+    /// Every edge `(a, b)` once, `a < b`, sorted.
+    pub fn edges(&self) -> Vec<(CellId, CellId)> {
+        let mut e = Vec::new();
+        for (a, nb) in self.nbrs.iter().enumerate() {
+            e.extend(nb.iter().filter(|&&b| b > a).map(|&b| (a, b)));
+        }
+        e
+    }
+
+    /// Every triangle, corners ascending.
+    pub fn triangles(&self) -> Vec<[CellId; 3]> {
+        self.tris.clone()
+    }
+
+    /// The cell's topological neighbours, ascending.
+    pub fn neighbours(&self, c: CellId) -> &[CellId] {
+        &self.nbrs[c]
+    }
+
+    /// Inserts a cell on the longest edge of the cell with the largest resource.
+    fn insert(&mut self, now: u64) -> Option<CellId> {
+        if self.len() >= self.params.max_cells {
+            return None;
+        }
+        let (n, m) = (self.n, self.m);
+        let mut q = 0;
+        let mut best = f64::NEG_INFINITY;
+        for c in 0..self.len() {
+            let t = self.resource(c);
+            if t > best {
+                best = t;
+                q = c;
+            }
+        }
+        let wq = self.position(q).to_vec();
+        let mut f = q;
+        let mut longest = f64::NEG_INFINITY;
+        for &b in &self.nbrs[q] {
+            let l = dist_sq(&wq, self.position(b));
+            if l > longest {
+                longest = l;
+                f = b;
+            }
+        }
+        let r = self.len();
+        let wr: Vec<f64> = wq
+            .iter()
+            .zip(self.position(f))
+            .map(|(a, b)| 0.5 * (a + b))
+            .collect();
+        // Triangles on the split edge and their third corners, in corner order.
+        let mut opp: Vec<(CellId, usize)> = self.cell_tris[q]
+            .iter()
+            .filter(|&&t| self.tris[t].contains(&f))
+            .map(|&t| {
+                let c = self.tris[t].iter().copied().find(|&c| c != q && c != f);
+                (c.unwrap_or(q), t)
+            })
+            .collect();
+        opp.sort_unstable();
+        let mut affected = vec![q, f];
+        affected.extend(opp.iter().map(|e| e.0));
+        let old_vol: Vec<f64> = affected.iter().map(|&c| self.volume(c)).collect();
+        let old_tau: Vec<f64> = affected.iter().map(|&c| self.resource(c)).collect();
+        let mut kappa_before = vec![0.0; m];
+        if self.params.insert_rule == InsertRule::PreserveOutput {
+            self.predict(&wr, &mut kappa_before);
+        }
+
+        // Topology: q–f becomes q–r–f; each triangle q-f-c becomes q-r-c and r-f-c.
+        self.nbrs[q].retain(|&b| b != f);
+        self.nbrs[f].retain(|&b| b != q);
+        let mut nr = vec![q, f];
+        for &(c, t) in &opp {
+            let t2 = self.tris.len();
+            self.tris[t] = sorted3([q, r, c]);
+            self.tris.push(sorted3([r, f, c]));
+            self.cell_tris[f].retain(|&x| x != t);
+            self.cell_tris[f].push(t2);
+            self.cell_tris[c].push(t2);
+            nr.push(c);
+        }
+        let mut rt: Vec<usize> = opp.iter().map(|e| e.1).collect();
+        rt.extend(self.tris.len() - opp.len()..self.tris.len());
+        self.cell_tris.push(rt);
+        for &c in &nr {
+            self.nbrs[c].push(r); // r is the largest id: lists stay sorted
+        }
+        nr.sort_unstable();
+        self.nbrs.push(nr);
+
+        // The new cell's primary state, then widths.
+        self.pos.extend_from_slice(&wr);
+        self.out.extend(std::iter::repeat_n(0.0, m));
+        self.err_mean.push(0.0);
+        self.cnt.push(0.0);
+        self.stamp.push(now);
+        self.width.push(MIN_WIDTH);
+        self.width[r] = self.compute_width(r);
+        self.index
+            .insert(r, q, &self.pos[r * n..(r + 1) * n], self.width[r]);
+        for &c in &affected {
+            self.refresh_width(c);
+        }
+
+        // Counters: a neighbour's τ = mean·|F| follows its new volume by itself, which is
+        // exactly Δτ_c = (|F|new − |F|old)/|F|old · τ_c; r receives what they lose.
+        let mut tau_r = 0.0;
+        let mut cnt_r = 0.0;
+        let mut lost_sum = 0.0;
+        let mut weighted = vec![0.0; m];
+        for (i, &c) in affected.iter().enumerate() {
+            let new_vol = self.volume(c);
+            tau_r -= (new_vol - old_vol[i]) / old_vol[i] * old_tau[i];
+            cnt_r += (1.0 - new_vol / old_vol[i]).max(0.0) * self.count_at(c, now);
+            let lost = (old_vol[i] - new_vol).max(0.0);
+            lost_sum += lost;
+            for j in 0..m {
+                weighted[j] += lost * self.out[c * m + j];
+            }
+        }
+        self.err_mean[r] = tau_r.max(0.0) / self.volume(r);
+        self.cnt[r] = cnt_r;
+
+        let v_r: Vec<f64> = match self.params.insert_rule {
+            InsertRule::PreserveOutput => {
+                let mut after = vec![0.0; m];
+                self.predict(&wr, &mut after);
+                kappa_before
+                    .iter()
+                    .zip(&after)
+                    .map(|(b, a)| b - a)
+                    .collect()
+            }
+            InsertRule::VolumeWeighted if lost_sum > 0.0 => {
+                weighted.iter().map(|w| w / lost_sum).collect()
+            }
+            InsertRule::VolumeWeighted => (0..m)
+                .map(|j| 0.5 * (self.out[q * m + j] + self.out[f * m + j]))
+                .collect(),
+        };
+        self.out[r * m..(r + 1) * m].copy_from_slice(&v_r);
+        Some(r)
+    }
+
+    /// Checks the simplicial topology (every edge in one or two triangles, every triangle's edges
+    /// present, no duplicates, symmetric sorted neighbour lists, Euler characteristic of a disk),
+    /// finiteness of every value, cached widths and the spatial index.
+    pub fn check_invariants(&self) -> Result<(), String> {
+        let len = self.len();
+        let (n, m) = (self.n, self.m);
+        if self.pos.len() != len * n
+            || self.out.len() != len * m
+            || self.nbrs.len() != len
+            || self.cell_tris.len() != len
+            || self.err_mean.len() != len
+            || self.cnt.len() != len
+            || self.stamp.len() != len
+        {
+            return Err("per-cell arrays disagree in length".into());
+        }
+        for (a, nb) in self.nbrs.iter().enumerate() {
+            if nb.is_empty() {
+                return Err(format!("cell {a} has no neighbour"));
+            }
+            if nb.windows(2).any(|w| w[0] >= w[1]) {
+                return Err(format!("neighbours of {a} not strictly ascending: {nb:?}"));
+            }
+            for &b in nb {
+                if b == a || b >= len {
+                    return Err(format!("cell {a} has invalid neighbour {b}"));
+                }
+                if self.nbrs[b].binary_search(&a).is_err() {
+                    return Err(format!("edge {a}-{b} is not symmetric"));
+                }
+            }
+        }
+        let mut edge_tris: BTreeMap<(CellId, CellId), u32> = BTreeMap::new();
+        let mut seen = self.tris.clone();
+        seen.sort_unstable();
+        if seen.windows(2).any(|w| w[0] == w[1]) {
+            return Err("duplicate triangle".into());
+        }
+        for (t, tri) in self.tris.iter().enumerate() {
+            if !(tri[0] < tri[1] && tri[1] < tri[2] && tri[2] < len) {
+                return Err(format!("triangle {t} is malformed: {tri:?}"));
+            }
+            for (a, b) in [(0, 1), (0, 2), (1, 2)] {
+                let (a, b) = (tri[a], tri[b]);
+                if self.nbrs[a].binary_search(&b).is_err() {
+                    return Err(format!("triangle {t} {tri:?} lacks edge {a}-{b}"));
+                }
+                *edge_tris.entry((a, b)).or_default() += 1;
+            }
+            for &c in tri {
+                if !self.cell_tris[c].contains(&t) {
+                    return Err(format!("cell {c} does not list its triangle {t}"));
+                }
+            }
+        }
+        for (c, ts) in self.cell_tris.iter().enumerate() {
+            if ts
+                .iter()
+                .any(|&t| t >= self.tris.len() || !self.tris[t].contains(&c))
+            {
+                return Err(format!("cell {c} lists a triangle it is not in"));
+            }
+        }
+        let edges = self.edges();
+        for e in &edges {
+            match edge_tris.get(e) {
+                Some(1 | 2) => {}
+                other => {
+                    return Err(format!(
+                        "edge {e:?} is in {} triangles",
+                        other.unwrap_or(&0)
+                    ));
+                }
+            }
+        }
+        let euler = len as i64 - edges.len() as i64 + self.tris.len() as i64;
+        if euler != 1 {
+            return Err(format!("Euler characteristic {euler}, a disk has 1"));
+        }
+        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        if !finite(&self.pos) || !finite(&self.out) || !finite(&self.err_mean) || !finite(&self.cnt)
+        {
+            return Err("a position, output weight or counter is not finite".into());
+        }
+        if self.err_mean.iter().chain(&self.cnt).any(|&x| x < 0.0) {
+            return Err("a counter is negative".into());
+        }
+        for c in 0..len {
+            let w = self.compute_width(c);
+            if w != self.width[c] {
+                return Err(format!(
+                    "cached width of {c} is {}, actual {w}",
+                    self.width[c]
+                ));
+            }
+        }
+        self.index.check(&self.pos, &self.width)
+    }
+
+    /// The network as versioned JSON (format version [`FORMAT_VERSION`]).
+    pub fn to_json(&self) -> String {
+        serde_json::to_string(self).unwrap_or_else(|e| panic!("sgcs: serialising failed: {e}"))
+    }
+
+    /// Reads [`Network::to_json`]'s output; refuses other format versions with a message and
+    /// validates the whole network (parameters, values, topology).
+    pub fn from_json(text: &str) -> Result<Network, SgcsError> {
+        let value: serde_json::Value =
+            serde_json::from_str(text).map_err(|e| SgcsError::Format(e.to_string()))?;
+        if value.get("format").and_then(|f| f.as_str()) != Some(FORMAT_NAME) {
+            return Err(SgcsError::Format(format!(
+                "not an {FORMAT_NAME} document (missing \"format\": \"{FORMAT_NAME}\")"
+            )));
+        }
+        match value.get("version").and_then(|v| v.as_u64()) {
+            Some(v) if v == u64::from(FORMAT_VERSION) => {}
+            Some(found) => {
+                return Err(SgcsError::UnsupportedVersion {
+                    found,
+                    supported: FORMAT_VERSION,
+                });
+            }
+            None => return Err(SgcsError::Format("missing \"version\"".into())),
+        }
+        serde_json::from_value(value).map_err(|e| SgcsError::Corrupt(e.to_string()))
+    }
+
+    /// `collect_active` with caller-owned buffers (used by the refit).
+    pub(crate) fn active_into(
+        &self,
+        xi: &[f64],
+        stack: &mut Vec<u32>,
+        found: &mut Vec<(u32, f64)>,
+    ) {
+        self.collect_active(xi, stack, found);
+    }
+
+    pub(crate) fn out_flat_mut(&mut self) -> &mut Vec<f64> {
+        &mut self.out
+    }
+}
+
+fn sorted3(mut t: [CellId; 3]) -> [CellId; 3] {
+    t.sort_unstable();
+    t
+}
+
+/// The saved form: primary state only; everything derived is rebuilt and checked on load.
+#[derive(Serialize, Deserialize)]
+struct NetworkData {
+    format: String,
+    version: u32,
+    params: Params,
+    input_dim: usize,
+    output_dim: usize,
+    steps: u64,
+    positions: Vec<f64>,
+    outputs: Vec<f64>,
+    triangles: Vec<[CellId; 3]>,
+    error_mean: Vec<f64>,
+    count: Vec<f64>,
+    stamp: Vec<u64>,
+}
+
+impl From<Network> for NetworkData {
+    fn from(net: Network) -> Self {
+        NetworkData {
+            format: FORMAT_NAME.to_string(),
+            version: FORMAT_VERSION,
+            params: net.params,
+            input_dim: net.n,
+            output_dim: net.m,
+            steps: net.steps,
+            positions: net.pos,
+            outputs: net.out,
+            triangles: net.tris,
+            error_mean: net.err_mean,
+            count: net.cnt,
+            stamp: net.stamp,
+        }
+    }
+}
+
+impl TryFrom<NetworkData> for Network {
+    type Error = SgcsError;
+
+    fn try_from(d: NetworkData) -> Result<Self, SgcsError> {
+        if d.format != FORMAT_NAME {
+            return Err(SgcsError::Format(format!("format is {:?}", d.format)));
+        }
+        if d.version != FORMAT_VERSION {
+            return Err(SgcsError::UnsupportedVersion {
+                found: u64::from(d.version),
+                supported: FORMAT_VERSION,
+            });
+        }
+        d.params.validate()?;
+        let len = d.error_mean.len();
+        if d.input_dim == 0
+            || d.output_dim == 0
+            || len < 3
+            || d.positions.len() != len * d.input_dim
+            || d.outputs.len() != len * d.output_dim
+            || d.count.len() != len
+            || d.stamp.len() != len
+        {
+            return Err(SgcsError::Corrupt("array lengths disagree".into()));
+        }
+        check_values("positions", &d.positions, d.positions.len())?;
+        let net = Network::assemble(
+            d.params,
+            d.input_dim,
+            d.output_dim,
+            d.positions,
+            d.outputs,
+            d.triangles,
+            d.error_mean,
+            d.count,
+            d.stamp,
+            d.steps,
+        )?;
+        net.check_invariants().map_err(SgcsError::Corrupt)?;
+        Ok(net)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use rand::RngExt;
+
+    use super::*;
+    use crate::test_support::{assert_close, rng};
+
+    fn unit_triangle() -> Vec<Vec<f64>> {
+        vec![vec![0.0, 0.0], vec![1.0, 0.0], vec![0.0, 1.0]]
+    }
+
+    /// A network grown on uniform samples of `f` over the unit square.
+    fn grown(params: Params, steps: usize, seed: u64, f: impl Fn(f64, f64) -> f64) -> Network {
+        let mut net = Network::new(params, 2, 1, &unit_triangle()).unwrap();
+        let mut r = rng(seed);
+        for _ in 0..steps {
+            let (x, y) = (r.random::<f64>(), r.random::<f64>());
+            net.step(&[x, y], &[f(x, y)]);
+        }
+        net
+    }
+
+    #[test]
+    fn new_network_is_one_triangle() {
+        let net = Network::new(Params::default(), 2, 1, &unit_triangle()).unwrap();
+        assert_eq!(net.len(), 3);
+        assert_eq!(net.triangles(), vec![[0, 1, 2]]);
+        assert_eq!(net.edges(), vec![(0, 1), (0, 2), (1, 2)]);
+        assert_close!(net.width(0), 1.0, 1e-15);
+        assert_close!(net.width(1), (1.0 + 2f64.sqrt()) / 2.0, 1e-15);
+        net.check_invariants().unwrap();
+    }
+
+    #[test]
+    fn bad_construction_is_an_error() {
+        let p = Params::default();
+        assert!(Network::new(p, 2, 1, &unit_triangle()[..2]).is_err());
+        let same = vec![vec![0.0, 0.0], vec![0.0, 0.0], vec![0.0, 1.0]];
+        assert!(Network::new(p, 2, 1, &same).is_err());
+        let nan = vec![vec![0.0, f64::NAN], vec![1.0, 0.0], vec![0.0, 1.0]];
+        assert!(Network::new(p, 2, 1, &nan).is_err());
+        assert!(Network::new(p, 3, 1, &unit_triangle()).is_err());
+        let bad = Params { eta: 0.0, ..p };
+        assert!(
+            Network::new(bad, 2, 1, &unit_triangle())
+                .unwrap_err()
+                .to_string()
+                .contains("eta")
+        );
+    }
+
+    #[test]
+    fn topology_holds_after_every_insertion() {
+        let params = Params {
+            lambda: 10,
+            ..Params::default()
+        };
+        let mut net = Network::new(params, 2, 1, &unit_triangle()).unwrap();
+        let mut r = rng(1);
+        let mut insertions = 0;
+        for _ in 0..5_000 {
+            let (x, y) = (r.random::<f64>(), r.random::<f64>());
+            let out = net.step(&[x, y], &[(x * 7.0).sin() * y]);
+            if let Some(c) = out.inserted {
+                insertions += 1;
+                assert_eq!(c, net.len() - 1);
+                net.check_invariants()
+                    .unwrap_or_else(|e| panic!("after insertion {c}: {e}"));
+            }
+        }
+        assert_eq!(insertions, 500);
+        assert_eq!(net.len(), 503);
+    }
+
+    #[test]
+    fn same_seed_same_network() {
+        let f = |x: f64, y: f64| (3.0 * x).cos() + y * y;
+        let p = Params {
+            lambda: 50,
+            ..Params::default()
+        };
+        let a = grown(p, 20_000, 7, f);
+        let b = grown(p, 20_000, 7, f);
+        assert_eq!(a.to_json(), b.to_json());
+        let c = grown(p, 20_000, 8, f);
+        assert_ne!(a.to_json(), c.to_json());
+    }
+
+    #[test]
+    fn save_load_gives_identical_predictions_and_training() {
+        let f = |x: f64, y: f64| (3.0 * x).cos() + y * y;
+        let p = Params {
+            lambda: 50,
+            ..Params::default()
+        };
+        let mut a = grown(p, 10_000, 3, f);
+        let mut b = Network::from_json(&a.to_json()).unwrap();
+        b.check_invariants().unwrap();
+        let mut r = rng(99);
+        for _ in 0..200 {
+            let xi = [r.random::<f64>() * 1.2 - 0.1, r.random::<f64>() * 1.2 - 0.1];
+            assert_eq!(a.predict1(&xi).to_bits(), b.predict1(&xi).to_bits());
+            assert_eq!(a.bmu(&xi), b.bmu(&xi));
+        }
+        // Training on after loading stays bit-identical (the index is rebuilt, results are not).
+        for _ in 0..3_000 {
+            let (x, y) = (r.random::<f64>(), r.random::<f64>());
+            a.step(&[x, y], &[f(x, y)]);
+            b.step(&[x, y], &[f(x, y)]);
+        }
+        assert_eq!(a.to_json(), b.to_json());
+    }
+
+    #[test]
+    fn load_refuses_other_versions_and_garbage() {
+        let net = Network::new(Params::default(), 2, 1, &unit_triangle()).unwrap();
+        let text = net.to_json().replace("\"version\":1", "\"version\":2");
+        let err = Network::from_json(&text).unwrap_err().to_string();
+        assert!(
+            err.contains("version 2") && err.contains("version 1"),
+            "{err}"
+        );
+        assert!(Network::from_json("{}").is_err());
+        assert!(Network::from_json("not json").is_err());
+        let broken = net.to_json().replace("[0,1,2]", "[0,1,7]");
+        assert!(Network::from_json(&broken).is_err());
+    }
+
+    #[test]
+    fn fast_queries_equal_brute_force() {
+        let f = |x: f64, y: f64| (5.0 * x).sin() * y + if x > 0.6 { 1.0 } else { 0.0 };
+        let p = Params { lambda: 20, ..Params::default() };
+        let net = grown(p, 30_000, 11, f);
+        let mut r = rng(12);
+        let (mut fast, mut brute) = (Vec::new(), Vec::new());
+        let mut stack = Vec::new();
+        for _ in 0..2_000 {
+            let xi = [r.random::<f64>() * 1.4 - 0.2, r.random::<f64>() * 1.4 - 0.2];
+            net.collect_active(&xi, &mut stack, &mut fast);
+            net.collect_active_brute(&xi, &mut brute);
+            assert_eq!(fast, brute);
+            let nearest = (0..net.len())
+                .min_by(|&a, &b| {
+                    dist_sq(net.position(a), &xi).total_cmp(&dist_sq(net.position(b), &xi))
+                })
+                .unwrap();
+            assert_eq!(net.bmu(&xi), nearest);
+        }
+    }
+
+    #[test]
+    fn network_is_send_and_sync() {
+        fn check<T: Send + Sync>() {}
+        check::<Network>();
+    }
+}

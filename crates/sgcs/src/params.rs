@@ -1,0 +1,234 @@
+//! Learning parameters and their single validation step.
+
+use serde::{Deserialize, Serialize};
+
+use crate::SgcsError;
+
+/// How the output weights `v_c` follow the error (the supervised layer's update rule).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum OutputRule {
+    /// Normalised least mean squares (the default):
+    /// `Δv_c = η (ζ − κ(ξ)) M_c / max(1, Σ_c M_c²)`.
+    ///
+    /// Identical to [`OutputRule::Plain`] wherever `Σ M_c² ≤ 1` (a sparse network); where many
+    /// cells overlap it shortens the step so the error of the presented sample shrinks by a
+    /// factor in `[1 − η, 1]`: it cannot diverge for `η ∈ (0, 2)`.
+    Normalized,
+    /// The paper's delta rule `Δv_c = η (ζ − κ(ξ)) M_c`. Diverges when `η Σ M_c² > 2`
+    /// (many overlapping cells); kept for comparison with the paper.
+    Plain,
+}
+
+/// The output weight given to a freshly inserted cell `r`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum InsertRule {
+    /// The default: `v_r` is chosen so that the network's output at the new centre `w_r` is the
+    /// same before and after the insertion (`v_r = κ_before(w_r) − κ_after,v_r=0(w_r)`, using
+    /// `M_r(w_r) = 1`). Insertion then does not disturb what has been learned; the new cell only
+    /// adds capacity.
+    PreserveOutput,
+    /// The mean of the new cell's neighbours' output weights, each weighted by the Voronoi volume
+    /// `|F_c|` it loses to the new cell (the rule SPEC §3 suggests, consistent with the counters).
+    /// Falls back to the plain mean of the split edge's two ends when no neighbour loses volume.
+    VolumeWeighted,
+}
+
+/// Parameters of a supervised growing cell structures network.
+///
+/// Defaults are the paper's (§3.2): `ε_b = 0.01`, `ε_n = 0.001`, `η = 0.1`, `α = 0.05`, `λ = 300`.
+/// Every value is checked by [`Params::validate`], which [`crate::Network::new`] and
+/// [`crate::Network::set_params`] call.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Params {
+    /// Learning rate of the best matching unit's position, `ε_b ∈ (0, 1]`.
+    pub eps_b: f64,
+    /// Learning rate of the BMU's topological neighbours' positions, `ε_n ∈ [0, 1]`.
+    pub eps_n: f64,
+    /// Learning rate of the output weights, `η ∈ (0, 2)`.
+    pub eta: f64,
+    /// Forgetting factor of the resource counters, `α ∈ [0, 1)`: every step each counter
+    /// is multiplied by `1 − α` (lazily, see the crate docs).
+    pub alpha: f64,
+    /// A cell is inserted every `λ ≥ 1` steps.
+    pub lambda: u32,
+    /// Growth stops when the network has this many cells (`≥ 3`); learning continues.
+    pub max_cells: usize,
+    /// Activations `M_c(ξ)` below this value are treated as exactly 0, `∈ [0, 1)`.
+    ///
+    /// A cell is skipped when `|ξ − w_c|² > ln(1/cutoff) · δ_c²`, i.e. when `M_c(ξ) < cutoff`.
+    /// This is what makes a step cost independent of the network's size. `0` disables the cutoff
+    /// (every cell is visited). The default `1e-8` changes `κ` by less than
+    /// `1e-8 · Σ_{skipped} |v_c|`, in practice far below `f64` noise of the learning itself.
+    pub activation_cutoff: f64,
+    /// Update rule of the output weights.
+    pub output_rule: OutputRule,
+    /// Output weight of an inserted cell.
+    pub insert_rule: InsertRule,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Params {
+            eps_b: 0.01,
+            eps_n: 0.001,
+            eta: 0.1,
+            alpha: 0.05,
+            lambda: 300,
+            max_cells: 1_000_000,
+            activation_cutoff: 1e-8,
+            output_rule: OutputRule::Normalized,
+            insert_rule: InsertRule::PreserveOutput,
+        }
+    }
+}
+
+fn check(ok: bool, name: &'static str, range: &'static str, value: f64) -> Result<(), SgcsError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(SgcsError::InvalidParam {
+            name,
+            range,
+            value: value.to_string(),
+        })
+    }
+}
+
+impl Params {
+    /// Checks every parameter; the error names the first invalid one and its valid range.
+    pub fn validate(&self) -> Result<(), SgcsError> {
+        let p = self;
+        check(p.eps_b > 0.0 && p.eps_b <= 1.0, "eps_b", "(0, 1]", p.eps_b)?;
+        check(p.eps_n >= 0.0 && p.eps_n <= 1.0, "eps_n", "[0, 1]", p.eps_n)?;
+        check(p.eta > 0.0 && p.eta < 2.0, "eta", "(0, 2)", p.eta)?;
+        check(p.alpha >= 0.0 && p.alpha < 1.0, "alpha", "[0, 1)", p.alpha)?;
+        check(p.lambda >= 1, "lambda", "[1, 2^32)", f64::from(p.lambda))?;
+        check(
+            p.max_cells >= 3,
+            "max_cells",
+            "[3, usize::MAX]",
+            p.max_cells as f64,
+        )?;
+        check(
+            p.activation_cutoff >= 0.0 && p.activation_cutoff < 1.0,
+            "activation_cutoff",
+            "[0, 1)",
+            p.activation_cutoff,
+        )?;
+        Ok(())
+    }
+
+    /// `ln(1/cutoff)`: a cell is active when `|ξ − w_c|² ≤ this · δ_c²` (infinite without cutoff).
+    pub(crate) fn reach_sq(&self) -> f64 {
+        if self.activation_cutoff > 0.0 {
+            -self.activation_cutoff.ln()
+        } else {
+            f64::INFINITY
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_the_papers_and_valid() {
+        let p = Params::default();
+        assert_eq!(
+            (p.eps_b, p.eps_n, p.eta, p.alpha, p.lambda),
+            (0.01, 0.001, 0.1, 0.05, 300)
+        );
+        assert_eq!(p.output_rule, OutputRule::Normalized);
+        p.validate().unwrap();
+    }
+
+    #[test]
+    fn errors_name_the_parameter_and_range() {
+        let cases: Vec<(Params, &str, &str)> = vec![
+            (
+                Params {
+                    eps_b: 0.0,
+                    ..Params::default()
+                },
+                "eps_b",
+                "(0, 1]",
+            ),
+            (
+                Params {
+                    eps_n: -1.0,
+                    ..Params::default()
+                },
+                "eps_n",
+                "[0, 1]",
+            ),
+            (
+                Params {
+                    eta: 2.5,
+                    ..Params::default()
+                },
+                "eta",
+                "(0, 2)",
+            ),
+            (
+                Params {
+                    eta: f64::NAN,
+                    ..Params::default()
+                },
+                "eta",
+                "(0, 2)",
+            ),
+            (
+                Params {
+                    alpha: 1.0,
+                    ..Params::default()
+                },
+                "alpha",
+                "[0, 1)",
+            ),
+            (
+                Params {
+                    lambda: 0,
+                    ..Params::default()
+                },
+                "lambda",
+                "[1",
+            ),
+            (
+                Params {
+                    max_cells: 2,
+                    ..Params::default()
+                },
+                "max_cells",
+                "[3",
+            ),
+            (
+                Params {
+                    activation_cutoff: 1.0,
+                    ..Params::default()
+                },
+                "activation_cutoff",
+                "[0, 1)",
+            ),
+        ];
+        for (p, name, range) in cases {
+            let msg = p.validate().unwrap_err().to_string();
+            assert!(msg.contains(name) && msg.contains(range), "{msg}");
+        }
+    }
+
+    #[test]
+    fn reach_matches_cutoff() {
+        let p = Params {
+            activation_cutoff: 1e-8,
+            ..Params::default()
+        };
+        let r2 = p.reach_sq();
+        assert!(((-r2).exp() - 1e-8).abs() < 1e-20);
+        let p = Params {
+            activation_cutoff: 0.0,
+            ..Params::default()
+        };
+        assert!(p.reach_sq().is_infinite());
+    }
+}
