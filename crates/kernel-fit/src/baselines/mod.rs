@@ -1,1 +1,137 @@
-//! Baselines the SGCS fit is compared against (filled in by the benchmark issue).
+//! Baselines the SGCS fit is compared against: a uniform grid and hierarchical radiosity.
+//!
+//! Both approximate the same target as the network, ζ(s, t) over `[0, 1)²` (s = sender,
+//! t = receiver, SPEC §2), and both implement [`Approximation`], so
+//! [`Reference::errors`](crate::Reference::errors) measures them exactly as it measures SGCS.
+//!
+//! - [`UniformGrid`]: a g × g piecewise-constant grid over (s, t); each block holds the mean ζ
+//!   of `m` random rays inside it. g² basis functions, g²·m rays.
+//! - [`HierarchicalRadiosity`]: Hanrahan, Salzman & Aupperle (1991) in Flatland. Elements are
+//!   intervals of surface edges, refined by halving; each final link is one basis function holding
+//!   the mean ζ over its (s, t) rectangle. See the `hr` module docs below for the linking rule, the
+//!   oracle and the link estimate.
+//!
+//! The `run_*` functions are what `flatland bench` loops over: each returns a [`BaselineRun`] with
+//! the approximation, rays cast, wall time, basis-function count and memory.
+//!
+//! **Rays.** Every kernel evaluation a baseline makes counts as one ray, whether or not the
+//! geometry layer needed to trace it (it may skip back-facing or unoccludable pairs): that is the
+//! same accounting the SGCS fit uses for its samples.
+//!
+//! ```no_run
+//! use flatland_geom::{Kernel, Scene};
+//! use kernel_fit::Reference;
+//! use kernel_fit::baselines::{run_hr_at_budget, run_uniform, HrParams, UniformParams};
+//!
+//! let scene = Scene::load("scenes/fig3.ron").unwrap();
+//! let kernel = Kernel::new(scene);
+//! let reference = Reference::new(&kernel, 256, 10_000, 1);
+//! let hr = run_hr_at_budget(&kernel, 400, 7, &HrParams::default()).unwrap();
+//! let uniform = run_uniform(&kernel, 400, 7, &UniformParams::default()).unwrap();
+//! println!("HR {:?}, uniform {:?}", reference.errors(&hr.approx), reference.errors(&uniform.approx));
+//! ```
+
+mod hr;
+mod uniform;
+
+pub use hr::{
+    HierarchicalRadiosity, HrLink, HrParams, HrStats, LinkEstimate, count_initial_links,
+    f_eps_for_budget, hr_params_for_budget, run_hr, run_hr_at_budget,
+};
+pub use uniform::{UniformGrid, UniformParams, run_uniform};
+
+use crate::Approximation;
+use std::time::Duration;
+
+/// One baseline run: what `flatland bench` records per method, budget and seed.
+#[derive(Clone, Debug)]
+pub struct BaselineRun<A> {
+    /// The approximation built.
+    pub approx: A,
+    /// Kernel evaluations (rays) spent building it.
+    pub rays: u64,
+    /// Wall time of the build (not of any parameter search that chose its settings).
+    pub wall: Duration,
+    /// Number of basis functions (blocks, links).
+    pub basis_functions: usize,
+    /// Bytes of the representation.
+    pub memory_bytes: usize,
+}
+
+impl<A: Approximation> BaselineRun<A> {
+    fn new(approx: A, rays: u64, wall: Duration) -> Self {
+        let basis_functions = approx.basis_functions();
+        let memory_bytes = approx.memory_bytes();
+        BaselineRun {
+            approx,
+            rays,
+            wall,
+            basis_functions,
+            memory_bytes,
+        }
+    }
+}
+
+/// SplitMix64 finaliser: decorrelates per-item seeds derived from one run seed.
+fn mix_seed(seed: u64, item: u64) -> u64 {
+    let mut z = seed
+        ^ item
+            .wrapping_mul(0x9e37_79b9_7f4a_7c15)
+            .wrapping_add(0x632b_e59b_d9b4_e019);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+/// Shared by the tests of both baselines: small scenes built in code, seeded.
+#[cfg(test)]
+pub(crate) mod test_support {
+    use flatland_geom::{Edge, Kernel, Role, Scene};
+    use glam::DVec2;
+
+    /// A surface edge from `a` to `b` (front = left of a→b).
+    pub fn surface(a: [f64; 2], b: [f64; 2], reflectance: f64, emission: f64) -> Edge {
+        Edge {
+            a: DVec2::from(a),
+            b: DVec2::from(b),
+            reflectance,
+            emission,
+            role: Role::Surface,
+            two_sided: false,
+        }
+    }
+
+    /// The closed unit box, counter-clockwise (facing in), the floor emitting.
+    pub fn box_edges() -> Vec<Edge> {
+        vec![
+            surface([0.0, 0.0], [1.0, 0.0], 0.5, 1.0),
+            surface([1.0, 0.0], [1.0, 1.0], 0.7, 0.0),
+            surface([1.0, 1.0], [0.0, 1.0], 0.6, 0.0),
+            surface([0.0, 1.0], [0.0, 0.0], 0.8, 0.0),
+        ]
+    }
+
+    /// The closed unit box.
+    pub fn box_kernel() -> Kernel {
+        kernel(box_edges())
+    }
+
+    /// The unit box with a floating two-sided blocker casting shadows (like the paper's Fig. 3).
+    pub fn blocker_kernel() -> Kernel {
+        let mut edges = box_edges();
+        edges.push(Edge {
+            a: DVec2::new(0.3, 0.45),
+            b: DVec2::new(0.65, 0.55),
+            reflectance: 0.5,
+            emission: 0.0,
+            role: Role::Blocker,
+            two_sided: true,
+        });
+        kernel(edges)
+    }
+
+    /// A kernel over `edges` (which must be valid).
+    pub fn kernel(edges: Vec<Edge>) -> Kernel {
+        Kernel::new(Scene::new(edges).expect("valid test scene"))
+    }
+}

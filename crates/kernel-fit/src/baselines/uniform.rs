@@ -1,0 +1,264 @@
+//! The uniform baseline: ζ piecewise constant on a g × g grid of (s, t) blocks.
+//!
+//! Block `(i, j)` covers `s ∈ [i/g, (i+1)/g)`, `t ∈ [j/g, (j+1)/g)` and holds the mean ζ of
+//! `m` uniformly random points inside it (one seeded stream, so a run is reproducible and the
+//! batch evaluation stays deterministic). It knows nothing about the scene: blocks straddle edge
+//! boundaries and shadow edges alike, which is what makes it the floor every adaptive method must
+//! beat.
+
+use super::{BaselineRun, mix_seed};
+use crate::{Approximation, FitError};
+use flatland_geom::Kernel;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::time::Instant;
+
+/// Settings of the uniform grid.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct UniformParams {
+    /// Rays (random ζ evaluations) averaged per block, `m ≥ 1`. Default 20, the per-link count
+    /// the paper uses for hierarchical radiosity.
+    pub rays_per_block: usize,
+}
+
+impl Default for UniformParams {
+    fn default() -> Self {
+        UniformParams { rays_per_block: 20 }
+    }
+}
+
+impl UniformParams {
+    /// The one place these values are checked.
+    pub fn check(&self) -> Result<(), FitError> {
+        if self.rays_per_block == 0 {
+            return Err(FitError::InvalidParameter {
+                name: "rays_per_block",
+                value: self.rays_per_block.to_string(),
+                valid: "at least 1",
+            });
+        }
+        Ok(())
+    }
+}
+
+/// A g × g piecewise-constant approximation of ζ.
+#[derive(Clone, Debug, PartialEq)]
+pub struct UniformGrid {
+    g: usize,
+    /// Row-major, row ↔ s.
+    values: Vec<f64>,
+    rays: u64,
+}
+
+impl UniformGrid {
+    /// Builds the grid with `g` blocks per axis, `params.rays_per_block` rays per block.
+    pub fn build(
+        kernel: &Kernel,
+        g: usize,
+        params: &UniformParams,
+        seed: u64,
+    ) -> Result<UniformGrid, FitError> {
+        params.check()?;
+        if g == 0 {
+            return Err(FitError::InvalidParameter {
+                name: "grid",
+                value: g.to_string(),
+                valid: "at least 1",
+            });
+        }
+        let points = sample_points(g, params.rays_per_block, seed);
+        let zeta = kernel.zeta_batch(&points);
+        let m = params.rays_per_block;
+        let values: Vec<f64> = zeta
+            .chunks_exact(m)
+            .map(|c| c.iter().sum::<f64>() / m as f64)
+            .collect();
+        Ok(UniformGrid {
+            g,
+            values,
+            rays: points.len() as u64,
+        })
+    }
+
+    /// Blocks per axis.
+    pub fn g(&self) -> usize {
+        self.g
+    }
+
+    /// The block values, row-major (row ↔ s).
+    pub fn values(&self) -> &[f64] {
+        &self.values
+    }
+
+    /// Rays spent building the grid (g² · m).
+    pub fn rays(&self) -> u64 {
+        self.rays
+    }
+
+    fn block(&self, x: f64) -> usize {
+        // `as usize` saturates negatives and NaN to 0; the min clamps s = 1.
+        ((x * self.g as f64) as usize).min(self.g - 1)
+    }
+}
+
+/// The `m` sample points of every block, block by block in row-major order: the ray plan of
+/// [`UniformGrid::build`], exposed to tests so they can recompute the block means independently.
+fn sample_points(g: usize, m: usize, seed: u64) -> Vec<[f64; 2]> {
+    let mut rng = ChaCha8Rng::seed_from_u64(mix_seed(seed, 0x756e_6966));
+    let inv = 1.0 / g as f64;
+    let mut points = Vec::with_capacity(g * g * m);
+    for i in 0..g {
+        for j in 0..g {
+            for _ in 0..m {
+                let s = (i as f64 + rng.random::<f64>()) * inv;
+                let t = (j as f64 + rng.random::<f64>()) * inv;
+                points.push([s.min(next_below(1.0)), t.min(next_below(1.0))]);
+            }
+        }
+    }
+    points
+}
+
+/// The largest f64 below `x > 0` (keeps rounded samples inside `[0, 1)`).
+fn next_below(x: f64) -> f64 {
+    f64::from_bits(x.to_bits() - 1)
+}
+
+impl Approximation for UniformGrid {
+    fn zeta(&self, s: f64, t: f64) -> f64 {
+        self.values[self.block(s) * self.g + self.block(t)]
+    }
+
+    fn basis_functions(&self) -> usize {
+        self.values.len()
+    }
+
+    fn memory_bytes(&self) -> usize {
+        self.values.len() * std::mem::size_of::<f64>()
+    }
+}
+
+/// The uniform baseline at a budget of basis functions: `g = round(√budget)` (at least 1), so the
+/// count is the nearest square, reported in the run.
+pub fn run_uniform(
+    kernel: &Kernel,
+    budget: usize,
+    seed: u64,
+    params: &UniformParams,
+) -> Result<BaselineRun<UniformGrid>, FitError> {
+    if budget == 0 {
+        return Err(FitError::InvalidParameter {
+            name: "budget",
+            value: budget.to_string(),
+            valid: "at least 1 basis function",
+        });
+    }
+    let g = ((budget as f64).sqrt().round() as usize).max(1);
+    let start = Instant::now();
+    let grid = UniformGrid::build(kernel, g, params, seed)?;
+    let wall = start.elapsed();
+    let rays = grid.rays;
+    Ok(BaselineRun::new(grid, rays, wall))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::baselines::test_support::{blocker_kernel, box_kernel};
+    use crate::{Reference, grid_point};
+
+    #[test]
+    fn error_falls_with_g() {
+        let kernel = blocker_kernel();
+        let reference = Reference::new(&kernel, 96, 4000, 3);
+        let params = UniformParams { rays_per_block: 16 };
+        let errors: Vec<f64> = [4, 8, 16, 32]
+            .iter()
+            .map(|&g| {
+                reference
+                    .errors(&UniformGrid::build(&kernel, g, &params, 11).unwrap())
+                    .grid
+            })
+            .collect();
+        for w in errors.windows(2) {
+            assert!(w[1] < w[0], "uniform error must fall with g: {errors:?}");
+        }
+    }
+
+    #[test]
+    fn values_and_errors_match_an_independent_recomputation() {
+        let kernel = blocker_kernel();
+        let params = UniformParams { rays_per_block: 5 };
+        let (g, seed) = (7, 42);
+        let grid = UniformGrid::build(&kernel, g, &params, seed).unwrap();
+
+        // Block means from single evaluations, not the batch API.
+        let points = sample_points(g, params.rays_per_block, seed);
+        for (b, chunk) in points.chunks_exact(params.rays_per_block).enumerate() {
+            let (i, j) = (b / g, b % g);
+            for &[s, t] in chunk {
+                assert!((i as f64 / g as f64..(i + 1) as f64 / g as f64).contains(&s));
+                assert!((j as f64 / g as f64..(j + 1) as f64 / g as f64).contains(&t));
+            }
+            let mean =
+                chunk.iter().map(|&[s, t]| kernel.zeta(s, t)).sum::<f64>() / chunk.len() as f64;
+            let stored = grid.values()[b];
+            assert!(
+                (mean - stored).abs() <= 1e-12 * mean.abs().max(1.0),
+                "block {b}: {mean} vs {stored}"
+            );
+        }
+
+        // The reported error from the saved values, by hand.
+        let res = 64;
+        let reference = Reference::new(&kernel, res, 500, 9);
+        let (mut num, mut den) = (0.0, 0.0);
+        for k in 0..res * res {
+            let (s, t) = grid_point(res, k);
+            let exact = kernel.zeta(s, t);
+            let (i, j) = ((s * g as f64) as usize, (t * g as f64) as usize);
+            let approx = grid.values()[i * g + j];
+            num += (approx - exact) * (approx - exact);
+            den += exact * exact;
+        }
+        let by_hand = (num / den).sqrt();
+        let reported = reference.errors(&grid).grid;
+        assert!(
+            (by_hand - reported).abs() < 1e-9,
+            "by hand {by_hand} vs reported {reported}"
+        );
+    }
+
+    #[test]
+    fn rays_and_counts_are_reported() {
+        let kernel = box_kernel();
+        let run = run_uniform(&kernel, 400, 1, &UniformParams { rays_per_block: 3 }).unwrap();
+        assert_eq!(run.basis_functions, 400);
+        assert_eq!(run.rays, 400 * 3);
+        assert_eq!(run.memory_bytes, 400 * 8);
+        // 50 is not a square: the nearest one (49) is used and reported.
+        let run = run_uniform(&kernel, 50, 1, &UniformParams::default()).unwrap();
+        assert_eq!(run.basis_functions, 49);
+        assert_eq!(run.rays, 49 * 20);
+        assert!(
+            run.approx
+                .values()
+                .iter()
+                .all(|v| v.is_finite() && *v >= 0.0)
+        );
+    }
+
+    #[test]
+    fn same_seed_same_grid_and_bad_params_rejected() {
+        let kernel = box_kernel();
+        let p = UniformParams::default();
+        assert_eq!(
+            UniformGrid::build(&kernel, 5, &p, 3).unwrap(),
+            UniformGrid::build(&kernel, 5, &p, 3).unwrap()
+        );
+        let err =
+            UniformGrid::build(&kernel, 5, &UniformParams { rays_per_block: 0 }, 3).unwrap_err();
+        assert!(err.to_string().contains("rays_per_block"), "{err}");
+        assert!(run_uniform(&kernel, 0, 1, &p).is_err());
+    }
+}
