@@ -1,0 +1,117 @@
+//! The one error type of this crate.
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong when building, loading or saving a scene or a kernel.
+///
+/// Messages name the edge (by its index in the file, from 0), the rule and the valid range,
+/// or the file, line and column of a parse error.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum GeomError {
+    /// A coordinate or the edge's direction is not a finite number.
+    #[error("edge {edge}: {field} must be finite, but is {value}")]
+    NonFinite {
+        /// Index of the offending edge.
+        edge: usize,
+        /// Which field (`a.x`, `b.y`, `b - a`, ...).
+        field: &'static str,
+        /// The offending value.
+        value: f64,
+    },
+    /// The two end points coincide (or are so close that the length underflows).
+    #[error(
+        "edge {edge}: zero length (a = ({ax}, {ay}), b = ({bx}, {by})); an edge needs two distinct end points"
+    )]
+    ZeroLength {
+        /// Index of the offending edge.
+        edge: usize,
+        /// `a.x`.
+        ax: f64,
+        /// `a.y`.
+        ay: f64,
+        /// `b.x`.
+        bx: f64,
+        /// `b.y`.
+        by: f64,
+    },
+    /// Reflectance outside `[0, 1]` (or NaN).
+    #[error("edge {edge}: reflectance must be in [0, 1], but is {value}")]
+    Reflectance {
+        /// Index of the offending edge.
+        edge: usize,
+        /// The offending value.
+        value: f64,
+    },
+    /// Negative or non-finite emission.
+    #[error("edge {edge}: emission must be finite and >= 0, but is {value}")]
+    Emission {
+        /// Index of the offending edge.
+        edge: usize,
+        /// The offending value.
+        value: f64,
+    },
+    /// The scene has no edge with role `surface`, so there is nothing to parameterize.
+    #[error(
+        "scene has no surface edge ({edges} edges given): at least one edge must have role `surface`"
+    )]
+    NoSurface {
+        /// How many edges the scene has.
+        edges: usize,
+    },
+    /// An edge index outside the scene.
+    #[error("edge index {index} out of range: the scene has {len} edges (valid 0..{len})")]
+    EdgeIndex {
+        /// The requested index.
+        index: usize,
+        /// The number of edges.
+        len: usize,
+    },
+    /// A parameter outside its valid range.
+    #[error("{name} must be in {range}, but is {value}")]
+    Param {
+        /// The parameter's name.
+        name: &'static str,
+        /// The valid range, e.g. `[0, 1]`.
+        range: &'static str,
+        /// The offending value.
+        value: f64,
+    },
+    /// The file extension is neither `.ron` nor `.json`.
+    #[error("{}: unknown scene format (expected a .ron or .json file name)", path.display())]
+    Format {
+        /// The file.
+        path: PathBuf,
+    },
+    /// A syntax or schema error, with its position (1-based line and column).
+    #[error("{location}{line}:{column}: {message}")]
+    Parse {
+        /// `"path:"` or empty for in-memory text.
+        location: String,
+        /// 1-based line.
+        line: usize,
+        /// 1-based column.
+        column: usize,
+        /// What the parser said.
+        message: String,
+    },
+    /// A scene file that parsed but is not a valid scene.
+    #[error("{}: {source}", path.display())]
+    InvalidFile {
+        /// The file.
+        path: PathBuf,
+        /// Why the scene is invalid.
+        source: Box<GeomError>,
+    },
+    /// Reading or writing a file failed.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+    /// Serializing a scene failed (should not happen for a valid scene).
+    #[error("cannot serialize scene: {0}")]
+    Serialize(String),
+}

@@ -1,0 +1,125 @@
+//! Scene files: the same schema in RON and JSON, chosen by extension; atomic saves.
+
+use std::path::{Path, PathBuf};
+
+use crate::GeomError;
+use crate::scene::{RawScene, Scene};
+
+/// The two file formats.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Format {
+    Ron,
+    Json,
+}
+
+fn format_of(path: &Path) -> Result<Format, GeomError> {
+    match path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .as_deref()
+    {
+        Some("ron") => Ok(Format::Ron),
+        Some("json") => Ok(Format::Json),
+        _ => Err(GeomError::Format {
+            path: path.to_path_buf(),
+        }),
+    }
+}
+
+fn parse_json(text: &str, location: &str) -> Result<RawScene, GeomError> {
+    serde_json::from_str(text).map_err(|e| {
+        let full = e.to_string();
+        // serde_json appends " at line L column C"; we put the position in front instead.
+        let message = match full.rfind(" at line ") {
+            Some(i) => full[..i].to_string(),
+            None => full,
+        };
+        GeomError::Parse {
+            location: location.to_string(),
+            line: e.line(),
+            column: e.column(),
+            message,
+        }
+    })
+}
+
+fn parse_ron(text: &str, location: &str) -> Result<RawScene, GeomError> {
+    ron::from_str(text).map_err(|e| GeomError::Parse {
+        location: location.to_string(),
+        line: e.span.start.line,
+        column: e.span.start.col,
+        message: e.code.to_string(),
+    })
+}
+
+impl Scene {
+    /// Parses and validates a scene from JSON text.
+    pub fn from_json_str(text: &str) -> Result<Scene, GeomError> {
+        Scene::try_from(parse_json(text, "")?)
+    }
+
+    /// Parses and validates a scene from RON text (`//` comments allowed).
+    pub fn from_ron_str(text: &str) -> Result<Scene, GeomError> {
+        Scene::try_from(parse_ron(text, "")?)
+    }
+
+    /// Loads a `.ron` or `.json` scene file (by extension, case-insensitive). Parse errors read
+    /// `file:line:column: message`; validation errors `file: edge N: rule`.
+    pub fn load(path: impl AsRef<Path>) -> Result<Scene, GeomError> {
+        let path = path.as_ref();
+        let format = format_of(path)?;
+        let text = std::fs::read_to_string(path).map_err(|source| GeomError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let location = format!("{}:", path.display());
+        let raw = match format {
+            Format::Ron => parse_ron(&text, &location)?,
+            Format::Json => parse_json(&text, &location)?,
+        };
+        Scene::try_from(raw).map_err(|e| GeomError::InvalidFile {
+            path: path.to_path_buf(),
+            source: Box::new(e),
+        })
+    }
+
+    /// Saves the scene as `.ron` or `.json` (by extension). Atomic: writes a temporary file in
+    /// the same directory and renames it over `path`, so a reader never sees half a file.
+    pub fn save(&self, path: impl AsRef<Path>) -> Result<(), GeomError> {
+        let path = path.as_ref();
+        let text = match format_of(path)? {
+            Format::Ron => {
+                let config = ron::ser::PrettyConfig::new().depth_limit(3);
+                ron::ser::to_string_pretty(&self.to_raw(), config)
+                    .map_err(|e| GeomError::Serialize(e.to_string()))?
+            }
+            Format::Json => serde_json::to_string_pretty(&self.to_raw())
+                .map_err(|e| GeomError::Serialize(e.to_string()))?,
+        };
+        write_atomic(path, format!("{text}\n").as_bytes())
+    }
+}
+
+/// Writes `bytes` to `path` through a temporary file in the same directory and a rename.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), GeomError> {
+    let io = |source| GeomError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let name = path.file_name().ok_or_else(|| {
+        io(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "not a file name",
+        ))
+    })?;
+    let mut tmp_name = std::ffi::OsString::from(".");
+    tmp_name.push(name);
+    tmp_name.push(format!(".tmp{}", std::process::id()));
+    let tmp: PathBuf = path.with_file_name(tmp_name);
+    let result = std::fs::write(&tmp, bytes).and_then(|()| std::fs::rename(&tmp, path));
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result.map_err(io)
+}

@@ -1,0 +1,129 @@
+//! Shared test helpers: `assert_close!`, one seeded RNG, scene generators.
+
+use glam::DVec2;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use crate::{Edge, Scene};
+
+/// Asserts `|a − b| <= tol` (absolute) and prints both values and the difference otherwise.
+#[macro_export]
+macro_rules! assert_close {
+    ($a:expr, $b:expr, $tol:expr $(, $($msg:tt)+)?) => {{
+        let (a, b, tol): (f64, f64, f64) = ($a, $b, $tol);
+        assert!(
+            (a - b).abs() <= tol,
+            "assert_close failed: {} = {a:e}, {} = {b:e}, |diff| = {:e} > tol {tol:e}{}",
+            stringify!($a),
+            stringify!($b),
+            (a - b).abs(),
+            { let _m = String::new(); $( let _m = format!(": {}", format_args!($($msg)+)); )? _m }
+        );
+    }};
+}
+
+/// The one seeded generator of the crate's tests.
+pub fn rng(seed: u64) -> ChaCha8Rng {
+    ChaCha8Rng::seed_from_u64(seed)
+}
+
+/// A counter-clockwise (inward-facing) closed polygon room with reflectance `rho`.
+pub fn room(points: &[DVec2], rho: f64) -> Vec<Edge> {
+    (0..points.len())
+        .map(|i| Edge::surface(points[i], points[(i + 1) % points.len()], rho))
+        .collect()
+}
+
+/// The unit-square box room (4 surfaces, the floor emits).
+pub fn unit_box() -> Scene {
+    let p = [
+        DVec2::new(0.0, 0.0),
+        DVec2::new(1.0, 0.0),
+        DVec2::new(1.0, 1.0),
+        DVec2::new(0.0, 1.0),
+    ];
+    let mut edges = room(&p, 0.5);
+    edges[0].emission = 1.0;
+    Scene::new(edges).unwrap()
+}
+
+/// The bundled scene `scenes/NAME.ron`.
+pub fn bundled(name: &str) -> Scene {
+    Scene::load(format!(
+        "{}/../../scenes/{name}.ron",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap()
+}
+
+/// A random point in `[-1, 1]²`.
+pub fn point(rng: &mut ChaCha8Rng) -> DVec2 {
+    DVec2::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0))
+}
+
+/// A random valid scene from `seed`: 2–12 edges, random roles, materials and sidedness. With
+/// `snap`, coordinates are multiples of ½ in `[-1, 1]`, so shared end points, collinear,
+/// overlapping and touching edges (the grazing cases) are common.
+pub fn random_scene(seed: u64, snap: bool) -> Scene {
+    let mut r = rng(seed);
+    let n = r.random_range(2..=12);
+    let pick = |r: &mut ChaCha8Rng| {
+        let p = point(r);
+        if snap { (p * 2.0).round() / 2.0 } else { p }
+    };
+    let mut edges: Vec<Edge> = Vec::new();
+    while edges.len() < n {
+        let a = pick(&mut r);
+        // Often continue from the previous end point (chains, corners).
+        let a = match edges.last() {
+            Some(e) if r.random_bool(0.4) => e.b,
+            _ => a,
+        };
+        let b = pick(&mut r);
+        if a == b {
+            continue;
+        }
+        let mut e = Edge::surface(a, b, r.random_range(0.0..=1.0));
+        if r.random_bool(0.2) {
+            e.emission = r.random_range(0.0..3.0);
+        }
+        e.two_sided = r.random_bool(0.25);
+        if !edges.is_empty() && r.random_bool(0.3) {
+            e.role = crate::Role::Blocker;
+        }
+        edges.push(e);
+    }
+    Scene::new(edges).unwrap()
+}
+
+/// Nodes and weights of 16-point Gauss–Legendre on `[-1, 1]`.
+pub const GAUSS16: [(f64, f64); 8] = [
+    (0.095_012_509_837_637_44, 0.189_450_610_455_068_47),
+    (0.281_603_550_779_258_9, 0.182_603_415_044_923_6),
+    (0.458_016_777_657_227_37, 0.169_156_519_395_002_56),
+    (0.617_876_244_402_643_8, 0.149_595_988_816_576_82),
+    (0.755_404_408_355_003, 0.124_628_971_255_533_95),
+    (0.865_631_202_387_831_8, 0.095_158_511_682_492_9),
+    (0.944_575_023_073_232_6, 0.062_253_523_938_647_776),
+    (0.989_400_934_991_649_9, 0.027_152_459_411_754_058),
+];
+
+/// `∫ f` over `[a, b]` with 16-point Gauss–Legendre.
+pub fn gauss(a: f64, b: f64, mut f: impl FnMut(f64) -> f64) -> f64 {
+    let (c, h) = ((a + b) / 2.0, (b - a) / 2.0);
+    GAUSS16
+        .iter()
+        .map(|&(x, w)| w * (f(c - h * x) + f(c + h * x)))
+        .sum::<f64>()
+        * h
+}
+
+#[test]
+fn gauss16_is_exact_for_degree_31() {
+    crate::assert_close!(
+        gauss(-1.0, 1.0, |x| x.powi(30) + x.powi(31)),
+        2.0 / 31.0,
+        1e-14
+    );
+    crate::assert_close!(gauss(0.0, 2.0, |x| x * x), 8.0 / 3.0, 1e-14);
+}
