@@ -2,8 +2,10 @@
 //!
 //! The tree is built by median splits along the widest axis. Between rebuilds it is kept
 //! *conservative*, never exact: when a cell moves, its leaf's box and the boxes above it grow to
-//! contain the new position; when a cell's width `δ_c` grows, the nodes' `max_width` grow. Boxes and
-//! widths never shrink until the next rebuild, so pruning with them never drops a cell that
+//! contain the new position. Each node also keeps a *reach box*, the bounding box of its cells'
+//! activation balls `|x − w_c| ≤ R δ_c` (`R² = ln(1/cutoff)`), grown the same way when a cell moves
+//! or widens. A cell with a wide support only widens the boxes that hold it, so wide cells at the
+//! border do not spoil pruning elsewhere. Boxes never shrink until the next rebuild, so pruning with them never drops a cell that
 //! belongs to a result: queries are exact, only their cost degrades, and a periodic rebuild
 //! restores it. Results never depend on the tree's shape (callers sort by cell id), so when and
 //! how the tree is rebuilt cannot change a network's behaviour.
@@ -20,6 +22,7 @@ enum Kind {
 #[derive(Clone, Debug)]
 struct Node {
     parent: u32,
+    /// At least the largest width below (conservative like the boxes).
     max_width: f64,
     kind: Kind,
 }
@@ -27,8 +30,10 @@ struct Node {
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Index {
     n: usize,
+    /// `R`: a cell reaches `R δ_c` from its centre (infinite without cutoff).
+    reach: f64,
     nodes: Vec<Node>,
-    /// Per node `2n` values: lower corner then upper corner.
+    /// Per node `4n` values: the position box's lower and upper corners, then the reach box's.
     bounds: Vec<f64>,
     leaf_of: Vec<u32>,
     built_len: usize,
@@ -37,10 +42,11 @@ pub(crate) struct Index {
 
 impl Index {
     /// Builds the tree over all cells.
-    pub(crate) fn build(n: usize, pos: &[f64], width: &[f64]) -> Index {
+    pub(crate) fn build(n: usize, reach: f64, pos: &[f64], width: &[f64]) -> Index {
         let len = width.len();
         let mut index = Index {
             n,
+            reach,
             nodes: Vec::with_capacity(2 * len / LEAF_SIZE + 2),
             bounds: Vec::new(),
             leaf_of: vec![NONE; len],
@@ -57,17 +63,24 @@ impl Index {
         let me = self.nodes.len() as u32;
         let mut lo = vec![f64::INFINITY; n];
         let mut hi = vec![f64::NEG_INFINITY; n];
+        let mut rlo = vec![f64::INFINITY; n];
+        let mut rhi = vec![f64::NEG_INFINITY; n];
         let mut max_width = 0.0f64;
         for &c in ids.iter() {
+            max_width = max_width.max(width[c as usize]);
             let p = &pos[c as usize * n..(c as usize + 1) * n];
+            let rho = self.rho(width[c as usize]);
             for d in 0..n {
                 lo[d] = lo[d].min(p[d]);
                 hi[d] = hi[d].max(p[d]);
+                rlo[d] = rlo[d].min(p[d] - rho);
+                rhi[d] = rhi[d].max(p[d] + rho);
             }
-            max_width = max_width.max(width[c as usize]);
         }
         self.bounds.extend_from_slice(&lo);
         self.bounds.extend_from_slice(&hi);
+        self.bounds.extend_from_slice(&rlo);
+        self.bounds.extend_from_slice(&rhi);
         self.nodes.push(Node {
             parent,
             max_width,
@@ -109,13 +122,27 @@ impl Index {
     }
 
     fn lo(&self, node: u32) -> &[f64] {
-        let k = node as usize * 2 * self.n;
+        let k = node as usize * 4 * self.n;
         &self.bounds[k..k + self.n]
     }
 
     fn hi(&self, node: u32) -> &[f64] {
-        let k = node as usize * 2 * self.n;
+        let k = node as usize * 4 * self.n;
         &self.bounds[k + self.n..k + 2 * self.n]
+    }
+
+    /// The reach-box half width of a cell: `R δ`, padded by a relative 1e-9 so rounding can never
+    /// make the box test stricter than the exact activation test it guards.
+    fn rho(&self, width: f64) -> f64 {
+        self.reach * width * (1.0 + 1e-9)
+    }
+
+    /// Whether `x` lies in the node's reach box (some cell below may be active at `x`).
+    fn reaches(&self, node: u32, x: &[f64]) -> bool {
+        let n = self.n;
+        let k = node as usize * 4 * n + 2 * n;
+        let (rlo, rhi) = (&self.bounds[k..k + n], &self.bounds[k + n..k + 2 * n]);
+        (0..n).all(|d| rlo[d] <= x[d] && x[d] <= rhi[d])
     }
 
     /// Squared distance from `x` to the node's box.
@@ -135,12 +162,12 @@ impl Index {
         s
     }
 
-    /// Grows the boxes from `c`'s leaf upwards so they contain `p` (the cell's new position).
+    /// Grows the position boxes from `c`'s leaf upwards so they contain `p` (its new position).
     pub(crate) fn moved(&mut self, c: usize, p: &[f64]) {
         let n = self.n;
         let mut node = self.leaf_of[c];
         while node != NONE {
-            let k = node as usize * 2 * n;
+            let k = node as usize * 4 * n;
             let mut grew = false;
             for d in 0..n {
                 if p[d] < self.bounds[k + d] {
@@ -159,11 +186,33 @@ impl Index {
         }
     }
 
-    /// Raises `max_width` from `c`'s leaf upwards to at least `w`.
-    pub(crate) fn widened(&mut self, c: usize, w: f64) {
+    /// Grows the reach boxes from `c`'s leaf upwards to hold the ball of radius `R · width`
+    /// around `p` (the cell's position).
+    pub(crate) fn reach_to(&mut self, c: usize, p: &[f64], width: f64) {
+        let n = self.n;
+        let rho = self.rho(width);
         let mut node = self.leaf_of[c];
-        while node != NONE && self.nodes[node as usize].max_width < w {
-            self.nodes[node as usize].max_width = w;
+        while node != NONE {
+            let k = node as usize * 4 * n + 2 * n;
+            let mut grew = false;
+            let nd = &mut self.nodes[node as usize];
+            if nd.max_width < width {
+                nd.max_width = width;
+                grew = true;
+            }
+            for d in 0..n {
+                if p[d] - rho < self.bounds[k + d] {
+                    self.bounds[k + d] = p[d] - rho;
+                    grew = true;
+                }
+                if p[d] + rho > self.bounds[k + n + d] {
+                    self.bounds[k + n + d] = p[d] + rho;
+                    grew = true;
+                }
+            }
+            if !grew {
+                break;
+            }
             node = self.nodes[node as usize].parent;
         }
     }
@@ -177,7 +226,7 @@ impl Index {
             cells.push(c as u32);
         }
         self.moved(c, p);
-        self.widened(c, w);
+        self.reach_to(c, p, w);
     }
 
     /// The nearest cell to `x`; ties go to the lowest id (so the answer is the brute-force one).
@@ -216,7 +265,7 @@ impl Index {
         best.1
     }
 
-    /// Appends `(c, |x − w_c|²)` for every cell with `|x − w_c|² ≤ reach_sq · δ_c²`, in tree order.
+    /// Appends every cell with `|x − w_c|² ≤ reach_sq · δ_c²`, in tree order.
     pub(crate) fn within(
         &self,
         x: &[f64],
@@ -224,15 +273,18 @@ impl Index {
         width: &[f64],
         reach_sq: f64,
         stack: &mut Vec<u32>,
-        found: &mut Vec<(u32, f64)>,
+        found: &mut Vec<u32>,
     ) {
         let n = self.n;
         stack.clear();
         stack.push(0);
         while let Some(node) = stack.pop() {
             let nd = &self.nodes[node as usize];
-            let mw = nd.max_width;
-            if self.box_dist_sq(node, x) > reach_sq * (mw * mw) {
+            // Two conservative tests: the reach box (tight where widths vary), and the distance to
+            // the position box against the widest cell (tight for round neighbourhoods).
+            if !self.reaches(node, x)
+                || self.box_dist_sq(node, x) > reach_sq * (nd.max_width * nd.max_width)
+            {
                 continue;
             }
             match &nd.kind {
@@ -241,7 +293,7 @@ impl Index {
                         let ci = c as usize;
                         let d2 = dist_sq(&pos[ci * n..(ci + 1) * n], x);
                         if is_active(d2, width[ci], reach_sq) {
-                            found.push((c, d2));
+                            found.push(c);
                         }
                     }
                 }
@@ -276,7 +328,13 @@ impl Index {
                     let mut node = i as u32;
                     while node != NONE {
                         let p = &pos[c * n..(c + 1) * n];
+                        let rho = self.rho(width[c]);
+                        let k = node as usize * 4 * n + 2 * n;
+                        let in_reach = (0..n).all(|d| {
+                            self.bounds[k + d] <= p[d] - rho && p[d] + rho <= self.bounds[k + n + d]
+                        });
                         if self.box_dist_sq(node, p) > 0.0
+                            || !in_reach
                             || self.nodes[node as usize].max_width < width[c]
                         {
                             return Err(format!("index: node {node} does not bound cell {c}"));

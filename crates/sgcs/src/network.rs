@@ -67,6 +67,7 @@ pub struct Network {
 #[derive(Clone, Debug, Default)]
 struct Scratch {
     stack: Vec<u32>,
+    ids: Vec<u32>,
     found: Vec<(u32, f64)>,
     kappa: Vec<f64>,
     touched: Vec<CellId>,
@@ -206,8 +207,13 @@ impl Network {
         for c in 0..len {
             net.width[c] = net.compute_width(c);
         }
-        net.index = Index::build(n, &net.pos, &net.width);
+        net.index = Index::build(n, net.params.reach_sq().sqrt(), &net.pos, &net.width);
         Ok(net)
+    }
+
+    fn rebuild_index(&mut self) {
+        let reach = self.params.reach_sq().sqrt();
+        self.index = Index::build(self.n, reach, &self.pos, &self.width);
     }
 
     /// The learning parameters.
@@ -218,7 +224,11 @@ impl Network {
     /// Replaces the parameters (e.g. live from a viewer) after validating them.
     pub fn set_params(&mut self, p: Params) -> Result<(), SgcsError> {
         p.validate()?;
+        let cutoff_changed = p.activation_cutoff != self.params.activation_cutoff;
         self.params = p;
+        if cutoff_changed {
+            self.rebuild_index(); // the reach boxes depend on the cutoff
+        }
         Ok(())
     }
 
@@ -261,18 +271,18 @@ impl Network {
     pub fn try_step(&mut self, xi: &[f64], zeta: &[f64]) -> Result<StepOutcome, SgcsError> {
         check_values("xi", xi, self.n)?;
         check_values("zeta", zeta, self.m)?;
-        let (n, m) = (self.n, self.m);
+        let m = self.m;
         self.steps += 1;
         let now = self.steps;
         self.index.tick();
         if self.index.wants_rebuild(self.len()) {
-            self.index = Index::build(n, &self.pos, &self.width);
+            self.rebuild_index();
         }
         let mut sc = std::mem::take(&mut self.scratch);
 
         // Best matching unit and the activations above the cutoff, in id order.
         let s = self.index.nearest(xi, &self.pos, &mut sc.stack);
-        self.collect_active(xi, &mut sc.stack, &mut sc.found);
+        self.collect_active(xi, &mut sc.stack, &mut sc.ids, &mut sc.found);
 
         // Output and error.
         sc.kappa.clear();
@@ -360,10 +370,9 @@ impl Network {
 
     fn refresh_width(&mut self, c: CellId) {
         let w = self.compute_width(c);
-        if w > self.width[c] {
-            self.index.widened(c, w);
-        }
         self.width[c] = w;
+        let n = self.n;
+        self.index.reach_to(c, &self.pos[c * n..(c + 1) * n], w);
     }
 
     fn ln_keep(&self) -> f64 {
@@ -383,16 +392,27 @@ impl Network {
         self.stamp[c] = now;
     }
 
-    /// Appends the active cells `(c, M_c(xi))` to `found`, sorted by id.
-    fn collect_active(&self, xi: &[f64], stack: &mut Vec<u32>, found: &mut Vec<(u32, f64)>) {
+    /// Puts the active cells `(c, M_c(xi))` into `found`, sorted by id.
+    fn collect_active(
+        &self,
+        xi: &[f64],
+        stack: &mut Vec<u32>,
+        ids: &mut Vec<u32>,
+        found: &mut Vec<(u32, f64)>,
+    ) {
+        ids.clear();
         found.clear();
         let reach_sq = self.params.reach_sq();
         self.index
-            .within(xi, &self.pos, &self.width, reach_sq, stack, found);
-        found.sort_unstable_by_key(|e| e.0);
-        for e in found.iter_mut() {
-            e.1 = activation(e.1, self.width[e.0 as usize]);
-        }
+            .within(xi, &self.pos, &self.width, reach_sq, stack, ids);
+        // Id order makes every sum independent of the index's shape (and equal to brute force).
+        ids.sort_unstable();
+        let n = self.n;
+        found.extend(ids.iter().map(|&c| {
+            let ci = c as usize;
+            let d2 = dist_sq(&self.pos[ci * n..(ci + 1) * n], xi);
+            (c, activation(d2, self.width[ci]))
+        }));
     }
 
     /// The same as `collect_active`, by visiting every cell (for tests).
@@ -411,10 +431,17 @@ impl Network {
 
     fn active(&self, xi: &[f64]) -> Vec<(u32, f64)> {
         assert_eq!(xi.len(), self.n, "sgcs: xi has the wrong length");
-        let mut stack = Vec::new();
-        let mut found = Vec::new();
-        self.collect_active(xi, &mut stack, &mut found);
+        let (mut stack, mut ids, mut found) = (Vec::new(), Vec::new(), Vec::new());
+        self.collect_active(xi, &mut stack, &mut ids, &mut found);
         found
+    }
+
+    /// The active cells `(c, M_c(ξ))` (those at or above the activation cutoff), ascending by id.
+    pub fn activations(&self, xi: &[f64]) -> Vec<(CellId, f64)> {
+        self.active(xi)
+            .into_iter()
+            .map(|(c, a)| (c as CellId, a))
+            .collect()
     }
 
     /// The network output `κ(ξ) = Σ_c v_c M_c(ξ)` into `out` (length `m`).
@@ -786,9 +813,10 @@ impl Network {
         &self,
         xi: &[f64],
         stack: &mut Vec<u32>,
+        ids: &mut Vec<u32>,
         found: &mut Vec<(u32, f64)>,
     ) {
-        self.collect_active(xi, stack, found);
+        self.collect_active(xi, stack, ids, found);
     }
 
     pub(crate) fn out_flat_mut(&mut self) -> &mut Vec<f64> {
@@ -1011,14 +1039,17 @@ mod tests {
     #[test]
     fn fast_queries_equal_brute_force() {
         let f = |x: f64, y: f64| (5.0 * x).sin() * y + if x > 0.6 { 1.0 } else { 0.0 };
-        let p = Params { lambda: 20, ..Params::default() };
+        let p = Params {
+            lambda: 20,
+            ..Params::default()
+        };
         let net = grown(p, 30_000, 11, f);
         let mut r = rng(12);
         let (mut fast, mut brute) = (Vec::new(), Vec::new());
-        let mut stack = Vec::new();
+        let (mut stack, mut ids) = (Vec::new(), Vec::new());
         for _ in 0..2_000 {
             let xi = [r.random::<f64>() * 1.4 - 0.2, r.random::<f64>() * 1.4 - 0.2];
-            net.collect_active(&xi, &mut stack, &mut fast);
+            net.collect_active(&xi, &mut stack, &mut ids, &mut fast);
             net.collect_active_brute(&xi, &mut brute);
             assert_eq!(fast, brute);
             let nearest = (0..net.len())

@@ -70,8 +70,14 @@ impl Network {
         let mut phi: Vec<(u32, f64)> = Vec::new();
         let mut found = Vec::new();
         let mut stack = Vec::new();
+        let mut ids = Vec::new();
         for i in 0..samples {
-            self.active_into(&inputs[i * n..(i + 1) * n], &mut stack, &mut found);
+            self.active_into(
+                &inputs[i * n..(i + 1) * n],
+                &mut stack,
+                &mut ids,
+                &mut found,
+            );
             phi.extend_from_slice(&found);
             row_start.push(phi.len());
         }
