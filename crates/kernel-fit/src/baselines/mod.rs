@@ -35,7 +35,7 @@ mod hr;
 mod uniform;
 
 pub use hr::{
-    HierarchicalRadiosity, HrLink, HrParams, HrStats, LinkEstimate, count_initial_links,
+    HierarchicalRadiosity, HrLink, HrParams, HrStats, LinkEstimate, Oracle, count_initial_links,
     f_eps_for_budget, hr_params_for_budget, run_hr, run_hr_at_budget,
 };
 pub use uniform::{UniformGrid, UniformParams, run_uniform};
