@@ -935,29 +935,43 @@ mod tests {
     #[test]
     fn crossed_strings_match_the_kernel_integral() {
         // Mean ζ over an unoccluded edge pair: closed form vs a fine midpoint rule on the kernel.
-        let kernel = box_kernel();
-        let surfaces = Surfaces::new(&kernel);
-        for (i, j) in [(0, 2), (0, 1), (3, 1)] {
-            let (p, q) = (surfaces.whole(i), surfaces.whole(j));
-            let exact =
-                surfaces.source_weight[i] * surfaces.reflectance[j] * surfaces.transfer(&p, &q)
-                    / (p.length() * q.length());
-            let n = 400;
-            let mut sum = 0.0;
-            for a in 0..n {
-                for b in 0..n {
-                    let s = p.s0 + (p.s1 - p.s0) * (a as f64 + 0.5) / n as f64;
-                    let t = q.s0 + (q.s1 - q.s0) * (b as f64 + 0.5) / n as f64;
-                    sum += kernel.zeta(s, t);
+        let check = |kernel: &Kernel, pairs: &[(usize, usize)]| {
+            let surfaces = Surfaces::new(kernel);
+            for &(i, j) in pairs {
+                let (p, q) = (surfaces.whole(i), surfaces.whole(j));
+                let exact =
+                    surfaces.source_weight[i] * surfaces.reflectance[j] * surfaces.transfer(&p, &q)
+                        / (p.length() * q.length());
+                let n = 400;
+                let mut sum = 0.0;
+                for a in 0..n {
+                    for b in 0..n {
+                        let s = p.s0 + (p.s1 - p.s0) * (a as f64 + 0.5) / n as f64;
+                        let t = q.s0 + (q.s1 - q.s0) * (b as f64 + 0.5) / n as f64;
+                        sum += kernel.zeta(s, t);
+                    }
                 }
+                let numeric = sum / (n * n) as f64;
+                // Touching edges have a 1/r corner: the midpoint rule converges slowly there.
+                assert!(exact > 0.0, "pair ({i},{j})");
+                assert!(
+                    (numeric - exact).abs() < 5e-3 * exact,
+                    "pair ({i},{j}): {numeric} vs {exact}"
+                );
             }
-            let numeric = sum / (n * n) as f64;
-            // Adjacent walls have a 1/r corner: the midpoint rule converges slowly there.
-            assert!(
-                (numeric - exact).abs() < 5e-3 * exact,
-                "pair ({i},{j}): {numeric} vs {exact}"
-            );
-        }
+        };
+        check(&box_kernel(), &[(0, 2), (0, 1), (3, 1)]);
+        // Clipping: a one-sided post crossing the floor's line (only its upper half is seen,
+        // and it sees only the floor right of it), and a two-sided post seen from both sides.
+        let one_sided = kernel(vec![
+            surface([0.0, 0.0], [1.0, 0.0], 0.5, 1.0),
+            surface([0.5, 0.6], [0.5, -0.4], 0.8, 0.0),
+        ]);
+        check(&one_sided, &[(0, 1), (1, 0)]);
+        let mut post = surface([0.5, 0.2], [0.5, 1.0], 0.8, 0.5);
+        post.two_sided = true;
+        let two_sided = kernel(vec![surface([0.0, 0.0], [1.0, 0.0], 0.5, 1.0), post]);
+        check(&two_sided, &[(0, 1), (1, 0)]);
     }
 
     #[test]
