@@ -19,6 +19,10 @@ enum Command {
     Check(cmd::check::Args),
     /// Evaluate the exact kernel k(s,t) (or zeta with --weighted) on an RxR grid, to CSV or PNG.
     Kernel(cmd::kernel::Args),
+    /// Learn a scene's kernel with SGCS; print the figures, optionally save the model.
+    Fit(cmd::fit::Args),
+    /// Evaluate a saved model on a grid (CSV or PNG) and report its errors.
+    Eval(cmd::eval::Args),
 }
 
 fn main() {
@@ -26,6 +30,8 @@ fn main() {
     let result: Result<()> = match cli.command {
         Some(Command::Check(args)) => cmd::check::run(&args),
         Some(Command::Kernel(args)) => cmd::kernel::run(&args),
+        Some(Command::Fit(args)) => cmd::fit::run(&args),
+        Some(Command::Eval(args)) => cmd::eval::run(&args),
         None => cmd::default_job(),
     };
     if let Err(err) = result {

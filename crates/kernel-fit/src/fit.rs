@@ -1,0 +1,623 @@
+//! The training driver: sample sets, θ-driven resampling, growth, stopping rules, progress.
+
+use std::ops::ControlFlow;
+use std::sync::Arc;
+use std::time::Instant;
+
+use flatland_geom::{Kernel, Scene};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use sgcs::Network;
+
+use crate::{Approximation, Errors, FitError, FitParams, InputFrame, Reference};
+
+/// Input dimension of the kernel's network: `γ(s, t) = (x₁, y₁, x₂, y₂)`.
+pub const INPUT_DIM: usize = 4;
+
+/// The learned ζ̃: a network plus what it needs to turn `(s, t)` into its input.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct LearnedKernel {
+    scene: Scene,
+    frame: InputFrame,
+    network: Network,
+}
+
+impl LearnedKernel {
+    /// Assembles a learned kernel (used by model loading).
+    pub fn new(scene: Scene, frame: InputFrame, network: Network) -> LearnedKernel {
+        LearnedKernel {
+            scene,
+            frame,
+            network,
+        }
+    }
+    /// The scene it was learned on.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+    /// The input normalisation.
+    pub fn frame(&self) -> InputFrame {
+        self.frame
+    }
+    /// The network.
+    pub fn network(&self) -> &Network {
+        &self.network
+    }
+    /// The network input for `(s, t)`.
+    pub fn input(&self, s: f64, t: f64) -> [f64; 4] {
+        self.frame.gamma(&self.scene, s, t)
+    }
+}
+
+impl Approximation for LearnedKernel {
+    fn zeta(&self, s: f64, t: f64) -> f64 {
+        self.network.predict1(&self.input(s, t))
+    }
+    fn basis_functions(&self) -> usize {
+        self.network.len()
+    }
+    fn memory_bytes(&self) -> usize {
+        // Per cell: position (4), output (1), width (1) as f64; per edge two u32 ids.
+        let cells = self.network.len() * (INPUT_DIM + 2) * 8;
+        cells + self.network.edges().len() * 8
+    }
+}
+
+/// Why a fit stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StopReason {
+    /// The target cell count was reached and trained for one growth period.
+    TargetCells,
+    /// The held-out error reached the target.
+    TargetError,
+    /// The ray budget is spent.
+    RayBudget,
+    /// The step budget is spent.
+    StepBudget,
+    /// The caller's progress callback asked to stop.
+    Interrupted,
+}
+
+/// One training sample: where it is, what the network sees, the target, and its set.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+struct Sample {
+    st: [f64; 2],
+    xi: [f64; 4],
+    zeta: f64,
+}
+
+/// Per-cell statistics of the samples a cell won, for the (s, t) re-projection (paper Fig. 3c).
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize)]
+struct CellStats {
+    sum_s: f64,
+    sum_t: f64,
+    wins: u64,
+}
+
+/// A point of the learning curve.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct HistoryPoint {
+    /// Training steps so far.
+    pub steps: u64,
+    /// Rays cast so far.
+    pub rays: u64,
+    /// Cells.
+    pub cells: usize,
+    /// Training samples.
+    pub samples: usize,
+    /// Held-out relative L2 error (on the first ≤ 1024 held-out points).
+    pub rel_l2_heldout: f64,
+}
+
+/// One cell as a viewer or a figure needs it.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CellSnapshot {
+    /// Mean (s, t) of the samples the cell won; `None` until it has won one.
+    pub st: Option<[f64; 2]>,
+    /// δ_c, in the unit-box input frame.
+    pub width: f64,
+    /// Whether the cell is critical (`τ_c > ω · mean τ`).
+    pub critical: bool,
+    /// τ_c.
+    pub resource: f64,
+    /// The output weight v_c.
+    pub output: f64,
+}
+
+/// A cheap copy of the fit's state for progress displays.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct Snapshot {
+    /// Training steps so far.
+    pub steps: u64,
+    /// Rays cast for training so far.
+    pub rays: u64,
+    /// The cells, indexed by cell id.
+    pub cells: Vec<CellSnapshot>,
+    /// The network's edges, as cell ids.
+    pub edges: Vec<[u32; 2]>,
+    /// Every training sample's (s, t) and the index of the set that produced it.
+    pub samples: Vec<([f32; 2], u32)>,
+    /// Number of sample sets (S₀ is set 0).
+    pub sets: usize,
+    /// The learning curve so far.
+    pub history: Vec<HistoryPoint>,
+}
+
+/// The figures a finished fit reports.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FitSummary {
+    /// Cells in the network.
+    pub cells: usize,
+    /// Training samples (= rays cast for training).
+    pub samples: usize,
+    /// Sample sets.
+    pub sets: usize,
+    /// Rays cast for training.
+    pub rays: u64,
+    /// Training steps.
+    pub steps: u64,
+    /// Errors of the final model.
+    pub errors: Errors,
+    /// Errors before the least-squares refit, when it ran.
+    pub errors_before_refit: Option<Errors>,
+    /// Wall time of the training (reference construction excluded), seconds.
+    pub wall_s: f64,
+    /// Why it stopped.
+    pub stop: StopReason,
+}
+
+/// Seed streams, so adding draws to one never shifts another.
+const STREAM_INITIAL: u64 = 1;
+const STREAM_RESAMPLE: u64 = 2;
+const STREAM_TRAIN: u64 = 3;
+
+/// Held-out points used for the learning curve (the final errors use all of them).
+const HISTORY_HELDOUT: usize = 1024;
+
+/// A running fit of one scene's kernel. See the crate docs for the algorithm.
+pub struct Fit {
+    kernel: Arc<Kernel>,
+    reference: Arc<Reference>,
+    params: FitParams,
+    model: LearnedKernel,
+    samples: Vec<Sample>,
+    /// `set_starts[j]` is the first sample of set j; sets are contiguous in `samples`.
+    set_starts: Vec<usize>,
+    cell_stats: Vec<CellStats>,
+    rays: u64,
+    steps_at_last_growth: u64,
+    /// No resampling before this step (after a scan fell short, wait one growth period).
+    resample_not_before: u64,
+    train_rng: ChaCha8Rng,
+    resample_rng: ChaCha8Rng,
+    history: Vec<HistoryPoint>,
+    stop: Option<StopReason>,
+    wall_s: f64,
+}
+
+impl Fit {
+    /// Starts a fit: validates the parameters, draws S₀ (|S₀| rays) and builds the first simplex
+    /// from three of its samples. `reference` is what errors are measured against; build it with
+    /// [`Reference::new`] on the same kernel (its seed stream never meets the training streams).
+    pub fn new(
+        kernel: Arc<Kernel>,
+        reference: Arc<Reference>,
+        params: FitParams,
+    ) -> Result<Fit, FitError> {
+        params.validate()?;
+        let scene = kernel.scene().clone();
+        let frame = InputFrame::of(&scene);
+        let mut initial_rng = stream(params.seed, STREAM_INITIAL);
+        let points: Vec<[f64; 2]> = (0..params.initial_samples)
+            .map(|_| [initial_rng.random::<f64>(), initial_rng.random::<f64>()])
+            .collect();
+        let samples = make_samples(&kernel, &scene, frame, &points);
+        let mut net_params = params.network;
+        net_params.max_cells = params.target_cells;
+        let simplex: Vec<Vec<f64>> = pick_simplex(&samples, &mut initial_rng);
+        let network = Network::new(net_params, INPUT_DIM, 1, &simplex)?;
+        let rays = samples.len() as u64;
+        Ok(Fit {
+            cell_stats: vec![CellStats::default(); network.len()],
+            model: LearnedKernel {
+                scene,
+                frame,
+                network,
+            },
+            kernel,
+            reference,
+            samples,
+            set_starts: vec![0],
+            rays,
+            steps_at_last_growth: 0,
+            resample_not_before: 0,
+            train_rng: stream(params.seed, STREAM_TRAIN),
+            resample_rng: stream(params.seed, STREAM_RESAMPLE),
+            history: Vec::new(),
+            stop: None,
+            wall_s: 0.0,
+            params,
+        })
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &FitParams {
+        &self.params
+    }
+    /// The learned kernel so far.
+    pub fn model(&self) -> &LearnedKernel {
+        &self.model
+    }
+    /// The network so far.
+    pub fn network(&self) -> &Network {
+        &self.model.network
+    }
+    /// The exact kernel being learned.
+    pub fn kernel(&self) -> &Arc<Kernel> {
+        &self.kernel
+    }
+    /// The reference errors are measured against.
+    pub fn reference(&self) -> &Arc<Reference> {
+        &self.reference
+    }
+    /// Rays cast for training so far.
+    pub fn rays(&self) -> u64 {
+        self.rays
+    }
+    /// Training samples so far.
+    pub fn sample_count(&self) -> usize {
+        self.samples.len()
+    }
+    /// Sample sets so far.
+    pub fn set_count(&self) -> usize {
+        self.set_starts.len()
+    }
+    /// Training steps so far.
+    pub fn steps(&self) -> u64 {
+        self.model.network.steps()
+    }
+    /// Why the fit stopped, once it has.
+    pub fn stopped(&self) -> Option<StopReason> {
+        self.stop
+    }
+    /// The learning curve so far.
+    pub fn history(&self) -> &[HistoryPoint] {
+        &self.history
+    }
+
+    /// One training step: resample if `|A| / |S| > ψ`, draw a set uniformly and a sample from
+    /// it, adapt the network, record who won. Returns the stop reason once a rule fires.
+    pub fn step(&mut self) -> Option<StopReason> {
+        if self.stop.is_some() {
+            return self.stop;
+        }
+        let steps = self.steps();
+        let cells = self.model.network.len();
+        if cells as f64 > self.params.psi * self.samples.len() as f64
+            && steps >= self.resample_not_before
+            && self.rays < self.params.ray_budget
+        {
+            self.resample();
+        }
+        let set = self.train_rng.random_range(0..self.set_starts.len());
+        let start = self.set_starts[set];
+        let end = self
+            .set_starts
+            .get(set + 1)
+            .copied()
+            .unwrap_or(self.samples.len());
+        let sample = self.samples[self.train_rng.random_range(start..end)];
+        let outcome = self.model.network.step(&sample.xi, &[sample.zeta]);
+        if let Some(new) = outcome.inserted {
+            debug_assert_eq!(new, self.cell_stats.len());
+            self.cell_stats.push(CellStats::default());
+            self.steps_at_last_growth = self.steps();
+        }
+        let stats = &mut self.cell_stats[outcome.bmu];
+        stats.sum_s += sample.st[0];
+        stats.sum_t += sample.st[1];
+        stats.wins += 1;
+
+        let steps = self.steps();
+        if self.params.eval_every > 0 && steps.is_multiple_of(self.params.eval_every) {
+            self.record_history();
+        }
+        self.stop = self.stop_reason();
+        self.stop
+    }
+
+    fn stop_reason(&self) -> Option<StopReason> {
+        let p = &self.params;
+        let steps = self.steps();
+        let lambda = u64::from(p.network.lambda);
+        if self.model.network.len() >= p.target_cells && steps - self.steps_at_last_growth >= lambda
+        {
+            return Some(StopReason::TargetCells);
+        }
+        if p.target_error > 0.0
+            && self
+                .history
+                .last()
+                .is_some_and(|h| h.steps == steps && h.rel_l2_heldout <= p.target_error)
+        {
+            return Some(StopReason::TargetError);
+        }
+        if self.rays >= p.ray_budget {
+            return Some(StopReason::RayBudget);
+        }
+        if steps >= p.max_steps {
+            return Some(StopReason::StepBudget);
+        }
+        None
+    }
+
+    /// Runs until a stopping rule fires, calling `progress` every `every` steps (and once at the
+    /// end); the callback can stop the fit by returning `ControlFlow::Break`. Then refits the
+    /// output weights if asked and measures the final errors.
+    pub fn run(
+        &mut self,
+        every: u64,
+        mut progress: impl FnMut(&Fit) -> ControlFlow<()>,
+    ) -> Result<FitSummary, FitError> {
+        let started = Instant::now();
+        let every = every.max(1);
+        loop {
+            if self.step().is_some() {
+                break;
+            }
+            if self.steps().is_multiple_of(every) && progress(self).is_break() {
+                self.stop = Some(StopReason::Interrupted);
+                break;
+            }
+        }
+        self.wall_s += started.elapsed().as_secs_f64();
+        let _ = progress(self);
+        self.finish()
+    }
+
+    /// Refits (if enabled) and measures the final errors. Idempotent apart from the refit.
+    pub fn finish(&mut self) -> Result<FitSummary, FitError> {
+        let started = Instant::now();
+        let mut errors_before_refit = None;
+        if self.params.refit {
+            errors_before_refit = Some(self.reference.errors(&self.model));
+            self.refit()?;
+        }
+        self.wall_s += started.elapsed().as_secs_f64();
+        Ok(FitSummary {
+            cells: self.model.network.len(),
+            samples: self.samples.len(),
+            sets: self.set_starts.len(),
+            rays: self.rays,
+            steps: self.steps(),
+            errors: self.reference.errors(&self.model),
+            errors_before_refit,
+            wall_s: self.wall_s,
+            stop: self.stop.unwrap_or(StopReason::Interrupted),
+        })
+    }
+
+    /// Refits every output weight by ridge least squares over all training samples, keeping
+    /// centres and widths (an improvement beyond the paper; see `sgcs::Network::refit_outputs`).
+    pub fn refit(&mut self) -> Result<(), FitError> {
+        let inputs: Vec<f64> = self.samples.iter().flat_map(|s| s.xi).collect();
+        let targets: Vec<f64> = self.samples.iter().map(|s| s.zeta).collect();
+        self.model
+            .network
+            .refit_outputs(&inputs, &targets, self.params.ridge)?;
+        Ok(())
+    }
+
+    /// A new sample set chosen by θ(ξ) = ρ_ACC(ξ) ∨ ¬ρ_A(ξ) (SPEC erratum 3): candidates are
+    /// scanned in parallel without casting a ray; only accepted ones cost a ray.
+    fn resample(&mut self) {
+        let p = self.params;
+        let cells = self.model.network.len() as f64;
+        let wanted = ((cells / p.psi).ceil() as usize)
+            .saturating_sub(self.samples.len())
+            .max(p.min_set_size);
+        let wanted = wanted.min(usize::try_from(p.ray_budget - self.rays).unwrap_or(usize::MAX));
+        let critical = self.model.network.critical_cells(p.omega);
+        let scan_limit = wanted.saturating_mul(p.scan_factor);
+        let chunk = (wanted * 4).clamp(256, 1 << 16);
+        let mut accepted: Vec<[f64; 2]> = Vec::with_capacity(wanted);
+        let mut scanned = 0;
+        while accepted.len() < wanted && scanned < scan_limit {
+            let n = chunk.min(scan_limit - scanned);
+            let candidates: Vec<[f64; 2]> = (0..n)
+                .map(|_| {
+                    [
+                        self.resample_rng.random::<f64>(),
+                        self.resample_rng.random::<f64>(),
+                    ]
+                })
+                .collect();
+            scanned += n;
+            let model = &self.model;
+            let keep: Vec<bool> = candidates
+                .par_iter()
+                .map(|&[s, t]| {
+                    let (d_a, d_acc) = model.network.activation_sums(&model.input(s, t), &critical);
+                    d_acc > p.phi || d_a <= p.phi
+                })
+                .collect();
+            accepted.extend(
+                candidates
+                    .iter()
+                    .zip(keep)
+                    .filter(|(_, k)| *k)
+                    .map(|(c, _)| *c),
+            );
+        }
+        accepted.truncate(wanted);
+        if accepted.len() < wanted {
+            // θ found too few places worth a ray; do not rescan every step.
+            self.resample_not_before = self.steps() + u64::from(p.network.lambda);
+        }
+        if accepted.is_empty() {
+            return;
+        }
+        let new = make_samples(&self.kernel, &self.model.scene, self.model.frame, &accepted);
+        self.rays += new.len() as u64;
+        self.set_starts.push(self.samples.len());
+        self.samples.extend(new);
+    }
+
+    fn record_history(&mut self) {
+        let (points, values) = self.reference.heldout();
+        let n = points.len().min(HISTORY_HELDOUT);
+        let predicted: Vec<f64> = points[..n]
+            .par_iter()
+            .map(|&[s, t]| self.model.zeta(s, t))
+            .collect();
+        self.history.push(HistoryPoint {
+            steps: self.steps(),
+            rays: self.rays,
+            cells: self.model.network.len(),
+            samples: self.samples.len(),
+            rel_l2_heldout: crate::relative_l2(&predicted, &values[..n]),
+        });
+    }
+
+    /// The re-projected (s, t) of every cell (paper Fig. 3c); `None` for a cell that never won.
+    pub fn cell_st(&self) -> Vec<Option<[f64; 2]>> {
+        self.cell_stats
+            .iter()
+            .map(|c| (c.wins > 0).then(|| [c.sum_s / c.wins as f64, c.sum_t / c.wins as f64]))
+            .collect()
+    }
+
+    /// A cheap copy of the state for a progress display or the viewer.
+    pub fn snapshot(&self) -> Snapshot {
+        let net = &self.model.network;
+        let critical = net.critical_cells(self.params.omega);
+        let st = self.cell_st();
+        let cells = (0..net.len())
+            .map(|c| CellSnapshot {
+                st: st[c],
+                width: net.width(c),
+                critical: critical[c],
+                resource: net.resource(c),
+                output: net.output(c)[0],
+            })
+            .collect();
+        let mut samples = Vec::with_capacity(self.samples.len());
+        for (set, &start) in self.set_starts.iter().enumerate() {
+            let end = self
+                .set_starts
+                .get(set + 1)
+                .copied()
+                .unwrap_or(self.samples.len());
+            samples.extend(
+                self.samples[start..end]
+                    .iter()
+                    .map(|s| ([s.st[0] as f32, s.st[1] as f32], set as u32)),
+            );
+        }
+        Snapshot {
+            steps: self.steps(),
+            rays: self.rays,
+            cells,
+            edges: net
+                .edges()
+                .into_iter()
+                .map(|(a, b)| [a as u32, b as u32])
+                .collect(),
+            samples,
+            sets: self.set_starts.len(),
+            history: self.history.clone(),
+        }
+    }
+
+    /// Continues learning on a changed scene (SPEC §6: the representation stays adaptive).
+    ///
+    /// The network keeps its cells, weights and counters and the input frame stays put (so the
+    /// cells keep their meaning); the old samples describe the old scene and are dropped, and a
+    /// new S₀ of `max(|S₀|, |A|/ψ)` uniform samples is drawn from the new kernel.
+    pub fn set_kernel(&mut self, kernel: Arc<Kernel>, reference: Arc<Reference>) {
+        let scene = kernel.scene().clone();
+        let n = (self.params.initial_samples)
+            .max((self.model.network.len() as f64 / self.params.psi).ceil() as usize);
+        let points: Vec<[f64; 2]> = (0..n)
+            .map(|_| {
+                [
+                    self.resample_rng.random::<f64>(),
+                    self.resample_rng.random::<f64>(),
+                ]
+            })
+            .collect();
+        self.samples = make_samples(&kernel, &scene, self.model.frame, &points);
+        self.rays += n as u64;
+        self.set_starts = vec![0];
+        self.cell_stats = vec![CellStats::default(); self.model.network.len()];
+        self.model.scene = scene;
+        self.kernel = kernel;
+        self.reference = reference;
+        self.stop = None;
+    }
+
+    /// Changes the parameters of a running fit (the viewer's controls).
+    pub fn set_params(&mut self, params: FitParams) -> Result<(), FitError> {
+        params.validate()?;
+        let mut net_params = params.network;
+        net_params.max_cells = params.target_cells;
+        self.model.network.set_params(net_params)?;
+        self.params = params;
+        self.stop = None;
+        Ok(())
+    }
+}
+
+impl Approximation for Fit {
+    fn zeta(&self, s: f64, t: f64) -> f64 {
+        self.model.zeta(s, t)
+    }
+    fn basis_functions(&self) -> usize {
+        self.model.basis_functions()
+    }
+    fn memory_bytes(&self) -> usize {
+        self.model.memory_bytes()
+    }
+}
+
+fn stream(seed: u64, stream: u64) -> ChaCha8Rng {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(stream);
+    rng
+}
+
+/// Casts one ray per point (in parallel, order kept) and builds the samples.
+fn make_samples(
+    kernel: &Kernel,
+    scene: &Scene,
+    frame: InputFrame,
+    points: &[[f64; 2]],
+) -> Vec<Sample> {
+    let zeta = kernel.zeta_batch(points);
+    points
+        .iter()
+        .zip(zeta)
+        .map(|(&[s, t], zeta)| Sample {
+            st: [s, t],
+            xi: frame.gamma(scene, s, t),
+            zeta,
+        })
+        .collect()
+}
+
+/// Three distinct samples' inputs as the initial triangle (distinct so no edge has length 0).
+fn pick_simplex(samples: &[Sample], rng: &mut ChaCha8Rng) -> Vec<Vec<f64>> {
+    let mut chosen: Vec<Vec<f64>> = Vec::with_capacity(3);
+    let mut tries = 0;
+    while chosen.len() < 3 {
+        let candidate = samples[rng.random_range(0..samples.len())].xi.to_vec();
+        tries += 1;
+        if tries > 1000 || !chosen.contains(&candidate) {
+            chosen.push(candidate);
+        }
+    }
+    chosen
+}

@@ -1,0 +1,134 @@
+//! Model files: scene fingerprint, parameters and network in one versioned JSON, written atomically.
+
+use std::path::Path;
+
+use flatland_geom::{Scene, write_atomic};
+use serde::{Deserialize, Serialize};
+
+use crate::{FitError, FitParams, FitSummary, LearnedKernel};
+
+/// The `format` field every model file carries.
+pub const MODEL_FORMAT: &str = "flatland-model";
+/// The model file version this build reads and writes.
+pub const MODEL_VERSION: u32 = 1;
+
+/// Only the header, read first so a file of another kind or version is refused with a clear
+/// message instead of a confusing field error.
+#[derive(Deserialize)]
+struct Header {
+    format: Option<String>,
+    version: Option<u32>,
+}
+
+/// What a model file holds.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ModelFile {
+    /// Always [`MODEL_FORMAT`].
+    pub format: String,
+    /// Always [`MODEL_VERSION`] when written by this build.
+    pub version: u32,
+    /// `Scene::fingerprint` of the scene it was learned on, as 16 hex digits.
+    pub scene_fingerprint: String,
+    /// The parameters of the fit.
+    pub params: FitParams,
+    /// The figures of the fit.
+    pub summary: Option<FitSummary>,
+    /// The learned kernel (scene, input frame, network).
+    pub model: LearnedKernel,
+}
+
+impl ModelFile {
+    /// Wraps a learned kernel for saving.
+    pub fn new(model: LearnedKernel, params: FitParams, summary: Option<FitSummary>) -> ModelFile {
+        ModelFile {
+            format: MODEL_FORMAT.to_owned(),
+            version: MODEL_VERSION,
+            scene_fingerprint: fingerprint_hex(model.scene()),
+            params,
+            summary,
+            model,
+        }
+    }
+
+    /// Writes the file atomically (temporary file in the same folder, then rename), so a crash
+    /// never leaves a half-written model where a good one was.
+    pub fn save(&self, path: &Path) -> Result<(), FitError> {
+        let text = serde_json::to_string(self).map_err(|e| FitError::Model {
+            path: path.to_owned(),
+            reason: format!("cannot serialise: {e}"),
+        })?;
+        Ok(write_atomic(path, text.as_bytes())?)
+    }
+
+    /// Reads and checks a model file: format, version, and that the embedded scene matches its
+    /// fingerprint.
+    pub fn load(path: &Path) -> Result<ModelFile, FitError> {
+        let text = std::fs::read_to_string(path).map_err(|source| FitError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        let bad = |reason: String| FitError::Model {
+            path: path.to_owned(),
+            reason,
+        };
+        let header: Header = serde_json::from_str(&text).map_err(|e| {
+            bad(format!(
+                "not a flatland model (line {}, column {}: {e})",
+                e.line(),
+                e.column()
+            ))
+        })?;
+        if header.format.as_deref() != Some(MODEL_FORMAT) {
+            return Err(bad(format!(
+                "not a flatland model: `format` must be \"{MODEL_FORMAT}\""
+            )));
+        }
+        match header.version {
+            Some(MODEL_VERSION) => {}
+            Some(v) => {
+                return Err(bad(format!(
+                    "model file version {v}, but this build reads version {MODEL_VERSION}; \
+                     refit the model with this build"
+                )));
+            }
+            None => return Err(bad("model file has no `version`".to_owned())),
+        }
+        let file: ModelFile = serde_json::from_str(&text).map_err(|e| {
+            bad(format!(
+                "malformed model (line {}, column {}): {e}",
+                e.line(),
+                e.column()
+            ))
+        })?;
+        let actual = fingerprint_hex(file.model.scene());
+        if actual != file.scene_fingerprint {
+            return Err(bad(format!(
+                "embedded scene has fingerprint {actual}, but the file says {}: the file was edited",
+                file.scene_fingerprint
+            )));
+        }
+        Ok(file)
+    }
+
+    /// Refuses a model learned on another scene.
+    pub fn check_scene(&self, scene: &Scene, scene_path: &Path) -> Result<(), FitError> {
+        let actual = fingerprint_hex(scene);
+        if actual == self.scene_fingerprint {
+            Ok(())
+        } else {
+            Err(FitError::Model {
+                path: scene_path.to_owned(),
+                reason: format!(
+                    "scene fingerprint {actual} does not match the model's {}: \
+                     the model was learned on another scene (or another subdivision)",
+                    self.scene_fingerprint
+                ),
+            })
+        }
+    }
+}
+
+/// The scene fingerprint as 16 lower-case hex digits.
+pub fn fingerprint_hex(scene: &Scene) -> String {
+    format!("{:016x}", scene.fingerprint())
+}

@@ -1,0 +1,204 @@
+//! The fit's parameters, with the paper's defaults and one validation step.
+
+use serde::{Deserialize, Serialize};
+
+use crate::FitError;
+
+/// Everything that configures a [`Fit`](crate::Fit). `Default` gives the paper's values (§3.2)
+/// where the paper has one, and measured choices where it is silent (each documented).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct FitParams {
+    /// The network's own parameters (ε_b, ε_n, η, α, λ, …).
+    pub network: sgcs::Params,
+    /// ω: a cell is critical when `τ_c > ω · mean τ`. Paper: 0.6. Valid: finite, ≥ 0.
+    pub omega: f64,
+    /// φ: ξ is inside a (sub-)network when its summed activation exceeds φ. Paper: 1. Valid: > 0.
+    pub phi: f64,
+    /// ψ: a new sample set is made when `|A| / |S| > ψ`. Paper: 0.05 (≈ 20 samples per cell).
+    /// Valid: (0, 1].
+    pub psi: f64,
+    /// |S₀|: uniform random samples before training starts. Valid: ≥ 3.
+    pub initial_samples: usize,
+    /// Smallest size of a resampled set `S_j`; a set is also large enough to bring
+    /// `|A| / |S|` back to ψ. Valid: ≥ 1.
+    pub min_set_size: usize,
+    /// The θ scan looks at most `scan_factor × set size` candidates, so it always ends even when
+    /// θ rejects nearly everything. Valid: ≥ 1.
+    pub scan_factor: usize,
+    /// Stop when the network has this many cells (and has trained one λ period with it). Valid: ≥ 3.
+    pub target_cells: usize,
+    /// Stop after this many training steps. Valid: ≥ 1.
+    pub max_steps: u64,
+    /// Stop when this many rays (exact kernel evaluations for training) have been cast. Valid: ≥ 1.
+    pub ray_budget: u64,
+    /// Stop when the held-out relative L2 error falls to this value (0 disables). Valid: [0, ∞).
+    pub target_error: f64,
+    /// Refit all output weights by ridge least squares over the training samples at the end.
+    pub refit: bool,
+    /// Ridge (Tikhonov) weight of the refit, relative to the mean diagonal of the normal
+    /// equations. Valid: finite, ≥ 0.
+    pub ridge: f64,
+    /// Held-out random points for the error measured during and after the fit. Valid: ≥ 16.
+    pub heldout: usize,
+    /// Steps between two held-out error measurements recorded in the history (0: never).
+    pub eval_every: u64,
+    /// Seed of every random choice: same seed, same fit.
+    pub seed: u64,
+}
+
+impl Default for FitParams {
+    fn default() -> Self {
+        FitParams {
+            network: sgcs::Params::default(),
+            omega: 0.6,
+            phi: 1.0,
+            psi: 0.05,
+            initial_samples: 500,
+            min_set_size: 50,
+            scan_factor: 64,
+            target_cells: 400,
+            max_steps: 50_000_000,
+            ray_budget: u64::MAX,
+            target_error: 0.0,
+            refit: true,
+            ridge: 1e-6,
+            heldout: 4096,
+            eval_every: 3000,
+            seed: 1,
+        }
+    }
+}
+
+impl FitParams {
+    /// Checks every value; the error names the parameter and its valid range.
+    pub fn validate(&self) -> Result<(), FitError> {
+        self.network.validate()?;
+        check(
+            "omega",
+            self.omega,
+            self.omega.is_finite() && self.omega >= 0.0,
+            "finite and ≥ 0",
+        )?;
+        check(
+            "phi",
+            self.phi,
+            self.phi.is_finite() && self.phi > 0.0,
+            "finite and > 0",
+        )?;
+        check(
+            "psi",
+            self.psi,
+            self.psi > 0.0 && self.psi <= 1.0,
+            "in (0, 1]",
+        )?;
+        check(
+            "initial_samples",
+            self.initial_samples,
+            self.initial_samples >= 3,
+            "≥ 3",
+        )?;
+        check(
+            "min_set_size",
+            self.min_set_size,
+            self.min_set_size >= 1,
+            "≥ 1",
+        )?;
+        check(
+            "scan_factor",
+            self.scan_factor,
+            self.scan_factor >= 1,
+            "≥ 1",
+        )?;
+        check(
+            "target_cells",
+            self.target_cells,
+            self.target_cells >= 3,
+            "≥ 3",
+        )?;
+        check("max_steps", self.max_steps, self.max_steps >= 1, "≥ 1")?;
+        check("ray_budget", self.ray_budget, self.ray_budget >= 1, "≥ 1")?;
+        let te = self.target_error;
+        check(
+            "target_error",
+            te,
+            te.is_finite() && te >= 0.0,
+            "finite and ≥ 0",
+        )?;
+        check(
+            "ridge",
+            self.ridge,
+            self.ridge.is_finite() && self.ridge >= 0.0,
+            "finite and ≥ 0",
+        )?;
+        check("heldout", self.heldout, self.heldout >= 16, "≥ 16")?;
+        Ok(())
+    }
+}
+
+fn check(
+    name: &'static str,
+    value: impl ToString,
+    ok: bool,
+    valid: &'static str,
+) -> Result<(), FitError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(FitError::InvalidParameter {
+            name,
+            value: value.to_string(),
+            valid,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid_and_papers() {
+        let p = FitParams::default();
+        p.validate().unwrap();
+        assert_eq!((p.omega, p.phi, p.psi), (0.6, 1.0, 0.05));
+    }
+
+    #[test]
+    fn errors_name_the_parameter_and_range() {
+        let cases: [(FitParams, &str); 4] = [
+            (
+                FitParams {
+                    psi: 0.0,
+                    ..Default::default()
+                },
+                "psi",
+            ),
+            (
+                FitParams {
+                    phi: f64::NAN,
+                    ..Default::default()
+                },
+                "phi",
+            ),
+            (
+                FitParams {
+                    target_cells: 2,
+                    ..Default::default()
+                },
+                "target_cells",
+            ),
+            (
+                FitParams {
+                    ridge: -1.0,
+                    ..Default::default()
+                },
+                "ridge",
+            ),
+        ];
+        for (p, name) in cases {
+            let msg = p.validate().unwrap_err().to_string();
+            assert!(msg.contains(name) && msg.contains("must be"), "{msg}");
+        }
+    }
+}

@@ -1,0 +1,138 @@
+//! `flatland fit`: learn a scene's kernel and report the figures.
+
+use std::ops::ControlFlow;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use anyhow::{Context, Result};
+use kernel_fit::{Fit, FitParams, FitSummary, ModelFile};
+
+use super::SceneArgs;
+
+/// Arguments of `flatland fit`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Stop at this many cells.
+    #[arg(long, default_value_t = FitParams::default().target_cells)]
+    pub cells: usize,
+    /// Seed of every random choice (same seed, same fit).
+    #[arg(long, default_value_t = FitParams::default().seed)]
+    pub seed: u64,
+    /// Stop after this many training steps.
+    #[arg(long)]
+    pub max_steps: Option<u64>,
+    /// Stop after this many training rays.
+    #[arg(long)]
+    pub rays: Option<u64>,
+    /// Stop when the held-out relative L2 error reaches this value.
+    #[arg(long)]
+    pub target_error: Option<f64>,
+    /// Skip the final least-squares refit of the output weights.
+    #[arg(long)]
+    pub no_refit: bool,
+    /// Reference grid resolution R for the error on the grid.
+    #[arg(long, default_value_t = 256)]
+    pub res: usize,
+    /// Write the model (scene fingerprint, parameters, network) to this JSON file.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Print one JSON object with the figures on stdout instead of the table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl Args {
+    /// The fit parameters these arguments ask for.
+    pub fn params(&self) -> FitParams {
+        let d = FitParams::default();
+        FitParams {
+            target_cells: self.cells,
+            seed: self.seed,
+            max_steps: self.max_steps.unwrap_or(d.max_steps),
+            ray_budget: self.rays.unwrap_or(d.ray_budget),
+            target_error: self.target_error.unwrap_or(d.target_error),
+            refit: !self.no_refit,
+            ..d
+        }
+    }
+}
+
+/// Runs `flatland fit`.
+pub fn run(args: &Args) -> Result<()> {
+    let (kernel, label) = args.scene.kernel()?;
+    let params = args.params();
+    params.validate()?;
+    let reference = Arc::new(super::reference(&kernel, args.res, &params));
+    let mut fit = Fit::new(Arc::new(kernel), reference, params)?;
+    let bar = super::progress_bar(params.target_cells as u64, "cells");
+    let summary = fit.run(2000, |f| {
+        bar.set_position(f.network().len() as u64);
+        bar.set_message(format!("{} rays", f.rays()));
+        ControlFlow::Continue(())
+    })?;
+    bar.finish_and_clear();
+    if let Some(out) = &args.out {
+        ModelFile::new(fit.model().clone(), params, Some(summary.clone()))
+            .save(out)
+            .with_context(|| format!("writing the model to {}", out.display()))?;
+    }
+    if args.json {
+        println!("{}", summary_json(&summary, &label));
+    } else {
+        print_summary(&summary, &label);
+        if let Some(out) = &args.out {
+            println!("model written to {}", out.display());
+        }
+    }
+    Ok(())
+}
+
+/// The `--json` object: flat figures first, then the details.
+pub fn summary_json(s: &FitSummary, scene: &str) -> serde_json::Value {
+    serde_json::json!({
+        "scene": scene,
+        "cells": s.cells,
+        "samples": s.samples,
+        "sets": s.sets,
+        "rays": s.rays,
+        "steps": s.steps,
+        "samples_per_cell": s.samples as f64 / s.cells as f64,
+        "rel_l2_grid": s.errors.grid,
+        "rel_l2_heldout": s.errors.heldout,
+        "rel_l2_grid_before_refit": s.errors_before_refit.map(|e| e.grid),
+        "rel_l2_heldout_before_refit": s.errors_before_refit.map(|e| e.heldout),
+        "wall_s": s.wall_s,
+        "stop": s.stop,
+    })
+}
+
+/// The human-readable summary table.
+pub fn print_summary(s: &FitSummary, scene: &str) {
+    let row = |k: &str, v: String| println!("  {k:<24} {v}");
+    println!("fit of {scene}");
+    row("cells", s.cells.to_string());
+    row("samples (sets)", format!("{} ({})", s.samples, s.sets));
+    row("rays", s.rays.to_string());
+    row("steps", s.steps.to_string());
+    row(
+        "samples / cell",
+        format!("{:.1}", s.samples as f64 / s.cells as f64),
+    );
+    if let Some(b) = s.errors_before_refit {
+        row(
+            "rel. L2 before refit",
+            format!("grid {:.4}   held out {:.4}", b.grid, b.heldout),
+        );
+    }
+    row(
+        "rel. L2",
+        format!(
+            "grid {:.4}   held out {:.4}",
+            s.errors.grid, s.errors.heldout
+        ),
+    );
+    row("wall time", format!("{:.3} s", s.wall_s));
+    row("stopped by", format!("{:?}", s.stop));
+}
