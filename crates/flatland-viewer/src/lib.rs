@@ -1,1 +1,119 @@
-//! Placeholder; filled in by its issue.
+//! The flatland viewer: watch the cells of a supervised growing cell structures network grow
+//! over the `(s, t)` plot of a Flatland radiosity kernel, live, while it learns.
+//!
+//! An eframe (glow) desktop app on top of [`kernel_fit`]; the library crates never depend on it.
+//!
+//! - **Kernel plot**: the exact `ζ(s, t)` as a heatmap (`t`, the receiver, to the right; `s`,
+//!   the sender, upwards; linear or log colour scale), the surface edges' boundaries on both
+//!   axes; over it the cells re-projected to the mean `(s, t)` of the samples they won (paper
+//!   Fig. 3c), sized by `δ_c`, cyan when critical, the network's edges, and optionally every
+//!   training sample coloured by the set that produced it.
+//! - **ζ̃ and |ζ̃ − ζ|** beside it, on the same colour scale (paper Fig. 3d).
+//! - **Scene view**: emitters, surfaces, blockers, front sides; the ray `x(s) → y(t)` under the
+//!   pointer with `k`, `V` and the learned value; the `s` of a hovered surface point marked in
+//!   the plots. Dragging an end point changes the scene: the reference is recomputed and the
+//!   network keeps learning from where it is (`Fit::set_kernel`, SPEC §6).
+//! - **Curves**: held-out relative L2 against steps and rays, cells and samples.
+//! - **Controls**: play, pause, step, reset, speed, every parameter of SPEC §3–4 with its valid
+//!   range, target cells, seed, subdivision, bundled scenes, scene files. Settings persist.
+//!
+//! Training runs on its own thread, which owns the [`kernel_fit::Fit`]; the UI sends commands
+//! and takes published snapshots without ever waiting for the learner. Textures are rebuilt
+//! only when the data behind them changes.
+//!
+//! ```no_run
+//! // What `flatland view` does: a window if there is a display, else a one-line note.
+//! if flatland_viewer::display_available() {
+//!     flatland_viewer::run(None)?;
+//! }
+//! # Ok::<(), flatland_viewer::ViewerError>(())
+//! ```
+
+#![forbid(unsafe_code)]
+#![deny(missing_docs)]
+
+mod app;
+mod colormap;
+mod views;
+mod worker;
+
+use std::path::PathBuf;
+
+pub use app::{Options, SceneChoice, Settings, ViewerApp};
+pub use colormap::{Scale, colormap, grid_image, samples_image, set_color};
+
+/// The scenes shipped with the project, by name, as RON text.
+pub const BUNDLED_SCENES: &[(&str, &str)] = &[
+    ("fig3", include_str!("../../../scenes/fig3.ron")),
+    ("box", include_str!("../../../scenes/box.ron")),
+    ("maze", include_str!("../../../scenes/maze.ron")),
+    ("corners", include_str!("../../../scenes/corners.ron")),
+];
+
+/// Why the viewer could not run.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ViewerError {
+    /// The scene given on the command line does not load.
+    #[error("could not open {path}: {source}")]
+    Scene {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: flatland_geom::GeomError,
+    },
+    /// The window could not be opened (no display, no OpenGL, …).
+    #[error("could not open the viewer window: {0}")]
+    Window(String),
+}
+
+/// Whether a window can be opened here: on Linux and the BSDs an X11 display must be named by
+/// `DISPLAY` (the viewer is built for X11; XWayland provides one under Wayland). Elsewhere a
+/// desktop is assumed.
+#[must_use]
+pub fn display_available() -> bool {
+    if cfg!(any(
+        target_os = "linux",
+        target_os = "freebsd",
+        target_os = "openbsd",
+        target_os = "netbsd"
+    )) {
+        std::env::var_os("DISPLAY").is_some_and(|d| !d.is_empty())
+    } else {
+        true
+    }
+}
+
+/// Opens the viewer on `scene` (a `.ron`/`.json` file), or on the scene remembered from the last
+/// run, else the bundled `fig3`. Returns when the window is closed.
+pub fn run(scene: Option<PathBuf>) -> Result<(), ViewerError> {
+    run_with(Options {
+        scene,
+        ..Options::default()
+    })
+}
+
+/// [`run`] with all options (autoplay, target cells, fresh settings, frame-rate log).
+pub fn run_with(options: Options) -> Result<(), ViewerError> {
+    if let Some(path) = &options.scene {
+        // Refuse a bad file before a window opens.
+        flatland_geom::Scene::load(path).map_err(|source| ViewerError::Scene {
+            path: path.clone(),
+            source,
+        })?;
+    }
+    let native = eframe::NativeOptions {
+        viewport: egui::ViewportBuilder::default()
+            .with_title("flatland — SGCS learning the radiosity kernel")
+            .with_inner_size([1280.0, 800.0])
+            .with_min_inner_size([900.0, 600.0]),
+        renderer: eframe::Renderer::Glow,
+        ..Default::default()
+    };
+    eframe::run_native(
+        "flatland-viewer",
+        native,
+        Box::new(move |cc| Ok(Box::new(ViewerApp::new(cc, &options)))),
+    )
+    .map_err(|e| ViewerError::Window(e.to_string()))
+}

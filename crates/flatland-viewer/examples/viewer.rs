@@ -1,0 +1,32 @@
+//! Opens the viewer with every option on the command line (used by `scripts/screenshot.sh`):
+//!
+//! `cargo run --release -p flatland-viewer --example viewer -- [--scene FILE] [--play]
+//! [--cells N] [--fresh] [--fps-log]`
+
+use std::path::PathBuf;
+
+fn main() {
+    let mut options = flatland_viewer::Options::default();
+    let mut args = std::env::args().skip(1);
+    while let Some(arg) = args.next() {
+        match arg.as_str() {
+            "--scene" => options.scene = args.next().map(PathBuf::from),
+            "--play" => options.autoplay = true,
+            "--cells" => options.target_cells = args.next().and_then(|n| n.parse().ok()),
+            "--fresh" => options.fresh_settings = true,
+            "--fps-log" => options.fps_log = true,
+            other => {
+                eprintln!("unknown argument {other:?}");
+                std::process::exit(2);
+            }
+        }
+    }
+    if !flatland_viewer::display_available() {
+        eprintln!("no display (DISPLAY is not set): the viewer needs a window");
+        std::process::exit(1);
+    }
+    if let Err(e) = flatland_viewer::run_with(options) {
+        eprintln!("error: {e}");
+        std::process::exit(1);
+    }
+}

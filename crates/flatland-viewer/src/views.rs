@@ -1,0 +1,608 @@
+//! Drawing: the (s, t) plots with their overlay, the scene view, the learning curves.
+//! Functions of what they show plus a little interaction state; nothing here trains or waits.
+
+use std::f32::consts::FRAC_PI_2;
+
+use egui::{
+    Align2, Color32, FontId, Pos2, Rect, Sense, Shape, Stroke, TextureId, Vec2, epaint::TextShape,
+    pos2, vec2,
+};
+use egui_plot::{Legend, Line, Plot, PlotPoints};
+use flatland_geom::{DVec2, GeomError, Role, Scene};
+use kernel_fit::Snapshot;
+
+use crate::worker::World;
+
+/// Height of a panel's title line.
+pub const TITLE_H: f32 = 18.0;
+
+const CELL: Color32 = Color32::from_rgb(245, 245, 245);
+const CRITICAL: Color32 = Color32::from_rgb(40, 230, 255);
+const NET_EDGE: Color32 = Color32::from_rgba_premultiplied(150, 150, 150, 150);
+const BOUNDARY: Color32 = Color32::from_rgba_premultiplied(90, 90, 90, 90);
+const SCENE_MARK: Color32 = Color32::from_rgb(120, 255, 140);
+const EMITTER: Color32 = Color32::from_rgb(255, 210, 60);
+const SURFACE: Color32 = Color32::from_rgb(190, 190, 195);
+const BLOCKER: Color32 = Color32::from_rgb(235, 80, 70);
+
+/// The scene view's colours, for a legend.
+pub const LEGEND: [(&str, Color32); 3] = [
+    ("emitter", EMITTER),
+    ("surface", SURFACE),
+    ("blocker", BLOCKER),
+];
+
+/// What the pointer is over, shared between the panels (one frame late for the other panels).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Hover {
+    /// `(s, t)` under the pointer in one of the plots.
+    pub st: Option<[f64; 2]>,
+    /// The parameter of the scene point under the pointer.
+    pub scene_s: Option<f64>,
+}
+
+/// An end point being dragged in the scene view.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SceneDrag {
+    /// Where it was.
+    pub from: DVec2,
+    /// Where it is now.
+    pub to: DVec2,
+}
+
+/// Where the unit square of `(s, t)` sits on screen: `t` to the right, `s` upwards.
+#[derive(Clone, Copy, Debug)]
+pub struct PlotFrame {
+    /// The whole panel (title, axes, plot).
+    pub outer: Rect,
+    /// The square the unit square maps to.
+    pub plot: Rect,
+    /// Whether axis titles and edge labels are drawn.
+    pub big: bool,
+}
+
+impl PlotFrame {
+    /// Fits the square plot into `outer`, leaving room for a title and (if `big`) axis labels.
+    #[must_use]
+    pub fn new(outer: Rect, big: bool) -> PlotFrame {
+        let (left, bottom) = if big { (34.0, 30.0) } else { (4.0, 4.0) };
+        let avail = Rect::from_min_max(
+            outer.min + vec2(left, TITLE_H),
+            outer.max - vec2(2.0, bottom),
+        );
+        let side = avail.width().min(avail.height()).max(8.0);
+        PlotFrame {
+            outer,
+            plot: Rect::from_min_size(avail.min, Vec2::splat(side)),
+            big,
+        }
+    }
+
+    /// Screen position of `(s, t)`.
+    #[must_use]
+    pub fn screen(&self, s: f64, t: f64) -> Pos2 {
+        pos2(
+            self.plot.left() + t as f32 * self.plot.width(),
+            self.plot.bottom() - s as f32 * self.plot.height(),
+        )
+    }
+
+    /// `[s, t]` at a screen position inside the plot.
+    #[must_use]
+    pub fn at(&self, p: Pos2) -> Option<[f64; 2]> {
+        self.plot.contains(p).then(|| {
+            let t = f64::from((p.x - self.plot.left()) / self.plot.width());
+            let s = f64::from((self.plot.bottom() - p.y) / self.plot.height());
+            [s.clamp(0.0, 0.999_999), t.clamp(0.0, 0.999_999)]
+        })
+    }
+}
+
+/// What is drawn over a heatmap.
+pub struct Overlay<'a> {
+    /// The fit's state (cells, edges).
+    pub snapshot: Option<&'a Snapshot>,
+    /// Draw the cells.
+    pub cells: bool,
+    /// Draw the network's edges.
+    pub edges: bool,
+    /// The samples texture, if shown.
+    pub samples: Option<TextureId>,
+}
+
+impl Overlay<'_> {
+    /// Nothing over the heatmap.
+    #[must_use]
+    pub fn none() -> Overlay<'static> {
+        Overlay {
+            snapshot: None,
+            cells: false,
+            edges: false,
+            samples: None,
+        }
+    }
+}
+
+fn uv() -> Rect {
+    Rect::from_min_max(Pos2::ZERO, pos2(1.0, 1.0))
+}
+
+/// One (s, t) panel: heatmap, edge boundaries, overlay, hover marks. Returns `(s, t)` under
+/// the pointer.
+pub fn kernel_plot(
+    ui: &mut egui::Ui,
+    frame: &PlotFrame,
+    title: &str,
+    heatmap: Option<TextureId>,
+    scene: &Scene,
+    overlay: &Overlay<'_>,
+    hover: &Hover,
+) -> Option<[f64; 2]> {
+    let response = ui.allocate_rect(frame.plot, Sense::hover());
+    let painter = ui.painter_at(frame.outer.expand(2.0));
+    let plot = frame.plot;
+    let text = ui.visuals().text_color();
+    let weak = ui.visuals().weak_text_color();
+    painter.text(
+        pos2(plot.left(), frame.outer.top()),
+        Align2::LEFT_TOP,
+        title,
+        FontId::proportional(13.0),
+        text,
+    );
+    painter.rect_filled(plot, 0.0, Color32::BLACK);
+    match heatmap {
+        Some(tex) => {
+            painter.image(tex, plot, uv(), Color32::WHITE);
+        }
+        None => {
+            painter.text(
+                plot.center(),
+                Align2::CENTER_CENTER,
+                "…",
+                FontId::proportional(14.0),
+                weak,
+            );
+        }
+    }
+
+    // Edge boundaries on both axes, labelled with the edge index when there is room.
+    let label_font = FontId::proportional(10.0);
+    for &e in scene.surface_edges() {
+        let Some((s0, s1)) = scene.edge_param_range(e) else {
+            continue;
+        };
+        if s0 > 0.0 {
+            let p = frame.screen(s0, s0);
+            painter.vline(p.x, plot.y_range(), Stroke::new(1.0, BOUNDARY));
+            painter.hline(plot.x_range(), p.y, Stroke::new(1.0, BOUNDARY));
+            painter.vline(
+                p.x,
+                plot.bottom()..=plot.bottom() + 5.0,
+                Stroke::new(1.0, weak),
+            );
+            painter.hline(plot.left() - 5.0..=plot.left(), p.y, Stroke::new(1.0, weak));
+        }
+        let mid = frame.screen((s0 + s1) / 2.0, (s0 + s1) / 2.0);
+        if frame.big && (s1 - s0) as f32 * plot.width() >= 12.0 {
+            painter.text(
+                pos2(mid.x, plot.bottom() + 2.0),
+                Align2::CENTER_TOP,
+                e.to_string(),
+                label_font.clone(),
+                weak,
+            );
+            painter.text(
+                pos2(plot.left() - 3.0, mid.y),
+                Align2::RIGHT_CENTER,
+                e.to_string(),
+                label_font.clone(),
+                weak,
+            );
+        }
+    }
+    if frame.big {
+        painter.text(
+            pos2(plot.center().x, plot.bottom() + 14.0),
+            Align2::CENTER_TOP,
+            "t (receiver edge)",
+            FontId::proportional(12.0),
+            weak,
+        );
+        let galley =
+            painter.layout_no_wrap("s (sender edge)".into(), FontId::proportional(12.0), weak);
+        let pos = pos2(frame.outer.left(), plot.center().y + galley.size().x / 2.0);
+        painter.add(TextShape::new(pos, galley, weak).with_angle(-FRAC_PI_2));
+    }
+
+    if let Some(tex) = overlay.samples {
+        painter.image(tex, plot, uv(), Color32::WHITE);
+    }
+    if let Some(snap) = overlay.snapshot {
+        let pos: Vec<Option<Pos2>> = snap
+            .cells
+            .iter()
+            .map(|c| c.st.map(|[s, t]| frame.screen(s, t)))
+            .collect();
+        let mut shapes = Vec::with_capacity(snap.edges.len() + 2 * snap.cells.len());
+        if overlay.edges {
+            let stroke = Stroke::new(1.0, NET_EDGE);
+            for &[a, b] in &snap.edges {
+                if let (Some(Some(pa)), Some(Some(pb))) = (pos.get(a as usize), pos.get(b as usize))
+                {
+                    shapes.push(Shape::line_segment([*pa, *pb], stroke));
+                }
+            }
+        }
+        if overlay.cells {
+            let outline = Stroke::new(1.0, Color32::BLACK);
+            for (c, p) in snap.cells.iter().zip(&pos) {
+                let Some(p) = p else { continue };
+                let r = (c.width as f32 * plot.width() * 0.3).clamp(2.0, 9.0);
+                let fill = if c.critical { CRITICAL } else { CELL };
+                shapes.push(Shape::circle_filled(*p, r, fill));
+                shapes.push(Shape::circle_stroke(*p, r, outline));
+            }
+        }
+        painter.extend(shapes);
+    }
+
+    if let Some([s, t]) = hover.st {
+        let p = frame.screen(s, t);
+        let stroke = Stroke::new(1.0, Color32::from_white_alpha(200));
+        painter.hline(plot.x_range(), p.y, stroke);
+        painter.vline(p.x, plot.y_range(), stroke);
+    }
+    if let Some(s) = hover.scene_s {
+        let p = frame.screen(s, s);
+        let stroke = Stroke::new(1.5, SCENE_MARK);
+        painter.hline(plot.x_range(), p.y, stroke);
+        painter.vline(p.x, plot.y_range(), stroke);
+    }
+    response.hover_pos().and_then(|p| frame.at(p))
+}
+
+/// What the scene view reports back.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SceneOut {
+    /// The parameter of the surface point under the pointer.
+    pub hovered_s: Option<f64>,
+    /// A finished drag: from, to.
+    pub moved: Option<(DVec2, DVec2)>,
+}
+
+/// The scene `scene` with every end point equal to `from` moved to `to`, edge by edge through
+/// [`Scene::with_edge`] (so each step is validated).
+pub fn moved_scene(scene: &Scene, from: DVec2, to: DVec2) -> Result<Scene, GeomError> {
+    let mut out = scene.clone();
+    for (i, e) in scene.edges().iter().enumerate() {
+        let mut moved = *e;
+        if e.a == from {
+            moved.a = to;
+        }
+        if e.b == from {
+            moved.b = to;
+        }
+        if moved != *e {
+            out = out.with_edge(i, moved)?;
+        }
+    }
+    Ok(out)
+}
+
+struct View {
+    centre: Pos2,
+    mid: DVec2,
+    scale: f64,
+}
+
+impl View {
+    fn of(scene: &Scene, rect: Rect) -> View {
+        let (lo, hi) = scene.bounds();
+        let size = (hi - lo).max(DVec2::splat(1e-9));
+        let scale = (f64::from(rect.width()) / size.x).min(f64::from(rect.height()) / size.y);
+        View {
+            centre: rect.center(),
+            mid: (lo + hi) / 2.0,
+            scale,
+        }
+    }
+    fn screen(&self, p: DVec2) -> Pos2 {
+        let d = (p - self.mid) * self.scale;
+        self.centre + vec2(d.x as f32, -d.y as f32)
+    }
+    fn at(&self, q: Pos2) -> DVec2 {
+        let d = q - self.centre;
+        self.mid + DVec2::new(f64::from(d.x), -f64::from(d.y)) / self.scale
+    }
+}
+
+/// The scene: edges by role (emitters yellow, surfaces grey, blockers red), front-side ticks,
+/// surface edge indices, draggable end points; the hovered ray `x(s) → y(t)`.
+pub fn scene_view(
+    ui: &mut egui::Ui,
+    rect: Rect,
+    scene: &Scene,
+    world: &World,
+    hover: &Hover,
+    drag: &mut Option<SceneDrag>,
+) -> SceneOut {
+    let response = ui.allocate_rect(rect, Sense::click_and_drag());
+    let painter = ui.painter_at(rect);
+    let weak = ui.visuals().weak_text_color();
+    painter.rect_filled(rect, 4.0, Color32::from_gray(16));
+    painter.text(
+        rect.left_top() + vec2(6.0, 3.0),
+        Align2::LEFT_TOP,
+        "scene",
+        FontId::proportional(13.0),
+        ui.visuals().text_color(),
+    );
+    let inner = Rect::from_min_max(
+        rect.min + vec2(18.0, TITLE_H + 8.0),
+        rect.max - vec2(18.0, 14.0),
+    );
+    let view = View::of(scene, inner);
+    let pointer = response.hover_pos();
+    let mut out = SceneOut::default();
+
+    // Dragging an end point (snapped to 0.01 scene units).
+    let ends: Vec<DVec2> = {
+        let mut v: Vec<DVec2> = scene.edges().iter().flat_map(|e| [e.a, e.b]).collect();
+        v.dedup();
+        v
+    };
+    let nearest_end = |q: Pos2| {
+        ends.iter()
+            .map(|&p| (p, view.screen(p).distance(q)))
+            .filter(|(_, d)| *d <= 9.0)
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(p, _)| p)
+    };
+    if response.drag_started()
+        && let Some(p) = response.interact_pointer_pos().and_then(nearest_end)
+    {
+        *drag = Some(SceneDrag { from: p, to: p });
+    }
+    if let (Some(d), Some(q)) = (drag.as_mut(), response.interact_pointer_pos()) {
+        let p = view.at(q);
+        d.to = (p * 100.0).round() / 100.0;
+    }
+    if response.drag_stopped()
+        && let Some(d) = drag.take()
+        && d.to != d.from
+    {
+        out.moved = Some((d.from, d.to));
+    }
+    let preview;
+    let shown = match drag {
+        Some(d) => {
+            preview = moved_scene(scene, d.from, d.to).ok();
+            preview.as_ref().unwrap_or(scene)
+        }
+        None => scene,
+    };
+
+    for (i, e) in shown.edges().iter().enumerate() {
+        let (color, width) = match e.role {
+            Role::Blocker => (BLOCKER, 3.0),
+            Role::Surface if e.emission > 0.0 => (EMITTER, 4.0),
+            Role::Surface => (SURFACE, 2.0),
+        };
+        let (a, b) = (view.screen(e.a), view.screen(e.b));
+        painter.line_segment([a, b], Stroke::new(width, color));
+        let n = e.normal();
+        let n = vec2(n.x as f32, -n.y as f32);
+        let ticks = ((a.distance(b) / 22.0) as usize).clamp(1, 16);
+        let tick = Stroke::new(1.0, color.gamma_multiply(0.8));
+        for k in 0..ticks {
+            let p = a + (b - a) * ((k as f32 + 0.5) / ticks as f32);
+            painter.line_segment([p, p + n * 6.0], tick);
+            if e.two_sided {
+                painter.line_segment([p, p - n * 6.0], tick);
+            }
+        }
+        if e.role == Role::Surface {
+            let mid = a + (b - a) * 0.5 + n * 13.0;
+            painter.text(
+                mid,
+                Align2::CENTER_CENTER,
+                i.to_string(),
+                FontId::proportional(10.0),
+                weak,
+            );
+        }
+    }
+    let hovered_end = pointer.and_then(nearest_end);
+    for p in &ends {
+        let hot = hovered_end == Some(*p) || drag.is_some_and(|d| d.from == *p);
+        let at = match drag {
+            Some(d) if d.from == *p => view.screen(d.to),
+            _ => view.screen(*p),
+        };
+        let (r, c) = if hot {
+            (5.0, Color32::WHITE)
+        } else {
+            (2.5, Color32::from_gray(150))
+        };
+        painter.circle_filled(at, r, c);
+    }
+    if hovered_end.is_some() || drag.is_some() {
+        ui.ctx().set_cursor_icon(egui::CursorIcon::Grab);
+    }
+
+    // The hovered ray of the kernel plot.
+    if let Some([s, t]) = hover.st {
+        let k = world.kernel.eval(s, t);
+        let (x, y) = (view.screen(k.x.position), view.screen(k.y.position));
+        let (color, label) = if k.geometry <= 0.0 {
+            (Color32::from_gray(140), "G = 0")
+        } else if k.visible {
+            (Color32::from_rgb(90, 255, 110), "visible")
+        } else {
+            (Color32::from_rgb(255, 80, 80), "blocked")
+        };
+        if k.visible && k.geometry > 0.0 {
+            painter.line_segment([x, y], Stroke::new(2.0, color));
+        } else {
+            painter.extend(Shape::dashed_line(
+                &[x, y],
+                Stroke::new(2.0, color),
+                6.0,
+                4.0,
+            ));
+        }
+        painter.circle_filled(x, 5.0, Color32::from_rgb(255, 150, 40));
+        painter.circle_filled(y, 5.0, CRITICAL);
+        painter.text(
+            x + vec2(6.0, -6.0),
+            Align2::LEFT_BOTTOM,
+            "x(s)",
+            FontId::proportional(12.0),
+            Color32::WHITE,
+        );
+        painter.text(
+            y + vec2(6.0, -6.0),
+            Align2::LEFT_BOTTOM,
+            "y(t)",
+            FontId::proportional(12.0),
+            Color32::WHITE,
+        );
+        painter.text(
+            rect.right_top() + vec2(-6.0, 3.0),
+            Align2::RIGHT_TOP,
+            format!("k = {:.4}, {label}", k.k),
+            FontId::proportional(12.0),
+            color,
+        );
+    }
+
+    // Hovering a surface: its parameter.
+    if drag.is_none()
+        && hovered_end.is_none()
+        && let Some(q) = pointer
+    {
+        let mut best: Option<(f64, f32, Pos2)> = None;
+        for &i in scene.surface_edges() {
+            let e = &scene.edges()[i];
+            let (a, b) = (view.screen(e.a), view.screen(e.b));
+            let ab = b - a;
+            let u = ((q - a).dot(ab) / ab.length_sq().max(1e-6)).clamp(0.0, 1.0);
+            let c = a + ab * u;
+            let d = c.distance(q);
+            if d <= 10.0
+                && best.is_none_or(|(_, bd, _)| d < bd)
+                && let Some(s) = scene.param_of(i, view.at(c))
+            {
+                best = Some((s, d, c));
+            }
+        }
+        if let Some((s, _, c)) = best {
+            painter.circle_stroke(c, 5.0, Stroke::new(2.0, SCENE_MARK));
+            painter.text(
+                c + vec2(8.0, 8.0),
+                Align2::LEFT_TOP,
+                format!("s = t = {s:.3}"),
+                FontId::proportional(12.0),
+                SCENE_MARK,
+            );
+            out.hovered_s = Some(s);
+        }
+    }
+    out
+}
+
+/// The learning curves: held-out error against steps and against rays; cells and samples.
+pub fn curves(ui: &mut egui::Ui, snapshot: Option<&Snapshot>) {
+    let history = snapshot.map_or(&[][..], |s| &s.history[..]);
+    let h = (ui.available_height() - 22.0).max(60.0);
+    let series = |f: &dyn Fn(&kernel_fit::HistoryPoint) -> [f64; 2]| -> PlotPoints<'static> {
+        history.iter().map(f).collect()
+    };
+    ui.columns(3, |cols| {
+        cols[0].label("held-out rel. L2 vs steps");
+        Plot::new("err-steps")
+            .height(h)
+            .include_y(0.0)
+            .allow_scroll(false)
+            .allow_zoom(false)
+            .allow_drag(false)
+            .show(&mut cols[0], |p| {
+                p.line(Line::new(
+                    "rel. L2",
+                    series(&|h| [h.steps as f64, h.rel_l2_heldout]),
+                ));
+            });
+        cols[1].label("held-out rel. L2 vs rays cast");
+        Plot::new("err-rays")
+            .height(h)
+            .include_y(0.0)
+            .allow_scroll(false)
+            .allow_zoom(false)
+            .allow_drag(false)
+            .show(&mut cols[1], |p| {
+                p.line(Line::new(
+                    "rel. L2",
+                    series(&|h| [h.rays as f64, h.rel_l2_heldout]),
+                ));
+            });
+        cols[2].label("cells and samples vs steps");
+        Plot::new("counts")
+            .height(h)
+            .include_y(0.0)
+            .legend(Legend::default())
+            .allow_scroll(false)
+            .allow_zoom(false)
+            .allow_drag(false)
+            .show(&mut cols[2], |p| {
+                p.line(Line::new(
+                    "cells",
+                    series(&|h| [h.steps as f64, h.cells as f64]),
+                ));
+                p.line(Line::new(
+                    "samples / 20",
+                    series(&|h| [h.steps as f64, h.samples as f64 / 20.0]),
+                ));
+            });
+    });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn plot_frame_round_trips() {
+        let f = PlotFrame::new(
+            Rect::from_min_size(pos2(10.0, 20.0), vec2(300.0, 300.0)),
+            true,
+        );
+        let p = f.screen(0.25, 0.75);
+        let [s, t] = f.at(p).unwrap();
+        assert!(
+            (s - 0.25).abs() < 1e-4 && (t - 0.75).abs() < 1e-4,
+            "{s} {t}"
+        );
+        assert!(
+            f.screen(0.0, 0.0).y > f.screen(1.0, 0.0).y,
+            "s goes upwards"
+        );
+        assert!(f.at(pos2(0.0, 0.0)).is_none());
+    }
+
+    #[test]
+    fn moving_a_shared_corner_moves_both_edges() {
+        let scene = Scene::from_ron_str(crate::BUNDLED_SCENES[0].1).unwrap();
+        let from = DVec2::new(4.0, 0.0);
+        let moved = moved_scene(&scene, from, DVec2::new(4.5, -0.5)).unwrap();
+        let hits = moved
+            .edges()
+            .iter()
+            .filter(|e| e.a == DVec2::new(4.5, -0.5) || e.b == DVec2::new(4.5, -0.5))
+            .count();
+        assert_eq!(hits, 2);
+        assert!(moved.edges().iter().all(|e| e.a != from && e.b != from));
+        // Collapsing an edge is refused, not panicking.
+        assert!(moved_scene(&scene, from, DVec2::new(0.0, 0.0)).is_err());
+    }
+}

@@ -1,0 +1,523 @@
+//! The learner's thread. It owns the [`Fit`]; the UI talks to it with [`Command`]s and reads
+//! what it publishes from a [`Mailbox`] with `try_lock`, so a frame never waits for training.
+//!
+//! Publishing is throttled: a [`Snapshot`] at most every [`PUBLISH_EVERY`], the learned ζ̃ on
+//! the display grid at most every [`APPROX_EVERY`] (it costs `APPROX_RES²` network evaluations).
+
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender, TryRecvError};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use flatland_geom::{Kernel, Scene};
+use kernel_fit::{
+    Approximation, Errors, Fit, FitParams, FitSummary, LearnedKernel, Reference, Snapshot,
+    StopReason,
+};
+use rayon::prelude::*;
+
+/// Resolution of the reference grid (the kernel heatmap).
+pub const REFERENCE_RES: usize = 256;
+/// Resolution of the approximation and error panels.
+pub const APPROX_RES: usize = 128;
+/// Shortest time between two published snapshots.
+pub const PUBLISH_EVERY: Duration = Duration::from_millis(33);
+/// Shortest time between two published approximations while training.
+pub const APPROX_EVERY: Duration = Duration::from_millis(600);
+/// Longest uninterrupted training slice: commands are read at least this often.
+const SLICE: Duration = Duration::from_millis(15);
+
+/// What the UI asks of the learner.
+#[derive(Debug)]
+pub enum Command {
+    /// Train continuously.
+    Play,
+    /// Stop training (the fit is kept).
+    Pause,
+    /// Train exactly this many steps (then pause).
+    Step(u64),
+    /// Start a fresh fit on `scene` (subdivided `subdivide` times).
+    Reset {
+        /// The scene as the user sees it (not subdivided).
+        scene: Scene,
+        /// Pieces per surface edge.
+        subdivide: usize,
+        /// The fit's parameters.
+        params: FitParams,
+    },
+    /// New parameters for the running fit.
+    Params(FitParams),
+    /// The scene changed (an end point was dragged): keep learning from the current state.
+    Edit {
+        /// The changed scene (not subdivided).
+        scene: Scene,
+        /// Pieces per surface edge.
+        subdivide: usize,
+    },
+    /// Steps per second; `None` trains as fast as possible.
+    Speed(Option<f64>),
+}
+
+/// A scene and everything derived from it that the UI shows. Replaced, never mutated.
+#[derive(Debug)]
+pub struct World {
+    /// Increases with every new scene.
+    pub id: u64,
+    /// The scene as the user sees and edits it (not subdivided).
+    pub scene: Scene,
+    /// The exact kernel (of the subdivided scene: the same function of `(s, t)`).
+    pub kernel: Arc<Kernel>,
+    /// The exact ζ on the reference grid and at held-out points.
+    pub reference: Arc<Reference>,
+    /// The exact ζ on the `APPROX_RES` display grid, for the error panel.
+    pub exact_small: Vec<f64>,
+}
+
+/// The learned ζ̃ on the display grid.
+#[derive(Debug)]
+pub struct Approx {
+    /// The [`World`] it belongs to.
+    pub world: u64,
+    /// Training steps when it was computed.
+    pub steps: u64,
+    /// ζ̃ on the `APPROX_RES` grid, row-major, row ↔ s.
+    pub values: Vec<f64>,
+    /// The model, for the learned value under the pointer.
+    pub model: LearnedKernel,
+}
+
+/// The learner's state as last published.
+#[derive(Clone, Debug)]
+pub struct Status {
+    /// The fit's state.
+    pub snapshot: Arc<Snapshot>,
+    /// The [`World`] it belongs to.
+    pub world: u64,
+    /// Whether it is training continuously.
+    pub running: bool,
+    /// Why it stopped, if it did.
+    pub stopped: Option<StopReason>,
+    /// Training steps per second over the last second.
+    pub steps_per_s: f64,
+    /// Final errors of the last finished fit (after the refit, if enabled).
+    pub summary: Option<FitSummary>,
+}
+
+/// What the learner publishes. Each field holds the newest value; the UI takes them.
+#[derive(Debug, Default)]
+pub struct Mailbox {
+    /// A new scene's data.
+    pub world: Option<Arc<World>>,
+    /// The newest status.
+    pub status: Option<Status>,
+    /// The newest approximation.
+    pub approx: Option<Arc<Approx>>,
+    /// An error to show (a bad parameter, a failed reset).
+    pub error: Option<String>,
+    /// Work that keeps the learner busy for a noticeable time (e.g. "computing the reference").
+    pub busy: Option<&'static str>,
+}
+
+/// The UI's end: a command channel and the mailbox. Dropping it stops the thread.
+pub struct WorkerHandle {
+    commands: Option<Sender<Command>>,
+    mailbox: Arc<Mutex<Mailbox>>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl WorkerHandle {
+    /// Starts the thread. `repaint` is called after each publication (the UI's repaint request).
+    pub fn spawn(repaint: impl Fn() + Send + 'static) -> WorkerHandle {
+        let (tx, rx) = mpsc::channel();
+        let mailbox = Arc::new(Mutex::new(Mailbox::default()));
+        let shared = Arc::clone(&mailbox);
+        let thread = std::thread::Builder::new()
+            .name("flatland-learner".into())
+            .spawn(move || Learner::new(rx, shared, Box::new(repaint)).run())
+            .expect("spawning the learner thread");
+        WorkerHandle {
+            commands: Some(tx),
+            mailbox,
+            thread: Some(thread),
+        }
+    }
+
+    /// Sends a command (ignored if the thread has ended).
+    pub fn send(&self, command: Command) {
+        if let Some(tx) = &self.commands {
+            let _ = tx.send(command);
+        }
+    }
+
+    /// Takes what was published since the last call, without waiting: `None` when the learner
+    /// holds the lock right now (try again next frame).
+    pub fn take(&self) -> Option<Mailbox> {
+        let mut guard = self.mailbox.try_lock().ok()?;
+        Some(std::mem::take(&mut *guard))
+    }
+}
+
+impl Drop for WorkerHandle {
+    fn drop(&mut self) {
+        self.commands = None; // disconnects: the learner's next read ends its loop
+        if let Some(thread) = self.thread.take() {
+            let _ = thread.join();
+        }
+    }
+}
+
+struct Learner {
+    rx: Receiver<Command>,
+    mailbox: Arc<Mutex<Mailbox>>,
+    repaint: Box<dyn Fn() + Send>,
+    fit: Option<Fit>,
+    world: Option<Arc<World>>,
+    next_world: u64,
+    running: bool,
+    steps_left: u64,
+    speed: Option<f64>,
+    allowance: f64,
+    last_tick: Instant,
+    last_publish: Instant,
+    last_approx: Instant,
+    published_steps: Option<u64>,
+    approx_steps: Option<u64>,
+    rate: (Instant, u64, f64),
+    summary: Option<FitSummary>,
+    dirty: bool,
+}
+
+impl Learner {
+    fn new(
+        rx: Receiver<Command>,
+        mailbox: Arc<Mutex<Mailbox>>,
+        repaint: Box<dyn Fn() + Send>,
+    ) -> Self {
+        let now = Instant::now();
+        Learner {
+            rx,
+            mailbox,
+            repaint,
+            fit: None,
+            world: None,
+            next_world: 1,
+            running: false,
+            steps_left: 0,
+            speed: None,
+            allowance: 0.0,
+            last_tick: now,
+            last_publish: now,
+            last_approx: now,
+            published_steps: None,
+            approx_steps: None,
+            rate: (now, 0, 0.0),
+            summary: None,
+            dirty: false,
+        }
+    }
+
+    fn run(mut self) {
+        loop {
+            // Read every waiting command; sleep on the channel only when there is nothing to do.
+            let idle = !(self.running || self.steps_left > 0 || self.dirty);
+            let first = if idle {
+                match self.rx.recv_timeout(Duration::from_millis(200)) {
+                    Ok(c) => Some(c),
+                    Err(RecvTimeoutError::Timeout) => None,
+                    Err(RecvTimeoutError::Disconnected) => return,
+                }
+            } else {
+                match self.rx.try_recv() {
+                    Ok(c) => Some(c),
+                    Err(TryRecvError::Empty) => None,
+                    Err(TryRecvError::Disconnected) => return,
+                }
+            };
+            if let Some(c) = first {
+                self.handle(c);
+                loop {
+                    match self.rx.try_recv() {
+                        Ok(c) => self.handle(c),
+                        Err(TryRecvError::Empty) => break,
+                        Err(TryRecvError::Disconnected) => return,
+                    }
+                }
+            }
+            self.train_slice();
+            self.publish(false);
+        }
+    }
+
+    fn handle(&mut self, command: Command) {
+        match command {
+            Command::Play => {
+                self.running = true;
+                self.last_tick = Instant::now();
+                self.allowance = 0.0;
+            }
+            Command::Pause => {
+                self.running = false;
+                self.steps_left = 0;
+            }
+            Command::Step(n) => {
+                self.running = false;
+                self.steps_left = self.steps_left.saturating_add(n);
+            }
+            Command::Speed(speed) => self.speed = speed,
+            Command::Reset {
+                scene,
+                subdivide,
+                params,
+            } => self.reset(scene, subdivide, params),
+            Command::Params(params) => {
+                if let Some(fit) = &mut self.fit {
+                    match fit.set_params(params) {
+                        Ok(()) => self.summary = None,
+                        Err(e) => self.report(e.to_string()),
+                    }
+                }
+            }
+            Command::Edit { scene, subdivide } => self.edit(scene, subdivide),
+        }
+        self.dirty = true;
+    }
+
+    fn report(&self, message: String) {
+        if let Ok(mut m) = self.mailbox.lock() {
+            m.error = Some(message);
+        }
+        (self.repaint)();
+    }
+
+    fn set_busy(&self, busy: Option<&'static str>) {
+        if let Ok(mut m) = self.mailbox.lock() {
+            m.busy = busy;
+        }
+        (self.repaint)();
+    }
+
+    /// The scene's kernel, reference and display grid: the expensive part of a scene change.
+    fn build_world(
+        &mut self,
+        scene: Scene,
+        subdivide: usize,
+        params: &FitParams,
+    ) -> Result<Arc<World>, String> {
+        self.set_busy(Some("computing the reference kernel…"));
+        let built = if subdivide > 1 {
+            scene.subdivide(subdivide)
+        } else {
+            Ok(scene.clone())
+        };
+        let result = built.map_err(|e| e.to_string()).map(|learned| {
+            let kernel = Arc::new(Kernel::new(learned));
+            let reference = Arc::new(Reference::new(
+                &kernel,
+                REFERENCE_RES,
+                params.heldout,
+                params.seed,
+            ));
+            let exact_small = kernel.grid(APPROX_RES, true);
+            let id = self.next_world;
+            self.next_world += 1;
+            Arc::new(World {
+                id,
+                scene,
+                kernel,
+                reference,
+                exact_small,
+            })
+        });
+        self.set_busy(None);
+        result
+    }
+
+    fn reset(&mut self, scene: Scene, subdivide: usize, params: FitParams) {
+        if let Err(e) = params.validate() {
+            self.report(e.to_string());
+            return;
+        }
+        let world = match self.build_world(scene, subdivide, &params) {
+            Ok(w) => w,
+            Err(e) => return self.report(e),
+        };
+        match Fit::new(
+            Arc::clone(&world.kernel),
+            Arc::clone(&world.reference),
+            params,
+        ) {
+            Ok(fit) => {
+                self.fit = Some(fit);
+                self.install(world);
+            }
+            Err(e) => self.report(e.to_string()),
+        }
+        self.running = false;
+        self.steps_left = 0;
+    }
+
+    fn edit(&mut self, scene: Scene, subdivide: usize) {
+        let Some(params) = self.fit.as_ref().map(|f| *f.params()) else {
+            return;
+        };
+        let world = match self.build_world(scene, subdivide, &params) {
+            Ok(w) => w,
+            Err(e) => return self.report(e),
+        };
+        if let Some(fit) = &mut self.fit {
+            fit.set_kernel(Arc::clone(&world.kernel), Arc::clone(&world.reference));
+        }
+        self.install(world);
+    }
+
+    fn install(&mut self, world: Arc<World>) {
+        self.world = Some(Arc::clone(&world));
+        self.summary = None;
+        self.published_steps = None;
+        self.approx_steps = None;
+        if let Ok(mut m) = self.mailbox.lock() {
+            m.world = Some(world);
+            m.approx = None;
+        }
+        self.publish(true);
+    }
+
+    /// Trains for at most one [`SLICE`], honouring the speed limit and pending single steps.
+    fn train_slice(&mut self) {
+        let Some(fit) = &mut self.fit else {
+            self.dirty = false;
+            return;
+        };
+        let now = Instant::now();
+        let mut budget = if self.steps_left > 0 {
+            self.steps_left
+        } else if self.running {
+            match self.speed {
+                None => u64::MAX,
+                Some(rate) => {
+                    let dt = now.duration_since(self.last_tick).as_secs_f64();
+                    self.allowance = (self.allowance + rate * dt).min(rate * 0.1);
+                    self.allowance.floor() as u64
+                }
+            }
+        } else {
+            0
+        };
+        self.last_tick = now;
+        if budget == 0 {
+            self.dirty = false;
+            if self.running {
+                std::thread::sleep(Duration::from_millis(2));
+            }
+            return;
+        }
+        let start_steps = fit.steps();
+        let mut stopped = None;
+        while budget > 0 {
+            let chunk = budget.min(256);
+            for _ in 0..chunk {
+                if let Some(reason) = fit.step() {
+                    stopped = Some(reason);
+                    break;
+                }
+            }
+            budget -= chunk;
+            if stopped.is_some() || now.elapsed() >= SLICE {
+                break;
+            }
+        }
+        let done = fit.steps() - start_steps;
+        if self.steps_left > 0 {
+            self.steps_left = self.steps_left.saturating_sub(done.max(1));
+        } else if self.speed.is_some() {
+            self.allowance -= done as f64;
+        }
+        if let Some(reason) = stopped {
+            self.running = false;
+            self.steps_left = 0;
+            if self.summary.is_none() && reason != StopReason::Interrupted {
+                match fit.finish() {
+                    Ok(summary) => self.summary = Some(summary),
+                    Err(e) => self.report(e.to_string()),
+                }
+                self.approx_steps = None; // the refit changed ζ̃
+            }
+            self.publish(true);
+        }
+    }
+
+    /// Publishes a snapshot (throttled unless `force`) and, less often, the approximation.
+    fn publish(&mut self, force: bool) {
+        let Some(fit) = &self.fit else { return };
+        let steps = fit.steps();
+        let now = Instant::now();
+        let (since, at, rate) = self.rate;
+        if now.duration_since(since) >= Duration::from_secs(1) {
+            let r = steps.saturating_sub(at) as f64 / now.duration_since(since).as_secs_f64();
+            self.rate = (now, steps, r);
+        }
+        let busy = self.running || self.steps_left > 0;
+        let changed = self.published_steps != Some(steps);
+        let due = now.duration_since(self.last_publish) >= PUBLISH_EVERY;
+        let mut published = false;
+        if force || (due && (changed || self.dirty)) {
+            let status = Status {
+                snapshot: Arc::new(fit.snapshot()),
+                world: self.world.as_ref().map_or(0, |w| w.id),
+                running: self.running,
+                stopped: fit.stopped(),
+                steps_per_s: if busy { self.rate.2.max(rate) } else { 0.0 },
+                summary: self.summary.clone(),
+            };
+            if let Ok(mut m) = self.mailbox.lock() {
+                m.status = Some(status);
+            }
+            self.published_steps = Some(steps);
+            self.last_publish = now;
+            self.dirty = false;
+            published = true;
+        }
+        let approx_due = now.duration_since(self.last_approx) >= APPROX_EVERY || !busy;
+        if self.approx_steps != Some(steps)
+            && approx_due
+            && let Some(world) = &self.world
+        {
+            let model = fit.model().clone();
+            let values = approx_grid(&model, APPROX_RES);
+            let approx = Arc::new(Approx {
+                world: world.id,
+                steps,
+                values,
+                model,
+            });
+            if let Ok(mut m) = self.mailbox.lock() {
+                m.approx = Some(approx);
+            }
+            self.approx_steps = Some(steps);
+            self.last_approx = Instant::now();
+            published = true;
+        }
+        if published {
+            (self.repaint)();
+        }
+    }
+}
+
+/// ζ̃ on the midpoint grid of resolution `res`, row-major, row ↔ s (in parallel).
+#[must_use]
+pub fn approx_grid(model: &LearnedKernel, res: usize) -> Vec<f64> {
+    (0..res * res)
+        .into_par_iter()
+        .with_min_len(512)
+        .map(|k| {
+            let (s, t) = kernel_fit::grid_point(res, k);
+            model.zeta(s, t)
+        })
+        .collect()
+}
+
+/// Both final errors, formatted.
+#[must_use]
+pub fn format_errors(e: &Errors) -> String {
+    format!("grid {:.3}, held out {:.3}", e.grid, e.heldout)
+}

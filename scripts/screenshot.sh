@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Runs the real viewer window under Xvfb (software GL), lets it train for a few seconds, and saves
+# a screenshot of the whole screen to docs/viewer.png. Also prints the frame rate the viewer
+# measured while training (its --fps-log lines).
+#
+#   scripts/screenshot.sh [SECONDS] [TARGET_CELLS] [OUT.png]
+#
+# Needs: xvfb-run, Xvfb and ImageMagick's `import` (apt-get install -y --no-install-recommends
+# xvfb imagemagick) and Mesa's GL (libgl1-mesa-dri, libegl-mesa0; present on the dev image).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+SECONDS_TO_RUN="${1:-12}"
+CELLS="${2:-400}"
+OUT="${3:-docs/viewer.png}"
+
+if ! command -v xvfb-run >/dev/null || ! command -v import >/dev/null; then
+    echo "installing xvfb and imagemagick" >&2
+    apt-get install -y --no-install-recommends xvfb xauth imagemagick >/dev/null
+fi
+
+cargo build --release -p flatland-viewer --example viewer
+BIN="${CARGO_TARGET_DIR:-target}/release/examples/viewer"
+mkdir -p "$(dirname "$OUT")"
+LOG="$(mktemp)"
+RUNTIME_DIR="$(mktemp -d)"
+
+# A stale WAYLAND_DISPLAY would make winit try Wayland: unset it. --fresh ignores remembered
+# settings so the picture is the same on every machine.
+env -u WAYLAND_DISPLAY XDG_RUNTIME_DIR="$RUNTIME_DIR" \
+    xvfb-run -a -s "-screen 0 1280x800x24" bash -c '
+        "$1" --fresh --play --cells "$2" --fps-log 2>"$3" &
+        pid=$!
+        sleep "$4"
+        import -window root "$5"
+        kill "$pid"
+        wait "$pid" || true
+    ' _ "$BIN" "$CELLS" "$LOG" "$SECONDS_TO_RUN" "$OUT"
+
+echo "saved $OUT"
+echo "viewer log (fps measured by the app over the last second, every 2 s):"
+cat "$LOG"
+rm -rf "$LOG" "$RUNTIME_DIR"
