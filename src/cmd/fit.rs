@@ -4,8 +4,11 @@ use std::ops::ControlFlow;
 use std::path::PathBuf;
 use std::sync::Arc;
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use anyhow::{Context, Result};
-use kernel_fit::{Fit, FitParams, FitSummary, ModelFile};
+use flatland_geom::KernelParams;
+use kernel_fit::{Fit, FitParams, FitSummary, ModelFile, StopReason};
 
 use super::SceneArgs;
 
@@ -41,6 +44,15 @@ pub struct Args {
     /// Print one JSON object with the figures on stdout instead of the table.
     #[arg(long)]
     pub json: bool,
+    /// Save the whole learning state here (atomically) every `--every` steps and on Ctrl-C.
+    #[arg(long, value_name = "FILE")]
+    pub checkpoint: Option<PathBuf>,
+    /// Steps between two checkpoints.
+    #[arg(long, value_name = "N", default_value_t = 100_000)]
+    pub every: u64,
+    /// Continue from a checkpoint (its scene and parameters; other fit options are ignored).
+    #[arg(long, value_name = "FILE", conflicts_with = "scene")]
+    pub resume: Option<PathBuf>,
 }
 
 impl Args {
@@ -59,20 +71,66 @@ impl Args {
     }
 }
 
+/// Steps between two progress callbacks (bar updates, checkpoint and Ctrl-C checks).
+const PROGRESS_EVERY: u64 = 1000;
+
 /// Runs `flatland fit`.
 pub fn run(args: &Args) -> Result<()> {
-    let (kernel, label) = args.scene.kernel()?;
-    let params = args.params();
-    params.validate()?;
-    let reference = Arc::new(super::reference(&kernel, args.res, &params));
-    let mut fit = Fit::new(Arc::new(kernel), reference, params)?;
+    let (mut fit, label) = match &args.resume {
+        Some(path) => {
+            let fit = Fit::resume(path, KernelParams::default())?;
+            (fit, format!("{} (resumed)", path.display()))
+        }
+        None => {
+            let (kernel, label) = args.scene.kernel()?;
+            let params = args.params();
+            params.validate()?;
+            let reference = Arc::new(super::reference(&kernel, args.res, &params));
+            (Fit::new(Arc::new(kernel), reference, params)?, label)
+        }
+    };
+    let params = *fit.params();
+    anyhow::ensure!(args.every >= 1, "--every must be at least 1, got 0");
+    let interrupted = Arc::new(AtomicBool::new(false));
+    if args.checkpoint.is_some() {
+        let flag = Arc::clone(&interrupted);
+        ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst))
+            .context("installing the Ctrl-C handler")?;
+    }
     let bar = super::progress_bar(params.target_cells as u64, "cells");
-    let summary = fit.run(2000, |f| {
+    let mut save_error = None;
+    let reason = fit.train(PROGRESS_EVERY, |f| {
         bar.set_position(f.network().len() as u64);
         bar.set_message(format!("{} rays", f.rays()));
-        ControlFlow::Continue(())
-    })?;
+        if let Some(path) = &args.checkpoint
+            && f.steps() % args.every < PROGRESS_EVERY
+            && let Err(e) = f.save_checkpoint(path)
+        {
+            save_error = Some(e);
+            return ControlFlow::Break(());
+        }
+        if interrupted.load(Ordering::SeqCst) {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    });
     bar.finish_and_clear();
+    if let Some(e) = save_error {
+        return Err(e).context("saving the checkpoint");
+    }
+    if let Some(path) = &args.checkpoint {
+        fit.save_checkpoint(path).context("saving the checkpoint")?;
+        if reason == StopReason::Interrupted {
+            eprintln!(
+                "interrupted after {} steps; checkpoint saved to {path} (continue with --resume {path})",
+                fit.steps(),
+                path = path.display()
+            );
+            std::process::exit(130);
+        }
+    }
+    let summary = fit.finish()?;
     if let Some(out) = &args.out {
         ModelFile::new(fit.model().clone(), params, Some(summary.clone()))
             .save(out)

@@ -354,27 +354,37 @@ impl Fit {
         None
     }
 
-    /// Runs until a stopping rule fires, calling `progress` every `every` steps (and once at the
-    /// end); the callback can stop the fit by returning `ControlFlow::Break`. Then refits the
-    /// output weights if asked and measures the final errors.
-    pub fn run(
+    /// Trains until a stopping rule fires, calling `progress` every `every` steps (and once at
+    /// the end); the callback stops the fit by returning `ControlFlow::Break`
+    /// ([`StopReason::Interrupted`]). The state is then exactly what a checkpoint saves.
+    pub fn train(
         &mut self,
         every: u64,
         mut progress: impl FnMut(&Fit) -> ControlFlow<()>,
-    ) -> Result<FitSummary, FitError> {
+    ) -> StopReason {
         let started = Instant::now();
         let every = every.max(1);
-        loop {
-            if self.step().is_some() {
-                break;
+        let reason = loop {
+            if let Some(reason) = self.step() {
+                break reason;
             }
             if self.steps().is_multiple_of(every) && progress(self).is_break() {
                 self.stop = Some(StopReason::Interrupted);
-                break;
+                break StopReason::Interrupted;
             }
-        }
+        };
         self.wall_s += started.elapsed().as_secs_f64();
         let _ = progress(self);
+        reason
+    }
+
+    /// [`train`](Fit::train), then [`finish`](Fit::finish): the whole fit.
+    pub fn run(
+        &mut self,
+        every: u64,
+        progress: impl FnMut(&Fit) -> ControlFlow<()>,
+    ) -> Result<FitSummary, FitError> {
+        self.train(every, progress);
         self.finish()
     }
 
@@ -568,6 +578,153 @@ impl Fit {
         self.params = params;
         self.stop = None;
         Ok(())
+    }
+}
+
+/// The `format` field of checkpoint files.
+pub const CHECKPOINT_FORMAT: &str = "flatland-checkpoint";
+/// The checkpoint version this build reads and writes.
+pub const CHECKPOINT_VERSION: u32 = 1;
+
+/// Everything a fit needs to continue exactly where it was (the kernel and the reference are
+/// rebuilt from the scene, which the model embeds).
+#[derive(Serialize, Deserialize)]
+struct Checkpoint {
+    format: String,
+    version: u32,
+    scene_fingerprint: String,
+    reference_res: usize,
+    params: FitParams,
+    model: LearnedKernel,
+    samples: Vec<Sample>,
+    set_starts: Vec<usize>,
+    cell_stats: Vec<CellStats>,
+    rays: u64,
+    steps_at_last_growth: u64,
+    resample_not_before: u64,
+    train_rng: ChaCha8Rng,
+    resample_rng: ChaCha8Rng,
+    history: Vec<HistoryPoint>,
+    stop: Option<StopReason>,
+    wall_s: f64,
+}
+
+impl Fit {
+    /// Saves the whole learning state atomically (temporary file, then rename), so an
+    /// interrupted run leaves the previous checkpoint intact. [`Fit::resume`] continues from it
+    /// to the same result as an uninterrupted run with the same seed.
+    pub fn save_checkpoint(&self, path: &std::path::Path) -> Result<(), FitError> {
+        let checkpoint = Checkpoint {
+            format: CHECKPOINT_FORMAT.to_owned(),
+            version: CHECKPOINT_VERSION,
+            scene_fingerprint: crate::fingerprint_hex(&self.model.scene),
+            reference_res: self.reference.res(),
+            params: self.params,
+            model: self.model.clone(),
+            samples: self.samples.clone(),
+            set_starts: self.set_starts.clone(),
+            cell_stats: self.cell_stats.clone(),
+            rays: self.rays,
+            steps_at_last_growth: self.steps_at_last_growth,
+            resample_not_before: self.resample_not_before,
+            train_rng: self.train_rng.clone(),
+            resample_rng: self.resample_rng.clone(),
+            history: self.history.clone(),
+            stop: self.stop,
+            wall_s: self.wall_s,
+        };
+        let text = serde_json::to_vec(&checkpoint).map_err(|e| FitError::Model {
+            path: path.to_owned(),
+            reason: format!("cannot serialise the checkpoint: {e}"),
+        })?;
+        Ok(flatland_geom::write_atomic(path, &text)?)
+    }
+
+    /// Continues a fit from a checkpoint. The kernel is rebuilt from the embedded scene with
+    /// `kernel_params`; the reference from it with the checkpoint's resolution and seed.
+    /// A file of another kind or version is refused with a message, never misread.
+    pub fn resume(
+        path: &std::path::Path,
+        kernel_params: flatland_geom::KernelParams,
+    ) -> Result<Fit, FitError> {
+        let bad = |reason: String| FitError::Model {
+            path: path.to_owned(),
+            reason,
+        };
+        let text = std::fs::read(path).map_err(|source| FitError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        #[derive(Deserialize)]
+        struct Header {
+            format: Option<String>,
+            version: Option<u32>,
+        }
+        let header: Header = serde_json::from_slice(&text).map_err(|e| {
+            bad(format!(
+                "not a checkpoint (line {}, column {}: {e})",
+                e.line(),
+                e.column()
+            ))
+        })?;
+        if header.format.as_deref() != Some(CHECKPOINT_FORMAT) {
+            return Err(bad(format!(
+                "not a checkpoint: `format` must be \"{CHECKPOINT_FORMAT}\""
+            )));
+        }
+        if header.version != Some(CHECKPOINT_VERSION) {
+            return Err(bad(format!(
+                "checkpoint version {:?}, but this build reads version {CHECKPOINT_VERSION}",
+                header.version
+            )));
+        }
+        let c: Checkpoint = serde_json::from_slice(&text).map_err(|e| {
+            bad(format!(
+                "malformed checkpoint (line {}, column {}): {e}",
+                e.line(),
+                e.column()
+            ))
+        })?;
+        if crate::fingerprint_hex(&c.model.scene) != c.scene_fingerprint {
+            return Err(bad(
+                "the embedded scene does not match its fingerprint".to_owned()
+            ));
+        }
+        c.params.validate()?;
+        let kernel = Arc::new(Kernel::with_params(c.model.scene.clone(), kernel_params)?);
+        let reference = Arc::new(Reference::new(
+            &kernel,
+            c.reference_res,
+            c.params.heldout,
+            c.params.seed,
+        ));
+        if c.cell_stats.len() != c.model.network.len()
+            || c.set_starts.first() != Some(&0)
+            || c.set_starts.windows(2).any(|w| w[0] >= w[1])
+            || c.set_starts.last().is_some_and(|&l| l >= c.samples.len())
+        {
+            return Err(bad(
+                "inconsistent checkpoint (cells, sets or samples)".to_owned()
+            ));
+        }
+        Ok(Fit {
+            kernel,
+            reference,
+            params: c.params,
+            model: c.model,
+            samples: c.samples,
+            set_starts: c.set_starts,
+            cell_stats: c.cell_stats,
+            rays: c.rays,
+            steps_at_last_growth: c.steps_at_last_growth,
+            resample_not_before: c.resample_not_before,
+            train_rng: c.train_rng,
+            resample_rng: c.resample_rng,
+            history: c.history,
+            // An interrupted fit resumes; a finished one stays finished.
+            stop: c.stop.filter(|&r| r != StopReason::Interrupted),
+            wall_s: c.wall_s,
+        })
     }
 }
 
