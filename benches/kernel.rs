@@ -1,2 +1,80 @@
-//! Kernel sampling benchmarks (filled in by the geometry issue).
-fn main() {}
+//! Kernel samples per second: `fig3` and `fig3` subdivided ×1000, naive (every ray against every
+//! edge, no culling) vs accelerated (shaft cache + BVH), single thread vs the rayon batch API.
+//!
+//! Run: `cargo bench --bench kernel`. Throughput is reported in samples (elements) per second.
+
+use std::hint::black_box;
+use std::time::Duration;
+
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use flatland_geom::Kernel;
+
+mod support;
+
+const SAMPLES: usize = 200_000;
+
+fn kernel_samples(c: &mut Criterion) {
+    let st = support::samples(SAMPLES, 1);
+    let fig3 = support::scene("fig3");
+    let scenes = [
+        ("fig3", fig3.clone()),
+        ("fig3x1000", fig3.subdivide(1000).expect("subdivide")),
+    ];
+    let mut group = c.benchmark_group("kernel");
+    group.throughput(Throughput::Elements(SAMPLES as u64));
+    for (name, scene) in scenes {
+        let kernel = Kernel::new(scene);
+        let _ = kernel.k_batch(&st); // fill the lazy shaft cache once
+        group.bench_function(format!("{name}/naive/single"), |b| {
+            b.iter(|| st.iter().map(|&[s, t]| kernel.k_naive(s, t)).sum::<f64>())
+        });
+        group.bench_function(format!("{name}/accelerated/single"), |b| {
+            b.iter(|| st.iter().map(|&[s, t]| kernel.k(s, t)).sum::<f64>())
+        });
+        group.bench_function(format!("{name}/accelerated/batch"), |b| {
+            b.iter(|| kernel.k_batch(black_box(&st)))
+        });
+    }
+    group.finish();
+}
+
+/// Brute-force visibility over the *pieces* of the ×1000 scene: what culling at the parent level
+/// saves (one ray against ~6000 edges).
+fn brute_force_pieces(c: &mut Criterion) {
+    let st = support::samples(2_000, 2);
+    let kernel = Kernel::new(support::scene("fig3").subdivide(1000).expect("subdivide"));
+    let scene = kernel.scene();
+    let pairs: Vec<_> = st
+        .iter()
+        .map(|&[s, t]| (scene.point(s), scene.point(t)))
+        .collect();
+    let mut group = c.benchmark_group("visibility");
+    group.throughput(Throughput::Elements(pairs.len() as u64));
+    group.bench_function("fig3x1000/brute_force_pieces", |b| {
+        b.iter(|| {
+            pairs
+                .iter()
+                .filter(|(x, y)| kernel.visible_brute_force(x.position, x.edge, y.position, y.edge))
+                .count()
+        })
+    });
+    group.bench_function("fig3x1000/accelerated", |b| {
+        b.iter(|| {
+            pairs
+                .iter()
+                .filter(|(x, y)| kernel.visible(x.position, x.edge, y.position, y.edge))
+                .count()
+        })
+    });
+    group.finish();
+}
+
+fn quick() -> Criterion {
+    Criterion::default()
+        .sample_size(10)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(2))
+}
+
+criterion_group! { name = benches; config = quick(); targets = kernel_samples, brute_force_pieces }
+criterion_main!(benches);

@@ -1,10 +1,113 @@
-//! Filled in by the geometry issue.
+//! `flatland check`: validate a scene file and print a summary.
 
-/// Arguments.
-#[derive(clap::Args)]
-pub struct Args {}
+use std::path::PathBuf;
 
-/// Run the subcommand.
-pub fn run(_args: &Args) -> anyhow::Result<()> {
-    anyhow::bail!("not implemented yet")
+use flatland_geom::{Kernel, PairVisibility, Role, Scene};
+
+/// Pairs listed one by one at most; larger scenes print counts only.
+const MAX_LISTED: usize = 40;
+/// Above this many surface edges the pair classification is skipped (it is quadratic).
+const MAX_CLASSIFIED: usize = 512;
+
+/// Arguments of `flatland check`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Scene file (.ron or .json).
+    #[arg(long, default_value = "scenes/fig3.ron")]
+    pub scene: PathBuf,
+}
+
+/// Loads and validates the scene, then prints the summary to stdout.
+pub fn run(args: &Args) -> anyhow::Result<()> {
+    let scene = Scene::load(&args.scene)?;
+    print!("{}", summary(&args.scene.display().to_string(), &scene));
+    Ok(())
+}
+
+/// The summary `flatland check` prints.
+pub fn summary(name: &str, scene: &Scene) -> String {
+    use std::fmt::Write as _;
+    let edges = scene.edges();
+    let surfaces = scene.surface_edges();
+    let blockers = edges.iter().filter(|e| e.role == Role::Blocker).count();
+    let emitters: Vec<usize> = (0..edges.len())
+        .filter(|&i| edges[i].emission > 0.0)
+        .collect();
+    let (lo, hi) = scene.bounds();
+    let mut out = String::new();
+    let w = &mut out;
+    let _ = writeln!(w, "scene {name}: valid");
+    let _ = writeln!(
+        w,
+        "edges: {} ({}, {}, {} two-sided)",
+        edges.len(),
+        plural(surfaces.len(), "surface"),
+        plural(blockers, "blocker"),
+        edges.iter().filter(|e| e.two_sided).count()
+    );
+    let list: Vec<String> = emitters
+        .iter()
+        .map(|&i| format!("edge {i} (E = {})", edges[i].emission))
+        .collect();
+    let _ = writeln!(
+        w,
+        "emitters: {}",
+        if list.is_empty() {
+            "none".into()
+        } else {
+            list.join(", ")
+        }
+    );
+    if emitters.is_empty() {
+        let _ = writeln!(w, "warning: nothing emits, so zeta = 0 everywhere");
+    }
+    let _ = writeln!(w, "total length L: {}", scene.total_length());
+    let _ = writeln!(w, "bounds: ({}, {}) .. ({}, {})", lo.x, lo.y, hi.x, hi.y);
+    let _ = writeln!(w, "fingerprint: {:016x}", scene.fingerprint());
+    if surfaces.len() > MAX_CLASSIFIED {
+        let _ = writeln!(
+            w,
+            "visibility: {} surfaces, pair classification skipped",
+            surfaces.len()
+        );
+        return out;
+    }
+    let kernel = Kernel::new(scene.clone());
+    let (mut same, mut never, mut clear, mut blocked) = (0, 0, 0, 0);
+    let mut rays = Vec::new();
+    for (i, &a) in surfaces.iter().enumerate() {
+        for &b in &surfaces[i + 1..] {
+            match kernel.pair_visibility(a, b) {
+                Some(PairVisibility::SameEdge) => same += 1,
+                Some(PairVisibility::NeverFacing) => never += 1,
+                Some(PairVisibility::Clear) => clear += 1,
+                Some(PairVisibility::Blocked(_)) => blocked += 1,
+                Some(PairVisibility::Rays(occluders)) => rays.push((a, b, occluders)),
+                _ => {}
+            }
+        }
+    }
+    let total = same + never + clear + blocked + rays.len();
+    let _ = writeln!(w, "surface edge pairs: {total}");
+    let _ = writeln!(w, "  same parent edge (k = 0):        {same}");
+    let _ = writeln!(w, "  never facing (k = 0, no ray):    {never}");
+    let _ = writeln!(w, "  clear (V = 1, no ray):           {clear}");
+    let _ = writeln!(w, "  fully blocked (V = 0, no ray):   {blocked}");
+    let _ = writeln!(w, "  need visibility rays:            {}", rays.len());
+    for (a, b, occluders) in rays.iter().take(MAX_LISTED) {
+        let names: Vec<String> = occluders.iter().map(usize::to_string).collect();
+        let _ = writeln!(w, "    {a}-{b}: against edges {}", names.join(", "));
+    }
+    if rays.len() > MAX_LISTED {
+        let _ = writeln!(w, "    ... and {} more", rays.len() - MAX_LISTED);
+    }
+    out
+}
+
+fn plural(n: usize, word: &str) -> String {
+    if n == 1 {
+        format!("1 {word}")
+    } else {
+        format!("{n} {word}s")
+    }
 }

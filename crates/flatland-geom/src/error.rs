@@ -96,20 +96,21 @@ pub enum GeomError {
         message: String,
     },
     /// A scene file that parsed but is not a valid scene.
-    #[error("{}: {source}", path.display())]
+    // The cause is part of the message (not a `source`), so `err.chain()` does not repeat it.
+    #[error("{}: {error}", path.display())]
     InvalidFile {
         /// The file.
         path: PathBuf,
         /// Why the scene is invalid.
-        source: Box<GeomError>,
+        error: Box<GeomError>,
     },
     /// Reading or writing a file failed.
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {error}", path.display())]
     Io {
         /// The file.
         path: PathBuf,
         /// The operating system's error.
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// Serializing a scene failed (should not happen for a valid scene).
     #[error("cannot serialize scene: {0}")]

@@ -69,9 +69,9 @@ impl Scene {
     pub fn load(path: impl AsRef<Path>) -> Result<Scene, GeomError> {
         let path = path.as_ref();
         let format = format_of(path)?;
-        let text = std::fs::read_to_string(path).map_err(|source| GeomError::Io {
+        let text = std::fs::read_to_string(path).map_err(|error| GeomError::Io {
             path: path.to_path_buf(),
-            source,
+            error,
         })?;
         let location = format!("{}:", path.display());
         let raw = match format {
@@ -80,7 +80,7 @@ impl Scene {
         };
         Scene::try_from(raw).map_err(|e| GeomError::InvalidFile {
             path: path.to_path_buf(),
-            source: Box::new(e),
+            error: Box::new(e),
         })
     }
 
@@ -103,9 +103,9 @@ impl Scene {
 
 /// Writes `bytes` to `path` through a temporary file in the same directory and a rename.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), GeomError> {
-    let io = |source| GeomError::Io {
+    let io = |error| GeomError::Io {
         path: path.to_path_buf(),
-        source,
+        error,
     };
     let name = path.file_name().ok_or_else(|| {
         io(std::io::Error::new(

@@ -56,6 +56,23 @@ pub struct KernelSample {
     pub zeta: f64,
 }
 
+/// How the visibility of a pair of surface edges is decided (see [`Kernel::pair_visibility`]).
+/// Occluders are named by edge index (the first piece of a subdivided parent).
+#[derive(Clone, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum PairVisibility {
+    /// Two pieces of one edge (or the same edge): `k = 0`.
+    SameEdge,
+    /// The edges never face each other: `k = 0`, no ray.
+    NeverFacing,
+    /// Nothing can occlude a facing ray: `V = 1`, no ray.
+    Clear,
+    /// This edge cuts every ray between them: `V = 0`, no ray.
+    Blocked(usize),
+    /// Rays are needed, against these occluders only.
+    Rays(Vec<usize>),
+}
+
 /// What the hot loop needs of one parent edge, packed together.
 #[derive(Clone, Copy, Debug)]
 struct Parent {
@@ -334,7 +351,42 @@ impl Kernel {
         self.parents[gy].reflectance * g
     }
 
+    /// How visibility between surface edges `ex` and `ey` is decided: the shaft classification
+    /// the kernel caches per pair of parent edges (for facing rays). `None` if either is a
+    /// blocker or out of range.
+    #[must_use]
+    pub fn pair_visibility(&self, ex: usize, ey: usize) -> Option<PairVisibility> {
+        let (gx, gy) = (self.group_or_none(ex), self.group_or_none(ey));
+        let (px, py) = (self.parents.get(gx)?, self.parents.get(gy)?);
+        if px.rank == usize::MAX || py.rank == usize::MAX {
+            return None;
+        }
+        if gx == gy {
+            return Some(PairVisibility::SameEdge);
+        }
+        let computed;
+        let shaft = match self.shaft(gx, gy) {
+            Some(shaft) => shaft,
+            None => {
+                computed = self.classify_ranks(px.rank.min(py.rank), px.rank.max(py.rank));
+                &computed
+            }
+        };
+        let edge = |g: u32| self.scene.groups()[g as usize].first;
+        Some(match shaft {
+            Shaft::NoFacing => PairVisibility::NeverFacing,
+            Shaft::Clear => PairVisibility::Clear,
+            Shaft::Blocked(g) => PairVisibility::Blocked(edge(*g)),
+            Shaft::Candidates(c) => PairVisibility::Rays(c.iter().map(|&g| edge(g)).collect()),
+        })
+    }
+
     // ----- internals -----
+
+    fn classify_ranks(&self, r0: usize, r1: usize) -> Shaft {
+        let (g0, g1) = (self.surface_parents[r0], self.surface_parents[r1]);
+        classify(&self.segments, &self.bvh, self.side(g0), self.side(g1))
+    }
 
     /// Whether `p` is within rounding of parent `g` (false for `usize::MAX`): a loose check,
     /// only to route points that are clearly elsewhere away from the shaft cache.
@@ -411,7 +463,7 @@ impl Kernel {
             } else {
                 (y, gy, x, gx)
             };
-            if self.side(gx).faces(y) && self.side(gy).faces(x) {
+            if self.faces(gx, y) && self.faces(gy, x) {
                 return match shaft {
                     Shaft::Clear => true,
                     Shaft::Blocked(_) => false,
@@ -426,6 +478,26 @@ impl Kernel {
             }
         }
         !self.bvh.any_hit(&self.segments, x, y, gx, gy)
+    }
+
+    /// [`Side::faces`], with a floating-point filter first: the signed distance of `p` from the
+    /// line has an error of a few ulps of the coordinates, so beyond `1e-12` of them its sign
+    /// is certain; only closer points pay for the exact predicate.
+    #[inline]
+    fn faces(&self, g: usize, p: DVec2) -> bool {
+        let parent = &self.parents[g];
+        let c = parent.normal.dot(p - parent.a);
+        let tol = 1e-12 * (p.abs() + parent.a.abs()).element_sum();
+        if parent.two_sided {
+            if c.abs() > tol {
+                return true;
+            }
+        } else if c > tol {
+            return true;
+        } else if c < -tol {
+            return false;
+        }
+        self.side(g).faces(p)
     }
 
     fn side(&self, g: usize) -> Side {
@@ -450,10 +522,7 @@ impl Kernel {
         }
         let (r0, r1) = if rx < ry { (rx, ry) } else { (ry, rx) };
         let n = self.surface_parents.len();
-        Some(self.shafts[r0 * n + r1].get_or_init(|| {
-            let (g0, g1) = (self.surface_parents[r0], self.surface_parents[r1]);
-            classify(&self.segments, &self.bvh, self.side(g0), self.side(g1))
-        }))
+        Some(self.shafts[r0 * n + r1].get_or_init(|| self.classify_ranks(r0, r1)))
     }
 }
 
@@ -798,6 +867,13 @@ mod tests {
             Some(&Shaft::Candidates(vec![1, 3].into()))
         );
         assert!(!kernel.visible(v(1.0, 0.0), 0, v(1.0, 1.0), 2));
+        assert_eq!(
+            kernel.pair_visibility(0, 2),
+            Some(PairVisibility::Rays(vec![1, 3]))
+        );
+        assert_eq!(kernel.pair_visibility(0, 1), Some(PairVisibility::Clear));
+        assert_eq!(kernel.pair_visibility(0, 0), Some(PairVisibility::SameEdge));
+        assert_eq!(kernel.pair_visibility(0, 9), None);
         // Subdivision does not multiply the shaft table: it is per parent edge.
         let fine = Kernel::new(bundled("fig3").subdivide(1000).unwrap());
         assert_eq!(fine.shafts.len(), 36);

@@ -51,5 +51,5 @@ mod test_support;
 pub use error::GeomError;
 pub use glam::DVec2;
 pub use io::write_atomic;
-pub use kernel::{Kernel, KernelParams, KernelSample};
+pub use kernel::{Kernel, KernelParams, KernelSample, PairVisibility};
 pub use scene::{Edge, Role, Scene, SurfacePoint};

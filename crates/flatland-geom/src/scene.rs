@@ -205,6 +205,11 @@ pub struct Scene {
     surface_groups: Vec<usize>,
     /// `cum[r]` = arc length before surface group of rank `r`; `cum[n] = L`.
     cum: Vec<f64>,
+    /// `1 / length` of the surface group of rank `r`.
+    inv_length: Vec<f64>,
+    /// `buckets[b]`: a rank near the one containing `s = b / buckets.len()`, where
+    /// [`Scene::locate`] starts its (usually zero-step) scan instead of a binary search.
+    buckets: Vec<u32>,
     total_length: f64,
 }
 
@@ -274,6 +279,18 @@ impl Scene {
         let surface_edges = (0..edges.len())
             .filter(|&i| edges[i].role == Role::Surface)
             .collect();
+        let inv_length = surface_groups
+            .iter()
+            .map(|&g| 1.0 / groups[g].length)
+            .collect();
+        let n = surface_groups.len();
+        let nb = (4 * n).max(64);
+        let buckets = (0..nb)
+            .map(|b| {
+                let arc = b as f64 / nb as f64 * total_length;
+                cum[1..n].partition_point(|&c| c <= arc).min(n - 1) as u32
+            })
+            .collect();
         Ok(Scene {
             edges,
             group_of,
@@ -281,6 +298,8 @@ impl Scene {
             surface_edges,
             surface_groups,
             cum,
+            inv_length,
+            buckets,
             total_length,
         })
     }
@@ -475,10 +494,17 @@ impl Scene {
         let s = wrap(s);
         let arc = s * self.total_length;
         let n = self.surface_groups.len();
-        // cum[0] = 0 <= arc, so the partition point is at least 1.
-        let r = (self.cum[1..n].partition_point(|&c| c <= arc)).min(n - 1);
+        let nb = self.buckets.len();
+        // Start from the bucket's rank; the scans fix any rounding at bucket borders.
+        let mut r = self.buckets[((s * nb as f64) as usize).min(nb - 1)] as usize;
+        while r > 0 && self.cum[r] > arc {
+            r -= 1;
+        }
+        while r + 1 < n && self.cum[r + 1] <= arc {
+            r += 1;
+        }
         let g = self.surface_groups[r];
-        let u = ((arc - self.cum[r]) / self.groups[g].length).clamp(0.0, 1.0);
+        let u = ((arc - self.cum[r]) * self.inv_length[r]).clamp(0.0, 1.0);
         (g, u)
     }
 
