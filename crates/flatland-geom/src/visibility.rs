@@ -176,12 +176,17 @@ impl Bvh {
     }
 
     /// Indices of the segments whose boxes overlap the closed box `[lo, hi]`, sorted.
-    pub(crate) fn overlapping(&self, lo: DVec2, hi: DVec2) -> Vec<u32> {
+    pub(crate) fn overlapping(&self, segments: &[Segment], lo: DVec2, hi: DVec2) -> Vec<u32> {
+        let apart =
+            |alo: DVec2, ahi: DVec2| alo.x > hi.x || alo.y > hi.y || ahi.x < lo.x || ahi.y < lo.y;
         let mut out = Vec::new();
         self.any(
-            |nlo, nhi| !(nlo.x > hi.x || nlo.y > hi.y || nhi.x < lo.x || nhi.y < lo.y),
+            |nlo, nhi| !apart(nlo, nhi),
             |i| {
-                out.push(i);
+                let s = segments[i as usize];
+                if !apart(s.a.min(s.b), s.a.max(s.b)) {
+                    out.push(i);
+                }
                 false
             },
         );
@@ -284,7 +289,7 @@ pub(crate) fn classify(segments: &[Segment], bvh: &Bvh, p: Side, q: Side) -> Sha
     let lo = pts.iter().fold(DVec2::INFINITY, |m, v| m.min(*v));
     let hi = pts.iter().fold(DVec2::NEG_INFINITY, |m, v| m.max(*v));
     let mut candidates = Vec::new();
-    for o in bvh.overlapping(lo, hi) {
+    for o in bvh.overlapping(segments, lo, hi) {
         let i = o as usize;
         if i == p.index || i == q.index {
             continue;
@@ -355,4 +360,148 @@ fn cuts_whole_shaft(p: Side, q: Side, s: Segment) -> bool {
                 .iter()
                 .all(|&v| !strictly_same_side(orient(u, v, s.a), orient(u, v, s.b)))
         })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_support::{point, rng};
+    use proptest::prelude::*;
+    use rand::RngExt;
+
+    fn v(x: f64, y: f64) -> DVec2 {
+        DVec2::new(x, y)
+    }
+
+    fn hits(x: DVec2, y: DVec2, p: DVec2, q: DVec2) -> bool {
+        let h = open_segment_hits(x, y, p, q);
+        // Symmetric in the ray's ends and in the occluder's ends.
+        assert_eq!(h, open_segment_hits(y, x, p, q));
+        assert_eq!(h, open_segment_hits(x, y, q, p));
+        h
+    }
+
+    #[test]
+    fn segment_test_follows_the_grazing_rule() {
+        let (x, y) = (v(0.0, 0.0), v(4.0, 0.0));
+        assert!(hits(x, y, v(2.0, -1.0), v(2.0, 1.0)), "proper crossing");
+        assert!(!hits(x, y, v(2.0, 1.0), v(2.0, 3.0)), "miss");
+        assert!(
+            hits(x, y, v(2.0, 0.0), v(2.0, 1.0)),
+            "touching an occluder's end point blocks"
+        );
+        assert!(
+            hits(x, y, v(1.0, 0.0), v(3.0, 0.0)),
+            "collinear overlap blocks"
+        );
+        assert!(
+            hits(x, y, v(-1.0, 0.0), v(5.0, 0.0)),
+            "collinear, covering blocks"
+        );
+        assert!(
+            !hits(x, y, v(4.0, 0.0), v(6.0, 0.0)),
+            "collinear, touching only y"
+        );
+        assert!(!hits(x, y, v(5.0, 0.0), v(6.0, 0.0)), "collinear, beyond y");
+        assert!(
+            !hits(x, y, v(0.0, -1.0), v(0.0, 1.0)),
+            "an occluder through x does not block"
+        );
+        assert!(
+            !hits(x, y, v(4.0, 0.0), v(4.0, 1.0)),
+            "an occluder ending at y does not block"
+        );
+        assert!(
+            !hits(x, x, v(0.0, -1.0), v(0.0, 1.0)),
+            "an empty ray meets nothing"
+        );
+        // Exactly through an end point with coordinates that are not exact decimals: the
+        // predicate sees the exact collinearity, whatever the rounding of a float cross product.
+        // (0.1, 0.2) is exactly half of (0.2, 0.4): exactly on the ray.
+        let (x2, y2, p) = (v(0.0, 0.0), v(0.2, 0.4), v(0.1, 0.2));
+        assert_eq!(orient(x2, y2, p), 0.0);
+        assert!(hits(x2, y2, p, v(0.3, 0.1)), "through an end point");
+        assert!(!hits(x2, y2, v(0.3, 0.1), v(0.5, 0.1)));
+    }
+
+    #[test]
+    fn bvh_finds_exactly_what_a_linear_scan_finds() {
+        let mut r = rng(11);
+        for n in [1, 3, 17, 200] {
+            let segments: Vec<Segment> = (0..n)
+                .map(|_| {
+                    let a = point(&mut r);
+                    Segment {
+                        a,
+                        b: a + (point(&mut r) * 0.3),
+                    }
+                })
+                .collect();
+            let bvh = Bvh::new(&segments);
+            for _ in 0..2000 {
+                let (x, y) = (point(&mut r), point(&mut r));
+                let skip = r.random_range(0..n);
+                let linear = segments
+                    .iter()
+                    .enumerate()
+                    .any(|(i, s)| i != skip && open_segment_hits(x, y, s.a, s.b));
+                assert_eq!(bvh.any_hit(&segments, x, y, skip, skip), linear);
+            }
+            let (lo, hi) = (v(-0.2, -0.2), v(0.3, 0.1));
+            let boxed: Vec<u32> = (0..n as u32)
+                .filter(|&i| {
+                    let s = segments[i as usize];
+                    let (slo, shi) = (s.a.min(s.b), s.a.max(s.b));
+                    !(slo.x > hi.x || slo.y > hi.y || shi.x < lo.x || shi.y < lo.y)
+                })
+                .collect();
+            assert_eq!(bvh.overlapping(&segments, lo, hi), boxed);
+        }
+    }
+
+    proptest! {
+        /// The classification agrees with brute force for facing segments between random pairs:
+        /// `Blocked` rays are all blocked, `Clear` rays all visible, candidates suffice.
+        #[test]
+        fn shaft_classification_is_sound(seed in any::<u64>()) {
+            let mut r = rng(seed);
+            let snap = |p: DVec2| (p * 4.0).round() / 4.0;
+            let mut segments: Vec<Segment> = Vec::new();
+            while segments.len() < 8 {
+                let (a, b) = (snap(point(&mut r)), snap(point(&mut r)));
+                if a != b {
+                    segments.push(Segment { a, b });
+                }
+            }
+            let bvh = Bvh::new(&segments);
+            let side = |i: usize, two_sided: bool| Side { index: i, a: segments[i].a, b: segments[i].b, two_sided };
+            for (i, j) in [(0, 1), (2, 3), (4, 5), (0, 7)] {
+                let (p, q) = (side(i, r.random_bool(0.3)), side(j, r.random_bool(0.3)));
+                let shaft = classify(&segments, &bvh, p, q);
+                for _ in 0..200 {
+                    // Exact dyadic points on the snapped segments.
+                    let at = |s: Segment, k: u32| s.a + (s.b - s.a) * (f64::from(k) / 8.0);
+                    let x = at(segments[i], r.random_range(0..=8));
+                    let y = at(segments[j], r.random_range(0..=8));
+                    if !(q.faces(x) && p.faces(y)) {
+                        continue;
+                    }
+                    let truth = !segments.iter().enumerate()
+                        .any(|(k, s)| k != i && k != j && open_segment_hits(x, y, s.a, s.b));
+                    match &shaft {
+                        Shaft::NoFacing => prop_assert!(false, "facing pair classified NoFacing"),
+                        Shaft::Clear => prop_assert!(truth, "Clear but blocked: {x:?} {y:?}"),
+                        Shaft::Blocked(_) => prop_assert!(!truth, "Blocked but visible: {x:?} {y:?}"),
+                        Shaft::Candidates(c) => {
+                            let by_candidates = !c.iter().any(|&k| {
+                                let s = segments[k as usize];
+                                open_segment_hits(x, y, s.a, s.b)
+                            });
+                            prop_assert_eq!(by_candidates, truth);
+                        }
+                    }
+                }
+            }
+        }
+    }
 }
