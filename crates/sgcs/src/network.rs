@@ -814,6 +814,11 @@ impl Network {
         serde_json::from_value(value).map_err(|e| SgcsError::Corrupt(e.to_string()))
     }
 
+    /// The cells in a spatially coherent order (used by the refit).
+    pub(crate) fn spatial_order(&self) -> Vec<u32> {
+        self.index.leaf_order()
+    }
+
     /// `collect_active` with caller-owned buffers (used by the refit).
     pub(crate) fn active_into(
         &self,
@@ -1561,7 +1566,10 @@ mod tests {
         assert_eq!(net.predict1(&[0.5, 0.5]), out[0]);
     }
 
-    /// The 10⁷-step soak: `cargo test --release -p sgcs -- --ignored soak` (about a minute).
+    /// The 10⁷-step soak: `cargo test --release -p sgcs -- --ignored soak` (one to four minutes).
+    /// Phases restrict the samples to a corner for 10⁶ steps (the rest of the network idles),
+    /// targets of 10⁶ hit every 100 003 steps for the first 8·10⁶ steps; the last 2·10⁶ steps
+    /// are clean so the final error shows the network recovered.
     #[test]
     #[ignore = "10^7 steps: run in release with --ignored"]
     fn soak_ten_million_steps() {
@@ -1575,7 +1583,7 @@ mod tests {
         for i in 0..10_000_000u64 {
             // Phases that leave parts of the network idle for millions of steps, and spikes.
             let (mut x, mut y) = (r.random::<f64>(), r.random::<f64>());
-            if (i / 1_000_000) % 3 == 1 {
+            if (i / 1_000_000) % 3 == 1 && i < 8_000_000 {
                 x *= 0.3;
                 y *= 0.3;
             }

@@ -5,7 +5,17 @@
 //! the normal equations `(ΦᵀΦ + μ I) V = Φᵀ Z` are assembled sparsely (rows of `ΦᵀΦ` only hold
 //! cells whose supports overlap) and solved by Jacobi-preconditioned conjugate gradients, one
 //! output column at a time, warm-started from the current weights. The penalty is relative:
-//! `μ = ridge · mean(diag ΦᵀΦ)`, so `ridge` is dimensionless (`1e-6` is a gentle choice).
+//! `μ = ridge · mean(diag ΦᵀΦ)`, so `ridge` is dimensionless.
+//!
+//! Choosing `ridge`: overlapping Gaussians make `ΦᵀΦ` badly conditioned, and a tiny ridge fits
+//! the training samples with large cancelling weights that generalise worse than the delta rule
+//! did. Measured on the bump-and-ridge test function (400 cells, 20 samples per cell), held-out
+//! relative L2 before 0.259; after a refit with ridge 1e-8: 0.62, 1e-6: 0.55, 1e-4: 0.22,
+//! **1e-3: 0.19**, 1e-2: 0.20. Use about `1e-3` and check on held-out samples.
+//!
+//! Cost: assembling `ΦᵀΦ` is `Σ_i a_i²/2` for `a_i` active cells per sample (rows are put in a
+//! spatial order so the assembly reads cached rows); at 4000 cells, n = 4 and 80 000 samples it
+//! is about 10 s on one core, CG a few hundred iterations more.
 
 use serde::{Deserialize, Serialize};
 
@@ -26,8 +36,9 @@ pub struct RefitReport {
     pub rms_after: f64,
 }
 
-/// Relative residual at which CG stops.
-const TOLERANCE: f64 = 1e-10;
+/// Relative residual of the normal equations at which CG stops. The training error has settled to
+/// four digits well before (measured: 1e-4 already gives it within 0.5 %).
+const TOLERANCE: f64 = 1e-6;
 
 impl Network {
     /// Ridge least-squares refit of every output weight over the samples `inputs` (flat,
@@ -65,9 +76,16 @@ impl Network {
             return Err(SgcsError::Refit(format!("non-finite sample value {x}")));
         }
 
-        // Φ in compressed rows (cells ascending within a row), and its transpose's pattern.
-        let mut row_start = vec![0usize];
-        let mut phi: Vec<(u32, f64)> = Vec::new();
+        // Φ in compressed rows (cells ascending within a row). Rows are stored in a spatial
+        // order (by their most active cell's place in the index's leaf order) so that the
+        // column-by-column assembly below reads rows that are already in cache.
+        let order = self.spatial_order();
+        let mut rank = vec![0u32; len];
+        for (k, &c) in order.iter().enumerate() {
+            rank[c as usize] = k as u32;
+        }
+        let mut rows: Vec<(u32, u32)> = Vec::with_capacity(samples); // (key, sample)
+        let mut all: Vec<Vec<(u32, f64)>> = Vec::with_capacity(samples);
         let mut found = Vec::new();
         let mut stack = Vec::new();
         let mut ids = Vec::new();
@@ -78,30 +96,49 @@ impl Network {
                 &mut ids,
                 &mut found,
             );
-            phi.extend_from_slice(&found);
+            let top = found.iter().fold((u32::MAX, f64::NEG_INFINITY), |b, e| {
+                if e.1 > b.1 { *e } else { b }
+            });
+            let key = if top.0 == u32::MAX {
+                u32::MAX
+            } else {
+                rank[top.0 as usize]
+            };
+            rows.push((key, i as u32));
+            all.push(found.clone());
+        }
+        rows.sort_unstable();
+        let sample_of: Vec<usize> = rows.iter().map(|r| r.1 as usize).collect();
+        let mut row_start = vec![0usize];
+        let mut phi: Vec<(u32, f64)> = Vec::new();
+        for &i in &sample_of {
+            phi.extend_from_slice(&all[i]);
             row_start.push(phi.len());
         }
-        let mut col_rows: Vec<Vec<u32>> = vec![Vec::new(); len];
+        drop(all);
+        let mut col_rows: Vec<Vec<(u32, f64)>> = vec![Vec::new(); len];
         for i in 0..samples {
-            for &(c, _) in &phi[row_start[i]..row_start[i + 1]] {
-                col_rows[c as usize].push(i as u32);
+            for &(c, a) in &phi[row_start[i]..row_start[i + 1]] {
+                col_rows[c as usize].push((i as u32, a));
             }
         }
 
-        // G = ΦᵀΦ, sparse rows, columns ascending.
-        let mut g_start = vec![0usize];
-        let mut g: Vec<(u32, f64)> = Vec::new();
+        // G = ΦᵀΦ: the upper triangle column by column (G_cd for d ≥ c), then mirrored, so each
+        // row ends up with its columns ascending.
+        let mut upper: Vec<Vec<(u32, f64)>> = vec![Vec::new(); len];
         let mut acc = vec![0.0f64; len];
         let mut mark = vec![false; len];
         let mut touched: Vec<u32> = Vec::new();
         let mut diag = vec![0.0f64; len];
-        for c in 0..len {
+        for &c in &order {
+            let c = c as usize;
             touched.clear();
-            for &i in &col_rows[c] {
+            for &(i, mc) in &col_rows[c] {
                 let i = i as usize;
                 let row = &phi[row_start[i]..row_start[i + 1]];
-                let mc = row.iter().find(|e| e.0 as usize == c).map_or(0.0, |e| e.1);
-                for &(d, md) in row {
+                // Rows are sorted by cell: start at c itself.
+                let from = row.partition_point(|e| (e.0 as usize) < c);
+                for &(d, md) in &row[from..] {
                     if !mark[d as usize] {
                         mark[d as usize] = true;
                         touched.push(d);
@@ -111,15 +148,32 @@ impl Network {
             }
             touched.sort_unstable();
             for &d in &touched {
-                g.push((d, acc[d as usize]));
-                if d as usize == c {
-                    diag[c] = acc[d as usize];
-                }
+                upper[c].push((d, acc[d as usize]));
                 acc[d as usize] = 0.0;
                 mark[d as usize] = false;
             }
+            diag[c] = upper[c]
+                .first()
+                .filter(|e| e.0 as usize == c)
+                .map_or(0.0, |e| e.1);
+        }
+        // Row c = the mirrored lower part (d < c, filled in ascending d) + the upper part.
+        let mut lower: Vec<Vec<(u32, f64)>> = vec![Vec::new(); len];
+        for d in 0..len {
+            for &(c, v) in &upper[d] {
+                if c as usize != d {
+                    lower[c as usize].push((d as u32, v));
+                }
+            }
+        }
+        let mut g_start = vec![0usize];
+        let mut g: Vec<(u32, f64)> = Vec::new();
+        for c in 0..len {
+            g.extend_from_slice(&lower[c]);
+            g.extend_from_slice(&upper[c]);
             g_start.push(g.len());
         }
+        drop((upper, lower, col_rows));
         let mean_diag = diag.iter().sum::<f64>() / len as f64;
         let mu = ridge * mean_diag.max(f64::MIN_POSITIVE);
 
@@ -135,7 +189,7 @@ impl Network {
                     }
                 }
                 for j in 0..m {
-                    let e = out[j] - targets[i * m + j];
+                    let e = out[j] - targets[sample_of[i] * m + j];
                     s += e * e;
                 }
             }
@@ -152,7 +206,14 @@ impl Network {
                 y[c] = s;
             }
         };
-        let precond: Vec<f64> = diag.iter().map(|&d| 1.0 / (d + mu)).collect();
+        // Jacobi preconditioner. (Symmetric Gauss-Seidel halved the iterations but doubled their
+        // cost; measured no faster.)
+        let d_mu: Vec<f64> = diag.iter().map(|&d| d + mu).collect();
+        let precond = |r: &[f64], z: &mut [f64]| {
+            for c in 0..len {
+                z[c] = r[c] / d_mu[c];
+            }
+        };
         let mut iterations = 0;
         let mut worst = 0.0f64;
         let old = self.out_flat_mut().clone();
@@ -161,7 +222,7 @@ impl Network {
             // b = Φᵀ z_j
             let mut b = vec![0.0; len];
             for i in 0..samples {
-                let z = targets[i * m + j];
+                let z = targets[sample_of[i] * m + j];
                 for &(c, a) in &phi[row_start[i]..row_start[i + 1]] {
                     b[c as usize] += a * z;
                 }
@@ -201,7 +262,7 @@ impl Network {
 /// Preconditioned CG on an SPD operator; returns (iterations, relative residual).
 fn conjugate_gradient(
     a: &dyn Fn(&[f64], &mut [f64]),
-    precond: &[f64],
+    precond: &dyn Fn(&[f64], &mut [f64]),
     b: &[f64],
     x: &mut [f64],
     max_iter: usize,
@@ -217,7 +278,8 @@ fn conjugate_gradient(
     let mut ax = vec![0.0; len];
     a(x, &mut ax);
     let mut r: Vec<f64> = b.iter().zip(&ax).map(|(b, a)| b - a).collect();
-    let mut z: Vec<f64> = r.iter().zip(precond).map(|(r, p)| r * p).collect();
+    let mut z = vec![0.0; len];
+    precond(&r, &mut z);
     let mut p = z.clone();
     let mut rz = dot(&r, &z);
     let mut ap = vec![0.0; len];
@@ -236,9 +298,7 @@ fn conjugate_gradient(
             x[i] += alpha * p[i];
             r[i] -= alpha * ap[i];
         }
-        for i in 0..len {
-            z[i] = r[i] * precond[i];
-        }
+        precond(&r, &mut z);
         let rz_new = dot(&r, &z);
         let beta = rz_new / rz;
         rz = rz_new;
@@ -247,4 +307,138 @@ fn conjugate_gradient(
         }
     }
     (max_iter, norm(&r) / b_norm)
+}
+
+#[cfg(test)]
+mod tests {
+    use rand::RngExt;
+
+    use super::*;
+    use crate::Params;
+    use crate::test_support::{assert_close, bump_ridge, relative_l2, rng, unit_square_points};
+
+    fn grown(cells: usize, seed: u64) -> Network {
+        let p = Params {
+            lambda: 100,
+            max_cells: cells,
+            ..Params::default()
+        };
+        let simplex = vec![vec![0.0, 0.0], vec![1.0, 0.0], vec![0.0, 1.0]];
+        let mut net = Network::new(p, 2, 1, &simplex).unwrap();
+        let mut r = rng(seed);
+        while net.len() < cells {
+            let (x, y) = (r.random::<f64>(), r.random::<f64>());
+            net.step(&[x, y], &[bump_ridge(x, y)]);
+        }
+        net
+    }
+
+    fn samples(seed: u64, count: usize) -> (Vec<f64>, Vec<f64>) {
+        let pts = unit_square_points(seed, count);
+        let inputs = pts.iter().flatten().copied().collect();
+        let targets = pts.iter().map(|p| bump_ridge(p[0], p[1])).collect();
+        (inputs, targets)
+    }
+
+    /// Solves the dense SPD system `a x = b` by Cholesky (test reference).
+    fn dense_solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Vec<f64> {
+        let n = b.len();
+        for j in 0..n {
+            for k in 0..j {
+                let l = a[j][k];
+                for i in j..n {
+                    a[i][j] -= a[i][k] * l;
+                }
+            }
+            let d = a[j][j].sqrt();
+            for i in j..n {
+                a[i][j] /= d;
+            }
+        }
+        for i in 0..n {
+            for k in 0..i {
+                b[i] -= a[i][k] * b[k];
+            }
+            b[i] /= a[i][i];
+        }
+        for i in (0..n).rev() {
+            for k in i + 1..n {
+                b[i] -= a[k][i] * b[k];
+            }
+            b[i] /= a[i][i];
+        }
+        b
+    }
+
+    #[test]
+    fn refit_solves_the_ridge_normal_equations() {
+        let mut net = grown(30, 1);
+        let (inputs, targets) = samples(2, 600);
+        let len = net.len();
+        let mut g = vec![vec![0.0; len]; len];
+        let mut b = vec![0.0; len];
+        for (i, xi) in inputs.chunks(2).enumerate() {
+            let acts = net.activations(xi);
+            for &(c, mc) in &acts {
+                b[c] += mc * targets[i];
+                for &(d, md) in &acts {
+                    g[c][d] += mc * md;
+                }
+            }
+        }
+        let ridge = 1e-3;
+        let mu = ridge * (0..len).map(|c| g[c][c]).sum::<f64>() / len as f64;
+        for c in 0..len {
+            g[c][c] += mu;
+        }
+        let expect = dense_solve(g, b);
+        let report = net.refit_outputs(&inputs, &targets, ridge).unwrap();
+        assert!(report.relative_residual <= TOLERANCE, "{report:?}");
+        assert!(report.rms_after < report.rms_before, "{report:?}");
+        let scale = expect.iter().map(|v| v.abs()).fold(0.0, f64::max);
+        for c in 0..len {
+            assert_close!(net.output(c)[0], expect[c], 1e-4 * scale);
+        }
+    }
+
+    #[test]
+    fn refit_lowers_the_held_out_error() {
+        let mut net = grown(400, 3);
+        let (inputs, targets) = samples(4, 8_000);
+        let held_out = unit_square_points(5, 2_000);
+        let before = relative_l2(&held_out, |x, y| net.predict1(&[x, y]), bump_ridge);
+        let report = net.refit_outputs(&inputs, &targets, 1e-3).unwrap();
+        let after = relative_l2(&held_out, |x, y| net.predict1(&[x, y]), bump_ridge);
+        net.check_invariants().unwrap();
+        // Measured 0.26 -> 0.19 (see the module docs).
+        assert!(
+            after < 0.9 * before,
+            "held-out {before} -> {after}, {report:?}"
+        );
+    }
+
+    #[test]
+    fn refit_rejects_bad_input() {
+        let mut net = grown(10, 6);
+        let before = net.to_json();
+        let (inputs, targets) = samples(7, 50);
+        for (i, t, ridge) in [
+            (&inputs[..99], &targets[..], 1e-3),
+            (&inputs[..], &targets[..49], 1e-3),
+            (&inputs[..], &targets[..], 0.0),
+            (&inputs[..], &targets[..], f64::NAN),
+            (&[][..], &[][..], 1e-3),
+        ] {
+            assert!(net.refit_outputs(i, t, ridge).is_err());
+        }
+        let mut bad = inputs.clone();
+        bad[3] = f64::INFINITY;
+        assert!(net.refit_outputs(&bad, &targets, 1e-3).is_err());
+        assert_eq!(net.to_json(), before);
+        let err = net
+            .refit_outputs(&inputs, &targets, -1.0)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("ridge"), "{err}");
+    }
 }
