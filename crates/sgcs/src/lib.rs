@@ -90,4 +90,4 @@ mod test_support;
 pub use error::SgcsError;
 pub use network::{CellId, FORMAT_VERSION, Network, SIMPLEX_DIM, StepOutcome};
 pub use params::{InsertRule, OutputRule, Params};
-pub use refit::RefitReport;
+pub use refit::{RefitReport, RefitSystem};

@@ -40,25 +40,64 @@ pub struct RefitReport {
 /// four digits well before (measured: 1e-4 already gives it within 0.5 %).
 const TOLERANCE: f64 = 1e-6;
 
+/// The assembled least-squares problem of a refit: `Φ`, `ΦᵀΦ` and `ΦᵀZ` for one sample set and
+/// one state of the centres and widths. Build it once with [`Network::refit_system`] to try
+/// several ridge values with [`Network::refit_with`] (the assembly is the expensive part).
+#[derive(Clone, Debug)]
+pub struct RefitSystem {
+    /// `(steps, len, cutoff bits)` of the network it was built for.
+    fingerprint: (u64, usize, u64),
+    m: usize,
+    samples: usize,
+    /// Φ's rows (in spatial order), cells ascending within a row.
+    phi: Vec<(u32, f64)>,
+    row_start: Vec<usize>,
+    /// The caller's sample index of each row.
+    sample_of: Vec<usize>,
+    targets: Vec<f64>,
+    /// ΦᵀΦ in compressed rows, columns ascending.
+    g: Vec<(u32, f64)>,
+    g_start: Vec<usize>,
+    diag: Vec<f64>,
+    /// `Φᵀ z_j` for each output `j`, `m · len`.
+    rhs: Vec<f64>,
+}
+
+impl RefitSystem {
+    /// Number of samples.
+    pub fn samples(&self) -> usize {
+        self.samples
+    }
+}
+
 impl Network {
     /// Ridge least-squares refit of every output weight over the samples `inputs` (flat,
     /// `N · input_dim`) and `targets` (flat, `N · output_dim`), centres and widths fixed.
     /// `ridge > 0` is relative to the mean diagonal of `ΦᵀΦ` (see the module docs). Keeps the
     /// old weights, and reports so, when the refit would not lower the training error.
+    /// The same as [`Network::refit_system`] then [`Network::refit_with`].
     pub fn refit_outputs(
         &mut self,
         inputs: &[f64],
         targets: &[f64],
         ridge: f64,
     ) -> Result<RefitReport, SgcsError> {
+        check_ridge(ridge)?;
+        let system = self.refit_system(inputs, targets)?;
+        self.refit_with(&system, ridge)
+    }
+
+    fn refit_fingerprint(&self) -> (u64, usize, u64) {
+        (
+            self.steps(),
+            self.len(),
+            self.params().activation_cutoff.to_bits(),
+        )
+    }
+
+    /// Assembles the refit's least-squares problem for the current centres and widths.
+    pub fn refit_system(&self, inputs: &[f64], targets: &[f64]) -> Result<RefitSystem, SgcsError> {
         let (n, m, len) = (self.input_dim(), self.output_dim(), self.len());
-        if !(ridge > 0.0 && ridge.is_finite()) {
-            return Err(SgcsError::InvalidParam {
-                name: "ridge",
-                range: "(0, inf)",
-                value: ridge.to_string(),
-            });
-        }
         if !inputs.len().is_multiple_of(n) || inputs.is_empty() {
             return Err(SgcsError::Refit(format!(
                 "inputs has length {}, not a positive multiple of input_dim {n}",
@@ -174,6 +213,59 @@ impl Network {
             g_start.push(g.len());
         }
         drop((upper, lower, col_rows));
+        let mut rhs = vec![0.0; m * len];
+        for j in 0..m {
+            let b = &mut rhs[j * len..(j + 1) * len];
+            for i in 0..samples {
+                let z = targets[sample_of[i] * m + j];
+                for &(c, a) in &phi[row_start[i]..row_start[i + 1]] {
+                    b[c as usize] += a * z;
+                }
+            }
+        }
+        Ok(RefitSystem {
+            fingerprint: self.refit_fingerprint(),
+            m,
+            samples,
+            phi,
+            row_start,
+            sample_of,
+            targets: targets.to_vec(),
+            g,
+            g_start,
+            diag,
+            rhs,
+        })
+    }
+
+    /// Solves `system` (from [`Network::refit_system`] on this network, or on a clone of it in
+    /// the same state) with penalty `ridge` and installs the weights; see
+    /// [`Network::refit_outputs`]. Errors when the network has trained or grown since.
+    pub fn refit_with(
+        &mut self,
+        system: &RefitSystem,
+        ridge: f64,
+    ) -> Result<RefitReport, SgcsError> {
+        check_ridge(ridge)?;
+        if system.fingerprint != self.refit_fingerprint() || system.m != self.output_dim() {
+            return Err(SgcsError::Refit(
+                "the system was assembled for another state of the network".into(),
+            ));
+        }
+        let RefitSystem {
+            m,
+            samples,
+            phi,
+            row_start,
+            sample_of,
+            targets,
+            g,
+            g_start,
+            diag,
+            rhs,
+            ..
+        } = system;
+        let (m, samples, len) = (*m, *samples, self.len());
         let mean_diag = diag.iter().sum::<f64>() / len as f64;
         let mu = ridge * mean_diag.max(f64::MIN_POSITIVE);
 
@@ -219,16 +311,9 @@ impl Network {
         let old = self.out_flat_mut().clone();
         let mut new = old.clone();
         for j in 0..m {
-            // b = Φᵀ z_j
-            let mut b = vec![0.0; len];
-            for i in 0..samples {
-                let z = targets[sample_of[i] * m + j];
-                for &(c, a) in &phi[row_start[i]..row_start[i + 1]] {
-                    b[c as usize] += a * z;
-                }
-            }
+            let b = &rhs[j * len..(j + 1) * len];
             let mut x: Vec<f64> = (0..len).map(|c| old[c * m + j]).collect();
-            let (it, res) = conjugate_gradient(&matvec, &precond, &b, &mut x, 20 * len + 100);
+            let (it, res) = conjugate_gradient(&matvec, &precond, b, &mut x, 20 * len + 100);
             iterations += it;
             worst = worst.max(res);
             if x.iter().all(|v| v.is_finite()) {
@@ -238,16 +323,10 @@ impl Network {
             }
         }
         *self.out_flat_mut() = new;
-        let rms_after = rms(self);
+        let mut rms_after = rms(self);
         if rms_after.is_nan() || rms_after > rms_before {
             *self.out_flat_mut() = old;
-            return Ok(RefitReport {
-                samples,
-                iterations,
-                relative_residual: worst,
-                rms_before,
-                rms_after: rms_before,
-            });
+            rms_after = rms_before;
         }
         Ok(RefitReport {
             samples,
@@ -255,6 +334,18 @@ impl Network {
             relative_residual: worst,
             rms_before,
             rms_after,
+        })
+    }
+}
+
+fn check_ridge(ridge: f64) -> Result<(), SgcsError> {
+    if ridge > 0.0 && ridge.is_finite() {
+        Ok(())
+    } else {
+        Err(SgcsError::InvalidParam {
+            name: "ridge",
+            range: "(0, inf)",
+            value: ridge.to_string(),
         })
     }
 }
@@ -415,6 +506,24 @@ mod tests {
             after < 0.9 * before,
             "held-out {before} -> {after}, {report:?}"
         );
+    }
+
+    #[test]
+    fn one_system_serves_several_ridges_and_refuses_a_changed_network() {
+        let net = grown(60, 8);
+        let (inputs, targets) = samples(9, 1_200);
+        let system = net.refit_system(&inputs, &targets).unwrap();
+        assert_eq!(system.samples(), 1_200);
+        for ridge in [1e-4, 1e-2] {
+            let (mut a, mut b) = (net.clone(), net.clone());
+            let ra = a.refit_with(&system, ridge).unwrap();
+            let rb = b.refit_outputs(&inputs, &targets, ridge).unwrap();
+            assert_eq!(ra, rb);
+            assert_eq!(a.to_json(), b.to_json());
+        }
+        let mut moved = net.clone();
+        moved.step(&[0.5, 0.5], &[1.0]);
+        assert!(moved.refit_with(&system, 1e-3).is_err());
     }
 
     #[test]
