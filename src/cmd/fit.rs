@@ -8,9 +8,18 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::{Context, Result};
 use flatland_geom::KernelParams;
-use kernel_fit::{Fit, FitParams, FitSummary, ModelFile, StopReason};
+use kernel_fit::{Fit, FitParams, FitSummary, ModelFile, Resampling, StopReason, Target};
 
 use super::SceneArgs;
+
+/// `--resampling` values.
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+pub enum ResamplingArg {
+    /// θ(ξ) = ρ_ACC ∨ ¬ρ_A (the paper).
+    Theta,
+    /// Uniform random (s, t): the control experiment.
+    Uniform,
+}
 
 /// Arguments of `flatland fit`.
 #[derive(clap::Args, Debug)]
@@ -32,6 +41,12 @@ pub struct Args {
     /// Stop when the held-out relative L2 error reaches this value.
     #[arg(long)]
     pub target_error: Option<f64>,
+    /// How new sample sets are chosen: `theta` (the paper) or `uniform` (the control).
+    #[arg(long, value_enum, default_value_t = ResamplingArg::Theta)]
+    pub resampling: ResamplingArg,
+    /// Let the network learn k and multiply by the known emission E' (instead of learning ζ).
+    #[arg(long)]
+    pub factor_emission: bool,
     /// Skip the final least-squares refit of the output weights.
     #[arg(long)]
     pub no_refit: bool,
@@ -66,6 +81,15 @@ impl Args {
             ray_budget: self.rays.unwrap_or(d.ray_budget),
             target_error: self.target_error.unwrap_or(d.target_error),
             refit: !self.no_refit,
+            resampling: match self.resampling {
+                ResamplingArg::Theta => Resampling::Theta,
+                ResamplingArg::Uniform => Resampling::Uniform,
+            },
+            target: if self.factor_emission {
+                Target::FactoredEmission
+            } else {
+                Target::Zeta
+            },
             ..d
         }
     }

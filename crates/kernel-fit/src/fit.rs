@@ -11,7 +11,9 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use sgcs::Network;
 
-use crate::{Approximation, Errors, FitError, FitParams, InputFrame, Reference};
+use crate::{
+    Approximation, Errors, FitError, FitParams, InputFrame, Reference, Resampling, Target,
+};
 
 /// Input dimension of the kernel's network: `γ(s, t) = (x₁, y₁, x₂, y₂)`.
 pub const INPUT_DIM: usize = 4;
@@ -22,15 +24,24 @@ pub struct LearnedKernel {
     scene: Scene,
     frame: InputFrame,
     network: Network,
+    /// E' per edge when the network learns k ([`Target::FactoredEmission`]); empty otherwise.
+    #[serde(default)]
+    emission_factor: Vec<f64>,
 }
 
 impl LearnedKernel {
     /// Assembles a learned kernel (used by model loading).
-    pub fn new(scene: Scene, frame: InputFrame, network: Network) -> LearnedKernel {
+    pub fn new(
+        scene: Scene,
+        frame: InputFrame,
+        network: Network,
+        emission_factor: Vec<f64>,
+    ) -> LearnedKernel {
         LearnedKernel {
             scene,
             frame,
             network,
+            emission_factor,
         }
     }
     /// The scene it was learned on.
@@ -53,7 +64,12 @@ impl LearnedKernel {
 
 impl Approximation for LearnedKernel {
     fn zeta(&self, s: f64, t: f64) -> f64 {
-        self.network.predict1(&self.input(s, t))
+        let kappa = self.network.predict1(&self.input(s, t));
+        if self.emission_factor.is_empty() {
+            kappa
+        } else {
+            kappa * self.emission_factor[self.scene.point(s).edge]
+        }
     }
     fn basis_functions(&self) -> usize {
         self.network.len()
@@ -86,7 +102,8 @@ pub enum StopReason {
 struct Sample {
     st: [f64; 2],
     xi: [f64; 4],
-    zeta: f64,
+    /// What the network learns for this sample (ζ, or k when the emission is factored out).
+    target: f64,
 }
 
 /// Per-cell statistics of the samples a cell won, for the (s, t) re-projection (paper Fig. 3c).
@@ -174,6 +191,20 @@ const STREAM_INITIAL: u64 = 1;
 const STREAM_RESAMPLE: u64 = 2;
 const STREAM_TRAIN: u64 = 3;
 
+/// Every this-many-th training sample is held back to choose the refit's ridge weight.
+const VALIDATION_STRIDE: usize = 5;
+/// Ridge candidates: `params.ridge × 10^k` for k in 0..RIDGE_DECADES.
+const RIDGE_DECADES: i32 = 7;
+
+/// What [`Fit::refit`] chose.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RefitChoice {
+    /// The ridge weight refitted with, or `None` when the learned weights validated better.
+    pub ridge: Option<f64>,
+    /// Relative L2 of the winner on the held-back training samples.
+    pub validation_error: f64,
+}
+
 /// Held-out points used for the learning curve (the final errors use all of them).
 const HISTORY_HELDOUT: usize = 1024;
 
@@ -214,7 +245,7 @@ impl Fit {
         let points: Vec<[f64; 2]> = (0..params.initial_samples)
             .map(|_| [initial_rng.random::<f64>(), initial_rng.random::<f64>()])
             .collect();
-        let samples = make_samples(&kernel, &scene, frame, &points);
+        let samples = make_samples(&kernel, &scene, frame, params.target, &points);
         let mut net_params = params.network;
         net_params.max_cells = params.target_cells;
         let simplex: Vec<Vec<f64>> = pick_simplex(&samples, &mut initial_rng);
@@ -226,6 +257,7 @@ impl Fit {
                 scene,
                 frame,
                 network,
+                emission_factor: emission_factor(&kernel, params.target),
             },
             kernel,
             reference,
@@ -310,7 +342,7 @@ impl Fit {
             .copied()
             .unwrap_or(self.samples.len());
         let sample = self.samples[self.train_rng.random_range(start..end)];
-        let outcome = self.model.network.step(&sample.xi, &[sample.zeta]);
+        let outcome = self.model.network.step(&sample.xi, &[sample.target]);
         if let Some(new) = outcome.inserted {
             debug_assert_eq!(new, self.cell_stats.len());
             self.cell_stats.push(CellStats::default());
@@ -410,15 +442,53 @@ impl Fit {
         })
     }
 
-    /// Refits every output weight by ridge least squares over all training samples, keeping
+    /// Refits every output weight by ridge least squares over the training samples, keeping
     /// centres and widths (an improvement beyond the paper; see `sgcs::Network::refit_outputs`).
-    pub fn refit(&mut self) -> Result<(), FitError> {
-        let inputs: Vec<f64> = self.samples.iter().flat_map(|s| s.xi).collect();
-        let targets: Vec<f64> = self.samples.iter().map(|s| s.zeta).collect();
-        self.model
-            .network
-            .refit_outputs(&inputs, &targets, self.params.ridge)?;
-        Ok(())
+    ///
+    /// The ridge weight is chosen on the training samples alone: every
+    /// [`VALIDATION_STRIDE`]-th sample is held back, each candidate `params.ridge × 10^k` is
+    /// fitted on the rest and scored on it, and the learned (delta-rule) weights compete too.
+    /// The winner is refitted on all samples; if the learned weights win, nothing changes. So
+    /// the refit never trusts a solve that merely interpolates its samples.
+    pub fn refit(&mut self) -> Result<RefitChoice, FitError> {
+        let (mut fit_part, mut check_part) = (Vec::new(), Vec::new());
+        for (i, sample) in self.samples.iter().enumerate() {
+            if i % VALIDATION_STRIDE == VALIDATION_STRIDE - 1 {
+                check_part.push(sample);
+            } else {
+                fit_part.push(sample);
+            }
+        }
+        let flatten = |part: &[&Sample]| -> (Vec<f64>, Vec<f64>) {
+            (
+                part.iter().flat_map(|s| s.xi).collect(),
+                part.iter().map(|s| s.target).collect(),
+            )
+        };
+        let (fit_x, fit_y) = flatten(&fit_part);
+        let (check_x, check_y) = flatten(&check_part);
+        let score = |net: &Network| -> f64 {
+            let predicted: Vec<f64> = check_x.chunks(INPUT_DIM).map(|x| net.predict1(x)).collect();
+            crate::relative_l2(&predicted, &check_y)
+        };
+        let mut best = (score(&self.model.network), None);
+        for k in 0..RIDGE_DECADES {
+            let ridge = self.params.ridge * 10f64.powi(k);
+            let mut trial = self.model.network.clone();
+            trial.refit_outputs(&fit_x, &fit_y, ridge)?;
+            let error = score(&trial);
+            if error < best.0 {
+                best = (error, Some(ridge));
+            }
+        }
+        if let Some(ridge) = best.1 {
+            let (all_x, all_y) = flatten(&self.samples.iter().collect::<Vec<_>>());
+            self.model.network.refit_outputs(&all_x, &all_y, ridge)?;
+        }
+        Ok(RefitChoice {
+            ridge: best.1,
+            validation_error: best.0,
+        })
     }
 
     /// A new sample set chosen by θ(ξ) = ρ_ACC(ξ) ∨ ¬ρ_A(ξ) (SPEC erratum 3): candidates are
@@ -447,6 +517,10 @@ impl Fit {
                 .collect();
             scanned += n;
             let model = &self.model;
+            if p.resampling == Resampling::Uniform {
+                accepted.extend(candidates);
+                continue;
+            }
             let keep: Vec<bool> = candidates
                 .par_iter()
                 .map(|&[s, t]| {
@@ -470,7 +544,13 @@ impl Fit {
         if accepted.is_empty() {
             return;
         }
-        let new = make_samples(&self.kernel, &self.model.scene, self.model.frame, &accepted);
+        let new = make_samples(
+            &self.kernel,
+            &self.model.scene,
+            self.model.frame,
+            p.target,
+            &accepted,
+        );
         self.rays += new.len() as u64;
         self.set_starts.push(self.samples.len());
         self.samples.extend(new);
@@ -559,11 +639,18 @@ impl Fit {
                 ]
             })
             .collect();
-        self.samples = make_samples(&kernel, &scene, self.model.frame, &points);
+        self.samples = make_samples(
+            &kernel,
+            &scene,
+            self.model.frame,
+            self.params.target,
+            &points,
+        );
         self.rays += n as u64;
         self.set_starts = vec![0];
         self.cell_stats = vec![CellStats::default(); self.model.network.len()];
         self.model.scene = scene;
+        self.model.emission_factor = emission_factor(&kernel, self.params.target);
         self.kernel = kernel;
         self.reference = reference;
         self.stop = None;
@@ -751,18 +838,32 @@ fn make_samples(
     kernel: &Kernel,
     scene: &Scene,
     frame: InputFrame,
+    target: Target,
     points: &[[f64; 2]],
 ) -> Vec<Sample> {
-    let zeta = kernel.zeta_batch(points);
+    let values = match target {
+        Target::Zeta => kernel.zeta_batch(points),
+        Target::FactoredEmission => kernel.k_batch(points),
+    };
     points
         .iter()
-        .zip(zeta)
-        .map(|(&[s, t], zeta)| Sample {
+        .zip(values)
+        .map(|(&[s, t], target)| Sample {
             st: [s, t],
             xi: frame.gamma(scene, s, t),
-            zeta,
+            target,
         })
         .collect()
+}
+
+/// E' per edge when the emission is factored out of the target, empty otherwise.
+fn emission_factor(kernel: &Kernel, target: Target) -> Vec<f64> {
+    match target {
+        Target::Zeta => Vec::new(),
+        Target::FactoredEmission => (0..kernel.scene().edges().len())
+            .map(|e| kernel.source_weight(e))
+            .collect(),
+    }
 }
 
 /// Three distinct samples' inputs as the initial triangle (distinct so no edge has length 0).

@@ -50,8 +50,9 @@ mod sampling;
 pub use error::FitError;
 pub use eval::{Approximation, Errors, Reference, grid_point, relative_l2};
 pub use fit::{
-    CellSnapshot, Fit, FitSummary, HistoryPoint, INPUT_DIM, LearnedKernel, Snapshot, StopReason,
+    CellSnapshot, Fit, FitSummary, HistoryPoint, INPUT_DIM, LearnedKernel, RefitChoice, Snapshot,
+    StopReason,
 };
 pub use model::{MODEL_FORMAT, MODEL_VERSION, ModelFile, fingerprint_hex};
-pub use params::FitParams;
+pub use params::{FitParams, Resampling, Target};
 pub use sampling::InputFrame;

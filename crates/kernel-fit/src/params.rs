@@ -36,8 +36,8 @@ pub struct FitParams {
     pub target_error: f64,
     /// Refit all output weights by ridge least squares over the training samples at the end.
     pub refit: bool,
-    /// Ridge (Tikhonov) weight of the refit, relative to the mean diagonal of the normal
-    /// equations. Valid: finite, ≥ 0.
+    /// Smallest ridge (Tikhonov) weight the refit tries, relative to the mean diagonal of the
+    /// normal equations; it tries this × 10⁰ … 10⁶ and keeps what validates best. Valid: > 0.
     pub ridge: f64,
     /// Held-out random points for the error measured during and after the fit. Valid: ≥ 16.
     pub heldout: usize,
@@ -45,6 +45,34 @@ pub struct FitParams {
     pub eval_every: u64,
     /// Seed of every random choice: same seed, same fit.
     pub seed: u64,
+    /// How new sample sets are chosen: θ (the paper) or uniformly (the control experiment).
+    pub resampling: Resampling,
+    /// What the network learns: ζ itself (the paper) or k with the emission factored out.
+    pub target: Target,
+}
+
+/// What the network's output approximates.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Target {
+    /// ζ = E'(sender) · k (paper §3.3).
+    #[default]
+    Zeta,
+    /// k, and ζ̃ = E'(sender) · κ. E' is piecewise constant per edge and known exactly, so the
+    /// network need not spend cells on its jumps (a light set into a ceiling is a 100× step
+    /// along one straight line, invisible to γ).
+    FactoredEmission,
+}
+
+/// How the sets `S₁, S₂, …` are chosen.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Resampling {
+    /// The paper's θ(ξ) = ρ_ACC(ξ) ∨ ¬ρ_A(ξ): rays only in critical or uncovered zones.
+    #[default]
+    Theta,
+    /// Uniform random (s, t), same set sizes: the control that shows what θ earns.
+    Uniform,
 }
 
 impl Default for FitParams {
@@ -66,6 +94,8 @@ impl Default for FitParams {
             heldout: 4096,
             eval_every: 3000,
             seed: 1,
+            resampling: Resampling::Theta,
+            target: Target::Zeta,
         }
     }
 }
