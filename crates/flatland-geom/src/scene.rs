@@ -484,20 +484,28 @@ impl Scene {
     }
 
     /// Group index and parameter `u ∈ [0, 1]` along it of the point `s` (see [`Scene::point`]).
-    #[inline]
+    /// The hot path of every kernel evaluation.
+    #[inline(always)]
     pub(crate) fn locate(&self, s: f64) -> (usize, f64) {
         let s = wrap(s);
         let arc = s * self.total_length;
         let n = self.surface_groups.len();
-        let nb = self.buckets.len();
-        // Start from the bucket's rank; the scans fix any rounding at bucket borders.
-        let mut r = self.buckets[((s * nb as f64) as usize).min(nb - 1)] as usize;
-        while r > 0 && self.cum[r] > arc {
-            r -= 1;
-        }
-        while r + 1 < n && self.cum[r + 1] <= arc {
-            r += 1;
-        }
+        let r = if n <= SMALL_SCENE {
+            // Branch-free count of the group starts at or before `arc`: no data-dependent
+            // branch or load chain, which is what a binary search costs on a few edges.
+            self.cum[1..n].iter().map(|&c| usize::from(c <= arc)).sum()
+        } else {
+            // Start from the bucket's rank; the scans fix any rounding at bucket borders.
+            let nb = self.buckets.len();
+            let mut r = self.buckets[((s * nb as f64) as usize).min(nb - 1)] as usize;
+            while r > 0 && self.cum[r] > arc {
+                r -= 1;
+            }
+            while r + 1 < n && self.cum[r + 1] <= arc {
+                r += 1;
+            }
+            r
+        };
         let g = self.surface_groups[r];
         let u = ((arc - self.cum[r]) * self.inv_length[r]).clamp(0.0, 1.0);
         (g, u)
@@ -523,6 +531,9 @@ impl Scene {
         }
     }
 }
+
+/// Up to this many surface groups [`Scene::locate`] counts instead of searching.
+const SMALL_SCENE: usize = 16;
 
 #[inline]
 fn lerp(a: DVec2, b: DVec2, u: f64) -> DVec2 {
