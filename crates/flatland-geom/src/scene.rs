@@ -845,6 +845,31 @@ mod tests {
     }
 
     #[test]
+    fn locate_agrees_with_a_binary_search_on_large_and_small_scenes() {
+        let mut r = rng(9);
+        for n in [3, 16, 17, 300] {
+            // A polygon with uneven edge lengths (above 16 surfaces, locate uses its buckets).
+            let mut angles: Vec<f64> = (0..n)
+                .map(|_| r.random_range(0.0..std::f64::consts::TAU))
+                .collect();
+            angles.sort_by(f64::total_cmp);
+            angles.dedup();
+            let pts: Vec<DVec2> = angles.iter().map(|a| v(a.cos(), a.sin())).collect();
+            let scene = Scene::new(room(&pts, 0.5)).unwrap();
+            let mut samples: Vec<f64> = (0..2000).map(|_| r.random_range(0.0..1.0)).collect();
+            samples.extend(scene.cum.iter().map(|c| c / scene.total_length));
+            for s in samples {
+                let arc = wrap(s) * scene.total_length;
+                let n = scene.surface_groups.len();
+                let expected = scene.cum[1..n].partition_point(|&c| c <= arc);
+                let (g, u) = scene.locate(s);
+                assert_eq!(scene.groups[g].rank, Some(expected), "s = {s}");
+                assert!((0.0..=1.0).contains(&u));
+            }
+        }
+    }
+
+    #[test]
     fn with_edge_replaces_and_validates() {
         let scene = unit_box();
         let moved = scene
