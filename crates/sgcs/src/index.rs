@@ -38,6 +38,8 @@ pub(crate) struct Index {
     leaf_of: Vec<u32>,
     built_len: usize,
     steps_since_build: u64,
+    /// A leaf has grown past `4 · LEAF_SIZE` by insertions.
+    overfull: bool,
 }
 
 impl Index {
@@ -52,6 +54,7 @@ impl Index {
             leaf_of: vec![NONE; len],
             built_len: len,
             steps_since_build: 0,
+            overfull: false,
         };
         let mut ids: Vec<u32> = (0..len as u32).collect();
         index.build_node(&mut ids, NONE, pos, width);
@@ -113,7 +116,8 @@ impl Index {
 
     /// Whether the tree has degraded enough (growth or drift) to be worth rebuilding.
     pub(crate) fn wants_rebuild(&self, len: usize) -> bool {
-        len > self.built_len + self.built_len / 4 + 8
+        self.overfull
+            || len > self.built_len + self.built_len / 4 + 8
             || self.steps_since_build > 1_000 + 8 * self.built_len as u64
     }
 
@@ -224,6 +228,7 @@ impl Index {
         self.leaf_of.push(leaf);
         if let Kind::Leaf { cells } = &mut self.nodes[leaf as usize].kind {
             cells.push(c as u32);
+            self.overfull |= cells.len() > 4 * LEAF_SIZE;
         }
         self.moved(c, p);
         self.reach_to(c, p, w);

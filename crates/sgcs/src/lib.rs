@@ -32,9 +32,13 @@
 //!   they lose, `τ_r = max(0, −Σ Δτ_c)` (a neighbour can gain volume; the total is clamped at 0),
 //!   stored as `mean_r = τ_r / |F_r|` with weight `Σ_c max(0, 1 − |F_c|new/|F_c|old) · τ_cnt,c`.
 //! - **New output weight** ([`InsertRule`]): by default `v_r` keeps `κ(w_r)` unchanged by the
-//!   insertion. The volume-weighted mean SPEC suggests adds `≈ v̄` on top of an output already
-//!   built by several overlapping cells (`D_A ≈ 3` inside a network), a jump the delta rule must
-//!   then unlearn; the test `preserve_rule_keeps_output_at_new_cell` shows the difference.
+//!   insertion (`v_r = κ_before(w_r) − κ_after(w_r)` with `v_r = 0`, as `M_r(w_r) = 1`). The
+//!   volume-weighted mean SPEC suggests ([`InsertRule::VolumeWeighted`], kept as an option) adds
+//!   `≈ v̄` on top of an output already built by several overlapping cells (`D_A` is 3 to 12
+//!   inside a grown network), a jump the delta rule must then unlearn. Measured on the
+//!   bump-and-ridge test, 400 cells: held-out relative L2 0.213 vs 0.231 (λ = 300), 0.256 vs
+//!   0.282 (λ = 100); the tests `insertion_splits_the_longest_edge_of_the_worst_cell` and
+//!   `preserve_rule_learns_at_least_as_well_as_volume_weighted` check both properties.
 //! - **Stability** ([`OutputRule::Normalized`], default): the step is divided by
 //!   `max(1, Σ M_c²)`, so it equals the paper's rule in sparse networks and cannot diverge where
 //!   cells overlap (the plain rule diverges once `η Σ M_c² > 2`).
@@ -53,6 +57,16 @@
 //!   order give the same network, bit for bit, including across save/load.
 //! - Cells are never removed, so a [`CellId`] is stable; callers keep per-cell statistics keyed by
 //!   [`StepOutcome::bmu`] and push a slot when [`StepOutcome::inserted`] is `Some`.
+//! - **Refit** (beyond the paper): [`Network::refit_outputs`] solves ridge least squares for all
+//!   output weights at fixed centres and widths (sparse normal equations, conjugate gradients);
+//!   [`Network::refit_system`] + [`Network::refit_with`] reuse one assembly for several ridges.
+//!   A relative ridge near `1e-3` generalises best in our tests; see the `refit` module notes on
+//!   [`RefitReport`].
+//!
+//! # Tests and the soak
+//! `cargo test -p sgcs` runs in seconds. The 10⁷-step soak (idle phases, spikes, counters
+//! checked for subnormals) is an ignored test: `cargo test --release -p sgcs -- --ignored soak`.
+//! The step benchmark is the workspace bench `cargo bench --bench sgcs_step`.
 //!
 //! # Example
 //! ```

@@ -22,6 +22,11 @@ use serde::{Deserialize, Serialize};
 use crate::{Network, SgcsError};
 
 /// What [`Network::refit_outputs`] did.
+///
+/// Choosing the ridge: overlapping Gaussians make `ΦᵀΦ` badly conditioned, so a tiny ridge
+/// generalises worse than the delta rule did. Held-out relative L2 on the bump-and-ridge test
+/// (400 cells, 20 samples per cell): 0.259 before; after ridge 1e-8: 0.62, 1e-6: 0.55,
+/// 1e-4: 0.22, 1e-3: 0.19, 1e-2: 0.20. The penalty is `ridge · mean(diag ΦᵀΦ)`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RefitReport {
     /// Number of samples used.
