@@ -51,7 +51,12 @@ impl Reference {
             .map(|_| [rng.random::<f64>(), rng.random::<f64>()])
             .collect();
         let heldout_values = kernel.zeta_batch(&heldout_points);
-        Reference { res, grid, heldout_points, heldout_values }
+        Reference {
+            res,
+            grid,
+            heldout_points,
+            heldout_values,
+        }
     }
 
     /// Grid resolution R.
@@ -89,7 +94,10 @@ impl Reference {
             .par_iter()
             .map(|&[s, t]| approx.zeta(s, t))
             .collect();
-        Errors { grid, heldout: relative_l2(&predicted, &self.heldout_values) }
+        Errors {
+            grid,
+            heldout: relative_l2(&predicted, &self.heldout_values),
+        }
     }
 }
 
@@ -106,10 +114,11 @@ pub fn grid_point(res: usize, k: usize) -> (f64, f64) {
 pub fn relative_l2(approx: &[f64], exact: &[f64]) -> f64 {
     assert_eq!(approx.len(), exact.len(), "relative_l2: length mismatch");
     // Scale by the largest magnitude first so squares neither overflow nor underflow.
-    let scale = exact
-        .iter()
-        .chain(approx)
-        .fold(0.0_f64, |m, v| if v.is_finite() { m.max(v.abs()) } else { m });
+    let scale =
+        exact.iter().chain(approx).fold(
+            0.0_f64,
+            |m, v| if v.is_finite() { m.max(v.abs()) } else { m },
+        );
     if scale == 0.0 {
         return 0.0;
     }
@@ -123,4 +132,106 @@ pub fn relative_l2(approx: &[f64], exact: &[f64]) -> f64 {
         return (num / exact.len() as f64).sqrt() * scale;
     }
     (num / den).sqrt()
+}
+
+/// Grid cells of `grid` (R × R, row ↔ s) next to a jump of the function: some 4-neighbour
+/// differs by more than `jump` (absolute), dilated by `radius` cells. These are the kernel's
+/// discontinuities that matter — shadow and emission boundaries — at the scale of `jump`.
+pub fn discontinuity_mask(grid: &[f64], res: usize, jump: f64, radius: usize) -> Vec<bool> {
+    assert_eq!(
+        grid.len(),
+        res * res,
+        "discontinuity_mask: grid is not res × res"
+    );
+    let mut edge = vec![false; res * res];
+    for i in 0..res {
+        for j in 0..res {
+            let v = grid[i * res + j];
+            let right = j + 1 < res && (grid[i * res + j + 1] - v).abs() > jump;
+            let down = i + 1 < res && (grid[(i + 1) * res + j] - v).abs() > jump;
+            if right {
+                edge[i * res + j] = true;
+                edge[i * res + j + 1] = true;
+            }
+            if down {
+                edge[i * res + j] = true;
+                edge[(i + 1) * res + j] = true;
+            }
+        }
+    }
+    let r = radius as isize;
+    let mut mask = vec![false; res * res];
+    for (k, _) in edge.iter().enumerate().filter(|(_, e)| **e) {
+        let (i, j) = ((k / res) as isize, (k % res) as isize);
+        for di in -r..=r {
+            for dj in -r..=r {
+                let (y, x) = (i + di, j + dj);
+                if (0..res as isize).contains(&y) && (0..res as isize).contains(&x) {
+                    mask[y as usize * res + x as usize] = true;
+                }
+            }
+        }
+    }
+    mask
+}
+
+/// Points per unit area inside `mask` divided by points per unit area outside it (paper R1:
+/// cells concentrate near discontinuities). `None` when either region is empty.
+pub fn density_ratio(mask: &[bool], res: usize, points: &[[f64; 2]]) -> Option<f64> {
+    let inside_area = mask.iter().filter(|m| **m).count() as f64;
+    let outside_area = mask.len() as f64 - inside_area;
+    if inside_area == 0.0 || outside_area == 0.0 || points.is_empty() {
+        return None;
+    }
+    let cell = |v: f64| ((v * res as f64) as usize).min(res - 1);
+    let inside = points
+        .iter()
+        .filter(|[s, t]| mask[cell(*s) * res + cell(*t)])
+        .count() as f64;
+    let outside = points.len() as f64 - inside;
+    (outside > 0.0).then(|| (inside / inside_area) / (outside / outside_area))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn relative_l2_is_scale_free_and_finite() {
+        let exact = [1.0, 2.0, 3.0];
+        let approx = [1.1, 1.9, 3.0];
+        let e = relative_l2(&approx, &exact);
+        let scaled: Vec<f64> = approx.iter().map(|v| v * 1e300).collect();
+        let exact_scaled: Vec<f64> = exact.iter().map(|v| v * 1e300).collect();
+        assert!((relative_l2(&scaled, &exact_scaled) - e).abs() < 1e-12);
+        let tiny: Vec<f64> = approx.iter().map(|v| v * 1e-300).collect();
+        let exact_tiny: Vec<f64> = exact.iter().map(|v| v * 1e-300).collect();
+        assert!((relative_l2(&tiny, &exact_tiny) - e).abs() < 1e-9);
+        assert_eq!(relative_l2(&[0.0; 3], &[0.0; 3]), 0.0);
+        assert!((relative_l2(&[0.0, 0.0], &[3.0, 4.0]) - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn step_function_mask_and_density() {
+        // A step at column 8 of a 16 × 16 grid: the mask is the two columns beside it, dilated.
+        let res = 16;
+        let grid: Vec<f64> = (0..res * res)
+            .map(|k| if k % res < 8 { 0.0 } else { 1.0 })
+            .collect();
+        let mask = discontinuity_mask(&grid, res, 0.5, 1);
+        for i in 0..res {
+            for j in 0..res {
+                assert_eq!(mask[i * res + j], (6..=9).contains(&j), "({i}, {j})");
+            }
+        }
+        // Half the points in the 4-column band (a quarter of the area): density ratio 3.
+        let points: Vec<[f64; 2]> = (0..40)
+            .map(|k| {
+                let t = if k % 2 == 0 { 7.5 / 16.0 } else { 1.5 / 16.0 };
+                [(k as f64 + 0.5) / 40.0, t]
+            })
+            .collect();
+        let ratio = density_ratio(&mask, res, &points).unwrap();
+        assert!((ratio - 3.0).abs() < 1e-12, "{ratio}");
+    }
 }

@@ -48,7 +48,9 @@ mod params;
 mod sampling;
 
 pub use error::FitError;
-pub use eval::{Approximation, Errors, Reference, grid_point, relative_l2};
+pub use eval::{
+    Approximation, Errors, Reference, density_ratio, discontinuity_mask, grid_point, relative_l2,
+};
 pub use fit::{
     CellSnapshot, Fit, FitSummary, HistoryPoint, INPUT_DIM, LearnedKernel, RefitChoice, Snapshot,
     StopReason,
