@@ -23,6 +23,8 @@ enum Command {
     Fit(cmd::fit::Args),
     /// Evaluate a saved model on a grid (CSV or PNG) and report its errors.
     Eval(cmd::eval::Args),
+    /// Run the adversarial stability suite (scaling, extreme scenes and parameters, soak).
+    Stress(cmd::stress::Args),
 }
 
 fn main() {
@@ -32,6 +34,7 @@ fn main() {
         Some(Command::Kernel(args)) => cmd::kernel::run(&args),
         Some(Command::Fit(args)) => cmd::fit::run(&args),
         Some(Command::Eval(args)) => cmd::eval::run(&args),
+        Some(Command::Stress(args)) => cmd::stress::run(&args),
         None => cmd::default_job(),
     };
     if let Err(err) = result {

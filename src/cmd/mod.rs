@@ -13,6 +13,7 @@ pub mod check;
 pub mod eval;
 pub mod fit;
 pub mod kernel;
+pub mod stress;
 
 /// The scene a command works on: a file, or the bundled default, optionally subdivided.
 #[derive(clap::Args, Debug, Clone)]
