@@ -40,6 +40,7 @@
 #![deny(missing_docs)]
 
 pub mod baselines;
+pub mod bench;
 mod error;
 mod eval;
 mod fit;

@@ -1,0 +1,359 @@
+//! Run time against error: every method at every budget (number of basis functions), on the
+//! same kernel, target and error measure, several seeds where random.
+
+use std::ops::ControlFlow;
+use std::sync::Arc;
+use std::time::Instant;
+
+use flatland_geom::Kernel;
+use serde::{Deserialize, Serialize};
+
+use crate::baselines::{HrParams, UniformParams, run_hr_at_budget, run_uniform};
+use crate::{Approximation, Errors, Fit, FitError, FitParams, Reference};
+
+/// A method the benchmark compares.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// SGCS with the least-squares output refit (one fit gives this row and the next).
+    Sgcs,
+    /// SGCS with the delta-rule output weights only (the paper).
+    SgcsNoRefit,
+    /// Hierarchical radiosity (Hanrahan, Salzman, Aupperle 1991).
+    Hr,
+    /// Piecewise constant on a g × g grid.
+    Uniform,
+}
+
+impl Method {
+    /// The name used in files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Sgcs => "sgcs",
+            Method::SgcsNoRefit => "sgcs-norefit",
+            Method::Hr => "hr",
+            Method::Uniform => "uniform",
+        }
+    }
+
+    /// Parses a name as [`Method::name`] writes it.
+    pub fn parse(name: &str) -> Result<Method, FitError> {
+        match name {
+            "sgcs" => Ok(Method::Sgcs),
+            "sgcs-norefit" => Ok(Method::SgcsNoRefit),
+            "hr" => Ok(Method::Hr),
+            "uniform" => Ok(Method::Uniform),
+            _ => Err(FitError::InvalidParameter {
+                name: "methods",
+                value: name.to_owned(),
+                valid: "a comma-separated list of sgcs, sgcs-norefit, hr, uniform",
+            }),
+        }
+    }
+}
+
+/// One method at one budget and seed.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BenchRow {
+    /// The method.
+    pub method: Method,
+    /// The budget asked for (basis functions).
+    pub budget: usize,
+    /// The seed.
+    pub seed: u64,
+    /// Basis functions actually used (HR and uniform land near, not on, the budget).
+    pub basis_functions: usize,
+    /// Relative L2 errors against the reference.
+    pub errors: Errors,
+    /// Rays (exact kernel evaluations) spent building the representation.
+    pub rays: u64,
+    /// Wall time to build it, seconds (errors excluded).
+    pub wall_s: f64,
+    /// Bytes of the representation.
+    pub memory_bytes: usize,
+}
+
+/// What to run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BenchPlan {
+    /// Methods, in the order rows are produced.
+    pub methods: Vec<Method>,
+    /// Budgets (basis functions).
+    pub budgets: Vec<usize>,
+    /// Seeds 1..=seeds.
+    pub seeds: u64,
+    /// SGCS parameters (target cells and seed are set per row).
+    pub fit: FitParams,
+    /// HR parameters (F_ε is searched per budget).
+    pub hr: HrParams,
+    /// Uniform-grid parameters.
+    pub uniform: UniformParams,
+}
+
+impl BenchPlan {
+    /// Checks the plan; errors name the parameter and the valid range.
+    pub fn validate(&self) -> Result<(), FitError> {
+        let bad =
+            |name, value: String, valid| Err(FitError::InvalidParameter { name, value, valid });
+        if self.methods.is_empty() {
+            return bad(
+                "methods",
+                "(none)".into(),
+                "at least one of sgcs, sgcs-norefit, hr, uniform",
+            );
+        }
+        if let Some(b) = self.budgets.iter().find(|&&b| b < 3) {
+            return bad("budgets", b.to_string(), "each ≥ 3");
+        }
+        if self.budgets.is_empty() {
+            return bad("budgets", "(none)".into(), "at least one budget ≥ 3");
+        }
+        if self.seeds == 0 {
+            return bad("seeds", "0".into(), "≥ 1");
+        }
+        self.fit.validate()?;
+        self.hr.check()?;
+        self.uniform.check()
+    }
+}
+
+/// Runs the plan on one kernel; `progress(done, total)` after each row. SGCS with and without
+/// refit come from one fit (the error before and after its refit), so asking for both costs one
+/// fit; its wall time is the training time (and for `sgcs`, plus the refit).
+pub fn run_bench(
+    kernel: &Arc<Kernel>,
+    reference: &Arc<Reference>,
+    plan: &BenchPlan,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<Vec<BenchRow>, FitError> {
+    plan.validate()?;
+    let total = plan.methods.len() * plan.budgets.len() * plan.seeds as usize;
+    let mut rows = Vec::with_capacity(total);
+    for &budget in &plan.budgets {
+        for seed in 1..=plan.seeds {
+            let wants_sgcs = plan
+                .methods
+                .iter()
+                .any(|m| matches!(m, Method::Sgcs | Method::SgcsNoRefit));
+            let sgcs = if wants_sgcs {
+                Some(sgcs_rows(kernel, reference, plan, budget, seed)?)
+            } else {
+                None
+            };
+            for &method in &plan.methods {
+                let row = match method {
+                    Method::Sgcs => sgcs.as_ref().map(|r| r.0.clone()).expect("fitted above"),
+                    Method::SgcsNoRefit => {
+                        sgcs.as_ref().map(|r| r.1.clone()).expect("fitted above")
+                    }
+                    Method::Hr => {
+                        let run = run_hr_at_budget(kernel, budget, seed, &plan.hr)?;
+                        row(
+                            method,
+                            budget,
+                            seed,
+                            &run.approx,
+                            reference,
+                            run.rays,
+                            run.wall.as_secs_f64(),
+                        )
+                    }
+                    Method::Uniform => {
+                        let run = run_uniform(kernel, budget, seed, &plan.uniform)?;
+                        row(
+                            method,
+                            budget,
+                            seed,
+                            &run.approx,
+                            reference,
+                            run.rays,
+                            run.wall.as_secs_f64(),
+                        )
+                    }
+                };
+                rows.push(row);
+                progress(rows.len(), total);
+            }
+        }
+    }
+    Ok(rows)
+}
+
+fn row(
+    method: Method,
+    budget: usize,
+    seed: u64,
+    approx: &dyn Approximation,
+    reference: &Reference,
+    rays: u64,
+    wall_s: f64,
+) -> BenchRow {
+    BenchRow {
+        method,
+        budget,
+        seed,
+        basis_functions: approx.basis_functions(),
+        errors: reference.errors(approx),
+        rays,
+        wall_s,
+        memory_bytes: approx.memory_bytes(),
+    }
+}
+
+/// One SGCS fit at `budget` cells: the row after the refit and the row before it.
+fn sgcs_rows(
+    kernel: &Arc<Kernel>,
+    reference: &Arc<Reference>,
+    plan: &BenchPlan,
+    budget: usize,
+    seed: u64,
+) -> Result<(BenchRow, BenchRow), FitError> {
+    let params = FitParams {
+        target_cells: budget,
+        seed,
+        refit: false,
+        eval_every: 0,
+        ..plan.fit
+    };
+    let mut fit = Fit::new(Arc::clone(kernel), Arc::clone(reference), params)?;
+    let started = Instant::now();
+    fit.train(u64::MAX, |_| ControlFlow::Continue(()));
+    let train_s = started.elapsed().as_secs_f64();
+    let before = row(
+        Method::SgcsNoRefit,
+        budget,
+        seed,
+        fit.model(),
+        reference,
+        fit.rays(),
+        train_s,
+    );
+    let started = Instant::now();
+    fit.refit()?;
+    let refit_s = started.elapsed().as_secs_f64();
+    let after = row(
+        Method::Sgcs,
+        budget,
+        seed,
+        fit.model(),
+        reference,
+        fit.rays(),
+        train_s + refit_s,
+    );
+    Ok((after, before))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use flatland_geom::Scene;
+
+    #[test]
+    fn every_method_reports_errors_that_recompute() {
+        let scene = Scene::from_ron_str(include_str!("../../../scenes/box.ron")).unwrap();
+        let kernel = Arc::new(Kernel::new(scene));
+        let reference = Arc::new(Reference::new(&kernel, 48, 512, 3));
+        let plan = BenchPlan {
+            methods: vec![
+                Method::Sgcs,
+                Method::SgcsNoRefit,
+                Method::Hr,
+                Method::Uniform,
+            ],
+            budgets: vec![30, 60],
+            seeds: 2,
+            fit: FitParams::default(),
+            hr: HrParams::default(),
+            uniform: UniformParams::default(),
+        };
+        let mut calls = 0;
+        let rows = run_bench(&kernel, &reference, &plan, |done, total| {
+            calls += 1;
+            assert!(done <= total);
+        })
+        .unwrap();
+        assert_eq!((rows.len(), calls), (16, 16));
+        for r in &rows {
+            assert!(
+                r.errors.grid.is_finite() && r.errors.heldout.is_finite(),
+                "{r:?}"
+            );
+            assert!(
+                r.rays > 0 && r.basis_functions > 0 && r.memory_bytes > 0,
+                "{r:?}"
+            );
+        }
+        // The uniform row's error equals an independent recomputation from its saved output.
+        let u = rows
+            .iter()
+            .find(|r| r.method == Method::Uniform && r.budget == 60)
+            .unwrap();
+        let grid = run_uniform(&kernel, 60, u.seed, &UniformParams::default()).unwrap();
+        let again = reference.errors(&grid.approx);
+        assert_eq!(again, u.errors);
+        // The refit never makes SGCS worse on the samples it validates on; on this box it helps.
+        for budget in [30, 60] {
+            let pick = |m| {
+                rows.iter()
+                    .find(|r| r.method == m && r.budget == budget && r.seed == 1)
+                    .unwrap()
+            };
+            assert!(
+                pick(Method::Sgcs).errors.heldout
+                    <= pick(Method::SgcsNoRefit).errors.heldout * 1.05
+            );
+        }
+    }
+
+    #[test]
+    fn bad_plans_are_refused_with_the_parameter_named() {
+        let base = BenchPlan {
+            methods: vec![Method::Uniform],
+            budgets: vec![10],
+            seeds: 1,
+            fit: FitParams::default(),
+            hr: HrParams::default(),
+            uniform: UniformParams::default(),
+        };
+        for (plan, name) in [
+            (
+                BenchPlan {
+                    methods: vec![],
+                    ..base.clone()
+                },
+                "methods",
+            ),
+            (
+                BenchPlan {
+                    budgets: vec![2],
+                    ..base.clone()
+                },
+                "budgets",
+            ),
+            (
+                BenchPlan {
+                    seeds: 0,
+                    ..base.clone()
+                },
+                "seeds",
+            ),
+        ] {
+            let msg = plan.validate().unwrap_err().to_string();
+            assert!(msg.contains(name), "{msg}");
+        }
+        assert!(
+            Method::parse("nope")
+                .unwrap_err()
+                .to_string()
+                .contains("sgcs")
+        );
+        for m in [
+            Method::Sgcs,
+            Method::SgcsNoRefit,
+            Method::Hr,
+            Method::Uniform,
+        ] {
+            assert_eq!(Method::parse(m.name()).unwrap(), m);
+        }
+    }
+}
