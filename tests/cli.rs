@@ -96,6 +96,16 @@ fn check_accepts_every_bundled_scene_and_the_json_copy() {
 }
 
 #[test]
+fn the_json_copy_of_fig3_is_the_same_scene() {
+    let json = Scene::load(root().join("tests/data/fig3.json")).unwrap();
+    assert_eq!(
+        json,
+        Scene::load(scene("fig3")).unwrap(),
+        "regenerate tests/data/fig3.json"
+    );
+}
+
+#[test]
 fn check_rejects_an_invalid_scene_naming_the_edge() {
     let dir = temp_dir("invalid");
     let path = dir.join("bad.ron");
