@@ -25,7 +25,7 @@ const PALETTE: [RGBColor; 6] = [
     RGBColor(140, 86, 75),
 ];
 
-fn register_font() {
+pub fn register_font() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
         // egui's bundled Ubuntu-Light: no system font lookup, the same text on every machine.
@@ -133,13 +133,16 @@ pub fn log_log(
             .map_err(|e| err(e.to_string()))?;
         root.present().map_err(|e| err(e.to_string()))?;
     }
+    write_rgb_png(path, &buffer, WIDTH, HEIGHT)
+}
+
+/// Encodes an RGB buffer as PNG and writes it atomically.
+pub fn write_rgb_png(path: &Path, rgb: &[u8], width: u32, height: u32) -> Result<()> {
+    use image::ImageEncoder as _;
     let mut png = Vec::new();
-    {
-        use image::ImageEncoder as _;
-        image::codecs::png::PngEncoder::new(&mut png)
-            .write_image(&buffer, WIDTH, HEIGHT, image::ExtendedColorType::Rgb8)
-            .context("encoding the plot")?;
-    }
+    image::codecs::png::PngEncoder::new(&mut png)
+        .write_image(rgb, width, height, image::ExtendedColorType::Rgb8)
+        .context("encoding the PNG")?;
     flatland_geom::write_atomic(path, &png)?;
     Ok(())
 }

@@ -90,7 +90,7 @@ const LOG_DECADES: f64 = 4.0;
 
 /// The value that maps to the top colour: the 99.5th percentile of the positive values, since
 /// the kernel is unbounded (≈ 1/r) at shared corners and the maximum would wash out the rest.
-fn top_value(grid: &[f64]) -> f64 {
+pub(crate) fn top_value(grid: &[f64]) -> f64 {
     let mut positive: Vec<f64> = grid.iter().copied().filter(|&v| v > 0.0).collect();
     if positive.is_empty() {
         return 1.0;
@@ -100,7 +100,7 @@ fn top_value(grid: &[f64]) -> f64 {
 }
 
 /// Maps each value to `[0, 1]` (linear from 0, or log over [`LOG_DECADES`]), clamped.
-fn normalise(grid: &[f64], log: bool, top: f64) -> Vec<f64> {
+pub(crate) fn normalise(grid: &[f64], log: bool, top: f64) -> Vec<f64> {
     grid.iter()
         .map(|&v| {
             let x = if log {
@@ -153,7 +153,7 @@ const VIRIDIS: [[u8; 3]; 17] = [
 ];
 
 /// The colour of `x ∈ [0, 1]`.
-fn viridis(x: f64) -> [u8; 3] {
+pub(crate) fn viridis(x: f64) -> [u8; 3] {
     let f = x.clamp(0.0, 1.0) * (VIRIDIS.len() - 1) as f64;
     let i = (f as usize).min(VIRIDIS.len() - 2);
     let w = f - i as f64;
