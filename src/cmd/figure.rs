@@ -80,7 +80,10 @@ pub fn run(args: &Args) -> Result<()> {
         args.log,
         top,
         scene,
-        Some((&cells, &edges)),
+        Some(Overlay {
+            cells: &cells,
+            edges: &edges,
+        }),
     )?;
     heatmap(
         &out("d_approximation.png"),
@@ -103,6 +106,13 @@ pub fn run(args: &Args) -> Result<()> {
     Ok(())
 }
 
+/// The network drawn over a kernel panel: cells at their re-projected (s, t), and its edges.
+#[derive(Clone, Copy)]
+struct Overlay<'a> {
+    cells: &'a [Option<[f64; 2]>],
+    edges: &'a [(usize, usize)],
+}
+
 /// A heat map of an R × R grid (row ↔ s, top to bottom; column ↔ t), surface-edge boundaries
 /// marked on both axes, optionally the cells (re-projected to their mean (s, t)) and the
 /// network's edges on top.
@@ -113,10 +123,10 @@ fn heatmap(
     log: bool,
     top: f64,
     scene: &Scene,
-    cells: Option<(&[Option<[f64; 2]>], &[(usize, usize)])>,
+    overlay: Option<Overlay<'_>>,
 ) -> Result<()> {
     let side = res as u32;
-    let dim = if cells.is_some() { 0.55 } else { 1.0 };
+    let dim = if overlay.is_some() { 0.55 } else { 1.0 };
     let mut rgb: Vec<u8> = normalise(grid, log, top)
         .into_iter()
         .flat_map(|v| viridis(v).map(|c| (f64::from(c) * dim) as u8))
@@ -135,7 +145,7 @@ fn heatmap(
                     .map_err(|e| err(e.to_string()))?;
             }
         }
-        if let Some((cells, edges)) = cells {
+        if let Some(Overlay { cells, edges }) = overlay {
             let at = |c: usize| cells.get(c).copied().flatten().map(|[s, t]| (px(t), px(s)));
             for &(a, b) in edges {
                 if let (Some(p), Some(q)) = (at(a), at(b)) {
