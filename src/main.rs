@@ -4,6 +4,7 @@ use anyhow::Result;
 use clap::{Parser, Subcommand};
 
 mod cmd;
+mod plot;
 
 /// Learn the Flatland radiosity kernel with supervised growing cell structures (Bohn 1996).
 #[derive(Parser)]
@@ -23,6 +24,12 @@ enum Command {
     Fit(cmd::fit::Args),
     /// Evaluate a saved model on a grid (CSV or PNG) and report its errors.
     Eval(cmd::eval::Args),
+    /// Regenerate RESULTS.md and its plots: every experiment, measured.
+    Results(cmd::results::Args),
+    /// The paper's Fig. 3 panels as PNGs: geometry, kernel, cells, approximation, error.
+    Figure(cmd::figure::Args),
+    /// Run time against error: SGCS, hierarchical radiosity and a uniform grid at several budgets.
+    Bench(cmd::bench::Args),
     /// Run the adversarial stability suite (scaling, extreme scenes and parameters, soak).
     Stress(cmd::stress::Args),
 }
@@ -35,6 +42,9 @@ fn main() {
         Some(Command::Fit(args)) => cmd::fit::run(&args),
         Some(Command::Eval(args)) => cmd::eval::run(&args),
         Some(Command::Stress(args)) => cmd::stress::run(&args),
+        Some(Command::Bench(args)) => cmd::bench::run(&args),
+        Some(Command::Figure(args)) => cmd::figure::run(&args),
+        Some(Command::Results(args)) => cmd::results::run(&args),
         None => cmd::default_job(),
     };
     if let Err(err) = result {

@@ -9,10 +9,13 @@ use flatland_geom::{Kernel, Scene};
 use indicatif::{ProgressBar, ProgressStyle};
 use kernel_fit::{FitParams, Reference};
 
+pub mod bench;
 pub mod check;
 pub mod eval;
+pub mod figure;
 pub mod fit;
 pub mod kernel;
+pub mod results;
 pub mod stress;
 
 /// The scene a command works on: a file, or the bundled default, optionally subdivided.
