@@ -83,6 +83,21 @@ fn brute_force_pieces(c: &mut Criterion) {
     group.finish();
 }
 
+/// How the accelerated kernel scales with the number of occluders (BVH: about `log n`).
+fn blocker_scaling(c: &mut Criterion) {
+    let st = support::samples(20_000, 3);
+    let mut group = c.benchmark_group("scaling");
+    group.throughput(Throughput::Elements(st.len() as u64));
+    for n in [10, 100, 1_000, 10_000] {
+        let kernel = Kernel::new(support::box_with_blockers(n, 4));
+        let _ = kernel.k_batch(&st);
+        group.bench_function(format!("box_blockers_{n}/accelerated/single"), |b| {
+            b.iter(|| st.iter().map(|&[s, t]| kernel.k(s, t)).sum::<f64>())
+        });
+    }
+    group.finish();
+}
+
 fn quick() -> Criterion {
     Criterion::default()
         .sample_size(10)
@@ -90,5 +105,5 @@ fn quick() -> Criterion {
         .measurement_time(Duration::from_secs(2))
 }
 
-criterion_group! { name = benches; config = quick(); targets = kernel_samples, brute_force_pieces }
+criterion_group! { name = benches; config = quick(); targets = kernel_samples, brute_force_pieces, blocker_scaling }
 criterion_main!(benches);
