@@ -41,15 +41,22 @@
 //!   `preserve_rule_learns_at_least_as_well_as_volume_weighted` check both properties.
 //! - **Stability** ([`OutputRule::Normalized`], default): the step is divided by
 //!   `max(1, Σ M_c²)`, so it equals the paper's rule in sparse networks and cannot diverge where
-//!   cells overlap (the plain rule diverges once `η Σ M_c² > 2`).
+//!   cells overlap: the error of the presented sample is multiplied by `1 − η min(1, Σ M_c²)`,
+//!   which lies in `(−1, 1)` for `η ∈ (0, 2)`. The plain rule multiplies it by `1 − η Σ M_c²`
+//!   and diverges once `η Σ M_c² > 2`; grown networks have `Σ M_c² > 1` (overlapping cells), so
+//!   it is safe only for small enough `η` (test `plain_rule_diverges_where_normalized_does_not`).
 //! - **Activation cutoff** ([`Params::activation_cutoff`], default `1e-8`): cells with
 //!   `M_c(ξ) < cutoff` are skipped, i.e. those farther than `δ_c · sqrt(ln(1/cutoff))`. Every sum
 //!   (`κ`, `D_A`, `D_ACC`, the update) uses exactly the cells at or above the cutoff, summed in id
 //!   order, so results are the brute-force ones bit for bit and never depend on the spatial index.
-//! - **Speed.** A bounding-volume k-d tree over the positions, with per-node maximum width, answers
-//!   the nearest-cell query exactly and finds the active cells; it is updated conservatively as
-//!   cells move and rebuilt now and then. A step therefore costs about the same at 4000 cells as at
-//!   400. Widths are cached and refreshed for the cells whose edges moved.
+//! - **Speed.** A bounding-volume k-d tree over the positions answers the nearest-cell query
+//!   exactly (branch and bound) and finds the active cells: each node also bounds its cells'
+//!   activation balls `|ξ − w_c| ≤ δ_c sqrt(ln(1/cutoff))` (a "reach box" and the largest width),
+//!   so cells of very different widths are pruned correctly. The tree is updated conservatively
+//!   (boxes only grow) as cells move, widen or are inserted, and rebuilt after enough growth or
+//!   drift. A step touches the active cells (about 170 at 4000 cells for inputs on a 2D surface in
+//!   R⁴), not all cells, and its cost grows only with the local overlap, not with `len()`.
+//!   Widths are cached and refreshed for the cells whose edges moved.
 //! - **Numbers.** Inputs and targets must be finite and at most `1e100` in magnitude
 //!   ([`Network::try_step`] rejects others); widths are floored at `1e-100`. No value becomes NaN
 //!   with the default output rule.

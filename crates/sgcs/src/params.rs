@@ -11,8 +11,8 @@ pub enum OutputRule {
     /// `Δv_c = η (ζ − κ(ξ)) M_c / max(1, Σ_c M_c²)`.
     ///
     /// Identical to [`OutputRule::Plain`] wherever `Σ M_c² ≤ 1` (a sparse network); where many
-    /// cells overlap it shortens the step so the error of the presented sample shrinks by a
-    /// factor in `[1 − η, 1]`: it cannot diverge for `η ∈ (0, 2)`.
+    /// cells overlap it shortens the step so the error of the presented sample is multiplied by
+    /// `1 − η min(1, Σ M_c²) ∈ (−1, 1)`: it cannot diverge for `η ∈ (0, 2)`.
     Normalized,
     /// The paper's delta rule `Δv_c = η (ζ − κ(ξ)) M_c`. Diverges when `η Σ M_c² > 2`
     /// (many overlapping cells); kept for comparison with the paper.
