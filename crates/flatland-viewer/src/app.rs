@@ -119,11 +119,23 @@ fn cached_texture(
     slot.as_ref().map(|c| c.texture.id()).unwrap_or_default()
 }
 
+/// What the cached overlay mesh was built from: the snapshot (by address), where the plot is,
+/// what is shown.
+#[derive(Clone, Copy, PartialEq, Eq)]
+struct OverlayKey {
+    snapshot: usize,
+    rect: [u32; 4],
+    cells: bool,
+    edges: bool,
+}
+
 /// Frames per second over the last second.
 #[derive(Default)]
 struct FpsMeter {
     frames: VecDeque<Instant>,
     last_log: Option<Instant>,
+    /// Main-thread CPU seconds of the frames since the last log (eframe's `cpu_usage`).
+    cpu: (f64, u32),
 }
 
 impl FpsMeter {
@@ -168,6 +180,7 @@ pub struct ViewerApp {
     approx_tex: Option<Cached>,
     error_tex: Option<Cached>,
     samples_tex: Option<Cached>,
+    overlay: Option<(OverlayKey, Arc<egui::Mesh>)>,
     scale: Option<(u64, bool, Scale)>,
     fps: FpsMeter,
     fps_now: f64,
@@ -239,6 +252,7 @@ impl ViewerApp {
             approx_tex: None,
             error_tex: None,
             samples_tex: None,
+            overlay: None,
             scale: None,
             fps: FpsMeter::default(),
             fps_now: 0.0,
@@ -488,9 +502,11 @@ impl ViewerApp {
         if now.duration_since(last) >= Duration::from_secs(2) {
             self.fps.last_log = Some(now);
             let rate = self.status.as_ref().map_or(0.0, |s| s.steps_per_s);
+            let (cpu, n) = std::mem::take(&mut self.fps.cpu);
             eprintln!(
-                "fps {:.1}  steps/s {:.0}  steps {}  cells {}  samples {}",
+                "fps {:.1}  ui-thread {:.1} ms/frame  steps/s {:.0}  steps {}  cells {}  samples {}",
                 self.fps_now,
+                1e3 * cpu / f64::from(n.max(1)),
                 rate,
                 self.steps(),
                 self.cells(),
@@ -611,6 +627,7 @@ impl ViewerApp {
         ui.separator();
         ui.heading("Run");
         ui.horizontal(|ui| {
+            ui.spacing_mut().slider_width = 80.0;
             let r = ui.add_enabled(
                 !self.settings.unlimited,
                 egui::Slider::new(&mut self.settings.speed, 100.0..=1_000_000.0)
@@ -910,6 +927,28 @@ impl ViewerApp {
 
         // Kernel plot with the live overlay.
         let kernel_frame = PlotFrame::new(kernel_rect, true);
+        let mesh = status.as_ref().map(|st| {
+            let r = kernel_frame.plot;
+            let key = OverlayKey {
+                snapshot: Arc::as_ptr(&st.snapshot) as usize,
+                rect: [r.min.x, r.min.y, r.max.x, r.max.y].map(f32::to_bits),
+                cells: self.settings.show_cells,
+                edges: self.settings.show_edges,
+            };
+            match &self.overlay {
+                Some((k, m)) if *k == key => Arc::clone(m),
+                _ => {
+                    let m = Arc::new(views::overlay_mesh(
+                        &kernel_frame,
+                        &st.snapshot,
+                        key.cells,
+                        key.edges,
+                    ));
+                    self.overlay = Some((key, Arc::clone(&m)));
+                    m
+                }
+            }
+        });
         let hovered = views::kernel_plot(
             ui,
             &kernel_frame,
@@ -917,9 +956,7 @@ impl ViewerApp {
             Some(kernel_tex),
             &world.scene,
             &views::Overlay {
-                snapshot: status.as_ref().map(|s| s.snapshot.as_ref()),
-                cells: self.settings.show_cells,
-                edges: self.settings.show_edges,
+                mesh,
                 samples: samples_tex,
             },
             &self.hover,
@@ -976,13 +1013,13 @@ impl ViewerApp {
             for (name, color) in views::LEGEND {
                 ui.label(RichText::new(name).color(color).strong());
             }
-            ui.label(RichText::new("ticks: front side; drag the dots").weak());
+            ui.label(RichText::new("ticks: front side").weak());
         });
         if let Some([s, t]) = self.hover.st {
             let k = world.kernel.eval(s, t);
             let learned = approx.map(|a| a.model.zeta(s, t));
             let text = format!(
-                "s {s:.4} (edge {})  →  t {t:.4} (edge {})\nG {:.4}   V {}   k {:.5}\nζ {:.5}   ζ̃ {}",
+                "s {s:.4} (edge {}) → t {t:.4} (edge {})\nG {:.4}  V {}  k {:.5}\nζ {:.5}  ζ̃ {}",
                 k.x.edge,
                 k.y.edge,
                 k.geometry,
@@ -1044,7 +1081,11 @@ fn row<T: egui::emath::Numeric>(
 }
 
 impl eframe::App for ViewerApp {
-    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+    fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
+        if let Some(cpu) = frame.info().cpu_usage {
+            self.fps.cpu.0 += f64::from(cpu);
+            self.fps.cpu.1 += 1;
+        }
         self.show(ui);
     }
 

@@ -84,6 +84,16 @@ pub fn display_available() -> bool {
     }
 }
 
+/// Leaves one core to the UI (and the software rasterizer): rayon, which the learner uses for
+/// resampling and reference grids, gets all other cores (at least one). Ignored when the global
+/// pool already exists.
+fn limit_learner_threads() {
+    let cores = std::thread::available_parallelism().map_or(1, std::num::NonZero::get);
+    let _ = rayon::ThreadPoolBuilder::new()
+        .num_threads(cores.saturating_sub(1).max(1))
+        .build_global();
+}
+
 /// Opens the viewer on `scene` (a `.ron`/`.json` file), or on the scene remembered from the last
 /// run, else the bundled `fig3`. Returns when the window is closed.
 pub fn run(scene: Option<PathBuf>) -> Result<(), ViewerError> {
@@ -102,6 +112,7 @@ pub fn run_with(options: Options) -> Result<(), ViewerError> {
             source,
         })?;
     }
+    limit_learner_threads();
     let native = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
             .with_title("flatland — SGCS learning the radiosity kernel")

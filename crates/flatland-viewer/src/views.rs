@@ -2,12 +2,13 @@
 //! Functions of what they show plus a little interaction state; nothing here trains or waits.
 
 use std::f32::consts::FRAC_PI_2;
+use std::sync::Arc;
 
 use egui::{
-    Align2, Color32, FontId, Pos2, Rect, Sense, Shape, Stroke, TextureId, Vec2, epaint::TextShape,
-    pos2, vec2,
+    Align2, Color32, FontId, Mesh, Pos2, Rect, Sense, Shape, Stroke, TextureId, Vec2,
+    epaint::TextShape, pos2, vec2,
 };
-use egui_plot::{Legend, Line, Plot, PlotPoints};
+use egui_plot::{Legend, Line, LineStyle, Plot, PlotPoints};
 use flatland_geom::{DVec2, GeomError, Role, Scene};
 use kernel_fit::Snapshot;
 
@@ -18,7 +19,7 @@ pub const TITLE_H: f32 = 18.0;
 
 const CELL: Color32 = Color32::from_rgb(245, 245, 245);
 const CRITICAL: Color32 = Color32::from_rgb(40, 230, 255);
-const NET_EDGE: Color32 = Color32::from_rgba_premultiplied(150, 150, 150, 150);
+const NET_EDGE: Color32 = Color32::from_rgba_premultiplied(120, 120, 120, 120);
 const BOUNDARY: Color32 = Color32::from_rgba_premultiplied(90, 90, 90, 90);
 const SCENE_MARK: Color32 = Color32::from_rgb(120, 255, 140);
 const EMITTER: Color32 = Color32::from_rgb(255, 210, 60);
@@ -99,27 +100,81 @@ impl PlotFrame {
 }
 
 /// What is drawn over a heatmap.
-pub struct Overlay<'a> {
-    /// The fit's state (cells, edges).
-    pub snapshot: Option<&'a Snapshot>,
-    /// Draw the cells.
-    pub cells: bool,
-    /// Draw the network's edges.
-    pub edges: bool,
+pub struct Overlay {
+    /// The cells and network edges, prebuilt by [`overlay_mesh`].
+    pub mesh: Option<Arc<Mesh>>,
     /// The samples texture, if shown.
     pub samples: Option<TextureId>,
 }
 
-impl Overlay<'_> {
+impl Overlay {
     /// Nothing over the heatmap.
     #[must_use]
-    pub fn none() -> Overlay<'static> {
+    pub fn none() -> Overlay {
         Overlay {
-            snapshot: None,
-            cells: false,
-            edges: false,
+            mesh: None,
             samples: None,
         }
+    }
+}
+
+/// The cells (discs sized by δ_c, cyan when critical, black rim) and the network's edges as
+/// one triangle mesh in screen space. Built only when the snapshot or the plot's place changes,
+/// so a frame draws ~1000 cells and ~3000 edges without tessellating them again.
+#[must_use]
+pub fn overlay_mesh(frame: &PlotFrame, snap: &Snapshot, cells: bool, edges: bool) -> Mesh {
+    let pos: Vec<Option<Pos2>> = snap
+        .cells
+        .iter()
+        .map(|c| c.st.map(|[s, t]| frame.screen(s, t)))
+        .collect();
+    let mut mesh = Mesh::default();
+    if edges {
+        mesh.reserve_vertices(4 * snap.edges.len());
+        for &[a, b] in &snap.edges {
+            if let (Some(Some(pa)), Some(Some(pb))) = (pos.get(a as usize), pos.get(b as usize)) {
+                line_quad(&mut mesh, *pa, *pb, 1.0, NET_EDGE);
+            }
+        }
+    }
+    if cells {
+        for (c, p) in snap.cells.iter().zip(&pos) {
+            let Some(p) = p else { continue };
+            // δ_c lives in the 4-D input frame, not in (s, t): the size is a relative cue.
+            let r = (c.width as f32 * frame.plot.width() * 0.06).clamp(1.5, 6.0);
+            let fill = if c.critical { CRITICAL } else { CELL };
+            disc(&mut mesh, *p, r + 1.0, Color32::BLACK);
+            disc(&mut mesh, *p, r, fill);
+        }
+    }
+    mesh
+}
+
+fn line_quad(mesh: &mut Mesh, a: Pos2, b: Pos2, width: f32, color: Color32) {
+    let d = b - a;
+    let len = d.length();
+    if len < 1e-3 {
+        return;
+    }
+    let n = vec2(-d.y, d.x) * (0.5 * width / len);
+    let i = mesh.vertices.len() as u32;
+    for p in [a + n, a - n, b - n, b + n] {
+        mesh.colored_vertex(p, color);
+    }
+    mesh.add_triangle(i, i + 1, i + 2);
+    mesh.add_triangle(i, i + 2, i + 3);
+}
+
+fn disc(mesh: &mut Mesh, centre: Pos2, r: f32, color: Color32) {
+    const SIDES: u32 = 10;
+    let i = mesh.vertices.len() as u32;
+    mesh.colored_vertex(centre, color);
+    for k in 0..SIDES {
+        let a = k as f32 * std::f32::consts::TAU / SIDES as f32;
+        mesh.colored_vertex(centre + vec2(a.cos(), a.sin()) * r, color);
+    }
+    for k in 0..SIDES {
+        mesh.add_triangle(i, i + 1 + k, i + 1 + (k + 1) % SIDES);
     }
 }
 
@@ -135,7 +190,7 @@ pub fn kernel_plot(
     title: &str,
     heatmap: Option<TextureId>,
     scene: &Scene,
-    overlay: &Overlay<'_>,
+    overlay: &Overlay,
     hover: &Hover,
 ) -> Option<[f64; 2]> {
     let response = ui.allocate_rect(frame.plot, Sense::hover());
@@ -218,33 +273,8 @@ pub fn kernel_plot(
     if let Some(tex) = overlay.samples {
         painter.image(tex, plot, uv(), Color32::WHITE);
     }
-    if let Some(snap) = overlay.snapshot {
-        let pos: Vec<Option<Pos2>> = snap
-            .cells
-            .iter()
-            .map(|c| c.st.map(|[s, t]| frame.screen(s, t)))
-            .collect();
-        let mut shapes = Vec::with_capacity(snap.edges.len() + 2 * snap.cells.len());
-        if overlay.edges {
-            let stroke = Stroke::new(1.0, NET_EDGE);
-            for &[a, b] in &snap.edges {
-                if let (Some(Some(pa)), Some(Some(pb))) = (pos.get(a as usize), pos.get(b as usize))
-                {
-                    shapes.push(Shape::line_segment([*pa, *pb], stroke));
-                }
-            }
-        }
-        if overlay.cells {
-            let outline = Stroke::new(1.0, Color32::BLACK);
-            for (c, p) in snap.cells.iter().zip(&pos) {
-                let Some(p) = p else { continue };
-                let r = (c.width as f32 * plot.width() * 0.3).clamp(2.0, 9.0);
-                let fill = if c.critical { CRITICAL } else { CELL };
-                shapes.push(Shape::circle_filled(*p, r, fill));
-                shapes.push(Shape::circle_stroke(*p, r, outline));
-            }
-        }
-        painter.extend(shapes);
+    if let Some(mesh) = &overlay.mesh {
+        painter.add(Shape::Mesh(Arc::clone(mesh)));
     }
 
     if let Some([s, t]) = hover.st {
@@ -555,14 +585,16 @@ pub fn curves(ui: &mut egui::Ui, snapshot: Option<&Snapshot>) {
             .allow_zoom(false)
             .allow_drag(false)
             .show(&mut cols[2], |p| {
-                p.line(Line::new(
-                    "cells",
-                    series(&|h| [h.steps as f64, h.cells as f64]),
-                ));
-                p.line(Line::new(
-                    "samples / 20",
-                    series(&|h| [h.steps as f64, h.samples as f64 / 20.0]),
-                ));
+                p.line(
+                    Line::new("cells", series(&|h| [h.steps as f64, h.cells as f64])).width(2.5),
+                );
+                p.line(
+                    Line::new(
+                        "samples / 20",
+                        series(&|h| [h.steps as f64, h.samples as f64 / 20.0]),
+                    )
+                    .style(LineStyle::dashed_dense()),
+                );
             });
     });
 }
