@@ -119,16 +119,6 @@ fn cached_texture(
     slot.as_ref().map(|c| c.texture.id()).unwrap_or_default()
 }
 
-/// What the cached overlay mesh was built from: the snapshot (by address), where the plot is,
-/// what is shown.
-#[derive(Clone, Copy, PartialEq, Eq)]
-struct OverlayKey {
-    snapshot: usize,
-    rect: [u32; 4],
-    cells: bool,
-    edges: bool,
-}
-
 /// Frames per second over the last second.
 #[derive(Default)]
 struct FpsMeter {
@@ -180,7 +170,7 @@ pub struct ViewerApp {
     approx_tex: Option<Cached>,
     error_tex: Option<Cached>,
     samples_tex: Option<Cached>,
-    overlay: Option<(OverlayKey, Arc<egui::Mesh>)>,
+    overlay_tex: Option<Cached>,
     scale: Option<(u64, bool, Scale)>,
     fps: FpsMeter,
     fps_now: f64,
@@ -252,7 +242,7 @@ impl ViewerApp {
             approx_tex: None,
             error_tex: None,
             samples_tex: None,
-            overlay: None,
+            overlay_tex: None,
             scale: None,
             fps: FpsMeter::default(),
             fps_now: 0.0,
@@ -927,27 +917,19 @@ impl ViewerApp {
 
         // Kernel plot with the live overlay.
         let kernel_frame = PlotFrame::new(kernel_rect, true);
-        let mesh = status.as_ref().map(|st| {
-            let r = kernel_frame.plot;
-            let key = OverlayKey {
-                snapshot: Arc::as_ptr(&st.snapshot) as usize,
-                rect: [r.min.x, r.min.y, r.max.x, r.max.y].map(f32::to_bits),
-                cells: self.settings.show_cells,
-                edges: self.settings.show_edges,
-            };
-            match &self.overlay {
-                Some((k, m)) if *k == key => Arc::clone(m),
-                _ => {
-                    let m = Arc::new(views::overlay_mesh(
-                        &kernel_frame,
-                        &st.snapshot,
-                        key.cells,
-                        key.edges,
-                    ));
-                    self.overlay = Some((key, Arc::clone(&m)));
-                    m
-                }
-            }
+        let ppp = ui.ctx().pixels_per_point();
+        let side = ((kernel_frame.plot.width() * ppp).round() as usize).clamp(16, 2048);
+        let (cells, edges) = (self.settings.show_cells, self.settings.show_edges);
+        let cells_tex = status.as_ref().map(|st| {
+            let snap = &st.snapshot;
+            let key = (
+                Arc::as_ptr(snap) as u64,
+                side as u64,
+                u64::from(cells) | u64::from(edges) << 1 | u64::from(ppp.to_bits()) << 2,
+            );
+            cached_texture(&ctx, &mut self.overlay_tex, "overlay", key, || {
+                views::overlay_image(side, ppp, snap, cells, edges)
+            })
         });
         let hovered = views::kernel_plot(
             ui,
@@ -956,7 +938,7 @@ impl ViewerApp {
             Some(kernel_tex),
             &world.scene,
             &views::Overlay {
-                mesh,
+                cells: cells_tex,
                 samples: samples_tex,
             },
             &self.hover,

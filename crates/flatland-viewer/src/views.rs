@@ -2,10 +2,9 @@
 //! Functions of what they show plus a little interaction state; nothing here trains or waits.
 
 use std::f32::consts::FRAC_PI_2;
-use std::sync::Arc;
 
 use egui::{
-    Align2, Color32, FontId, Mesh, Pos2, Rect, Sense, Shape, Stroke, TextureId, Vec2,
+    Align2, Color32, ColorImage, FontId, Pos2, Rect, Sense, Shape, Stroke, TextureId, Vec2,
     epaint::TextShape, pos2, vec2,
 };
 use egui_plot::{Legend, Line, LineStyle, Plot, PlotPoints};
@@ -101,8 +100,8 @@ impl PlotFrame {
 
 /// What is drawn over a heatmap.
 pub struct Overlay {
-    /// The cells and network edges, prebuilt by [`overlay_mesh`].
-    pub mesh: Option<Arc<Mesh>>,
+    /// The cells and network edges, prebuilt by [`overlay_image`].
+    pub cells: Option<TextureId>,
     /// The samples texture, if shown.
     pub samples: Option<TextureId>,
 }
@@ -112,28 +111,37 @@ impl Overlay {
     #[must_use]
     pub fn none() -> Overlay {
         Overlay {
-            mesh: None,
+            cells: None,
             samples: None,
         }
     }
 }
 
-/// The cells (discs sized by δ_c, cyan when critical, black rim) and the network's edges as
-/// one triangle mesh in screen space. Built only when the snapshot or the plot's place changes,
-/// so a frame draws ~1000 cells and ~3000 edges without tessellating them again.
+/// The network's edges and its cells (discs sized by δ_c, cyan when critical, black rim) drawn
+/// into a transparent `side × side` image (one pixel per screen pixel of the plot, `s` upwards).
+///
+/// Built on the CPU only when a new snapshot arrives; a frame then draws one textured square
+/// instead of ~25 000 triangles, which is what keeps software GL fast with 1000 cells.
+/// `px_per_point` scales the disc sizes with the display's pixel density.
 #[must_use]
-pub fn overlay_mesh(frame: &PlotFrame, snap: &Snapshot, cells: bool, edges: bool) -> Mesh {
-    let pos: Vec<Option<Pos2>> = snap
+pub fn overlay_image(
+    side: usize,
+    px_per_point: f32,
+    snap: &Snapshot,
+    cells: bool,
+    edges: bool,
+) -> ColorImage {
+    let mut img = ColorImage::filled([side, side], Color32::TRANSPARENT);
+    let n = side as f32;
+    let pos: Vec<Option<[f32; 2]>> = snap
         .cells
         .iter()
-        .map(|c| c.st.map(|[s, t]| frame.screen(s, t)))
+        .map(|c| c.st.map(|[s, t]| [t as f32 * n, (1.0 - s as f32) * n]))
         .collect();
-    let mut mesh = Mesh::default();
     if edges {
-        mesh.reserve_vertices(4 * snap.edges.len());
         for &[a, b] in &snap.edges {
             if let (Some(Some(pa)), Some(Some(pb))) = (pos.get(a as usize), pos.get(b as usize)) {
-                line_quad(&mut mesh, *pa, *pb, 1.0, NET_EDGE);
+                draw_line(&mut img, *pa, *pb, NET_EDGE);
             }
         }
     }
@@ -141,40 +149,60 @@ pub fn overlay_mesh(frame: &PlotFrame, snap: &Snapshot, cells: bool, edges: bool
         for (c, p) in snap.cells.iter().zip(&pos) {
             let Some(p) = p else { continue };
             // δ_c lives in the 4-D input frame, not in (s, t): the size is a relative cue.
-            let r = (c.width as f32 * frame.plot.width() * 0.06).clamp(1.5, 6.0);
+            let r = (c.width as f32 * n / px_per_point * 0.06).clamp(1.5, 6.0) * px_per_point;
             let fill = if c.critical { CRITICAL } else { CELL };
-            disc(&mut mesh, *p, r + 1.0, Color32::BLACK);
-            disc(&mut mesh, *p, r, fill);
+            draw_disc(&mut img, *p, r, fill, px_per_point);
         }
     }
-    mesh
+    img
 }
 
-fn line_quad(mesh: &mut Mesh, a: Pos2, b: Pos2, width: f32, color: Color32) {
-    let d = b - a;
-    let len = d.length();
-    if len < 1e-3 {
-        return;
-    }
-    let n = vec2(-d.y, d.x) * (0.5 * width / len);
-    let i = mesh.vertices.len() as u32;
-    for p in [a + n, a - n, b - n, b + n] {
-        mesh.colored_vertex(p, color);
-    }
-    mesh.add_triangle(i, i + 1, i + 2);
-    mesh.add_triangle(i, i + 2, i + 3);
+/// `src` over `dst`, both premultiplied.
+fn blend(dst: Color32, src: Color32) -> Color32 {
+    let k = u16::from(255 - src.a());
+    let mix = |s: u8, d: u8| s.saturating_add(((u16::from(d) * k + 127) / 255) as u8);
+    Color32::from_rgba_premultiplied(
+        mix(src.r(), dst.r()),
+        mix(src.g(), dst.g()),
+        mix(src.b(), dst.b()),
+        mix(src.a(), dst.a()),
+    )
 }
 
-fn disc(mesh: &mut Mesh, centre: Pos2, r: f32, color: Color32) {
-    const SIDES: u32 = 10;
-    let i = mesh.vertices.len() as u32;
-    mesh.colored_vertex(centre, color);
-    for k in 0..SIDES {
-        let a = k as f32 * std::f32::consts::TAU / SIDES as f32;
-        mesh.colored_vertex(centre + vec2(a.cos(), a.sin()) * r, color);
+fn draw_line(img: &mut ColorImage, a: [f32; 2], b: [f32; 2], color: Color32) {
+    let [w, h] = img.size;
+    let steps = (b[0] - a[0]).abs().max((b[1] - a[1]).abs()).ceil().max(1.0) as usize;
+    for k in 0..=steps {
+        let u = k as f32 / steps as f32;
+        let x = (a[0] + (b[0] - a[0]) * u) as usize;
+        let y = (a[1] + (b[1] - a[1]) * u) as usize;
+        if x < w && y < h {
+            let px = &mut img.pixels[y * w + x];
+            *px = blend(*px, color);
+        }
     }
-    for k in 0..SIDES {
-        mesh.add_triangle(i, i + 1 + k, i + 1 + (k + 1) % SIDES);
+}
+
+fn draw_disc(img: &mut ColorImage, c: [f32; 2], r: f32, fill: Color32, rim: f32) {
+    let [w, h] = img.size;
+    let outer = r + rim;
+    let (x0, x1) = (
+        (c[0] - outer).floor().max(0.0) as usize,
+        ((c[0] + outer).ceil() as usize).min(w),
+    );
+    let (y0, y1) = (
+        (c[1] - outer).floor().max(0.0) as usize,
+        ((c[1] + outer).ceil() as usize).min(h),
+    );
+    for y in y0..y1 {
+        for x in x0..x1 {
+            let d = ((x as f32 + 0.5 - c[0]).powi(2) + (y as f32 + 0.5 - c[1]).powi(2)).sqrt();
+            if d <= r {
+                img.pixels[y * w + x] = fill;
+            } else if d <= outer {
+                img.pixels[y * w + x] = Color32::BLACK;
+            }
+        }
     }
 }
 
@@ -273,8 +301,8 @@ pub fn kernel_plot(
     if let Some(tex) = overlay.samples {
         painter.image(tex, plot, uv(), Color32::WHITE);
     }
-    if let Some(mesh) = &overlay.mesh {
-        painter.add(Shape::Mesh(Arc::clone(mesh)));
+    if let Some(tex) = overlay.cells {
+        painter.image(tex, plot, uv(), Color32::WHITE);
     }
 
     if let Some([s, t]) = hover.st {
@@ -620,6 +648,30 @@ mod tests {
             "s goes upwards"
         );
         assert!(f.at(pos2(0.0, 0.0)).is_none());
+    }
+
+    #[test]
+    fn overlay_draws_cells_and_edges_where_they_are() {
+        let cell = |st, critical| kernel_fit::CellSnapshot {
+            st: Some(st),
+            width: 0.1,
+            critical,
+            resource: 1.0,
+            output: 0.0,
+        };
+        let snap = Snapshot {
+            cells: vec![cell([0.25, 0.75], true), cell([0.75, 0.25], false)],
+            edges: vec![[0, 1]],
+            ..Snapshot::default()
+        };
+        let img = overlay_image(100, 1.0, &snap, true, true);
+        // Cell 0: t = 0.75 → column 75, s = 0.25 → row 75 (s upwards).
+        assert_eq!(img.pixels[75 * 100 + 75], CRITICAL);
+        assert_eq!(img.pixels[25 * 100 + 25], CELL);
+        assert_ne!(img.pixels[50 * 100 + 50], Color32::TRANSPARENT, "the edge");
+        assert_eq!(img.pixels[0], Color32::TRANSPARENT);
+        let bare = overlay_image(100, 1.0, &snap, false, false);
+        assert!(bare.pixels.iter().all(|p| *p == Color32::TRANSPARENT));
     }
 
     #[test]
