@@ -37,8 +37,9 @@ pub enum InsertRule {
 ///
 /// Defaults are the paper's (§3.2): `ε_b = 0.01`, `ε_n = 0.001`, `η = 0.1`, `α = 0.05`, `λ = 300`.
 /// Every value is checked by [`Params::validate`], which [`crate::Network::new`] and
-/// [`crate::Network::set_params`] call.
+/// [`crate::Network::set_params`] call. Deserialising fills missing fields with the defaults.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct Params {
     /// Learning rate of the best matching unit's position, `ε_b ∈ (0, 1]`.
     pub eps_b: f64,
@@ -215,6 +216,14 @@ mod tests {
             let msg = p.validate().unwrap_err().to_string();
             assert!(msg.contains(name) && msg.contains(range), "{msg}");
         }
+    }
+
+    #[test]
+    fn partial_params_deserialise_with_defaults() {
+        let p: Params = serde_json::from_str(r#"{"lambda": 50, "output_rule": "Plain"}"#).unwrap();
+        assert_eq!(p.lambda, 50);
+        assert_eq!(p.output_rule, OutputRule::Plain);
+        assert_eq!(p.eta, Params::default().eta);
     }
 
     #[test]
