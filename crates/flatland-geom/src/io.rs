@@ -35,21 +35,72 @@ fn parse_json(text: &str, location: &str) -> Result<RawScene, GeomError> {
             Some(i) => full[..i].to_string(),
             None => full,
         };
+        let (line, column) = json_position(text, e.line(), e.column());
         GeomError::Parse {
             location: location.to_string(),
-            line: e.line(),
-            column: e.column(),
-            message,
+            line,
+            column,
+            message: one_line(&message),
         }
     })
+}
+
+/// serde_json reports an error at a line break (a raw newline in a string, an empty file) as
+/// column 0 of the following line; name the end of the line it is on instead, so that every
+/// position is 1-based.
+fn json_position(text: &str, line: usize, column: usize) -> (usize, usize) {
+    if column > 0 || line <= 1 {
+        return (line.max(1), column.max(1));
+    }
+    let previous = text
+        .split('\n')
+        .nth(line - 2)
+        .map_or(0, |l| l.chars().count());
+    (line - 1, previous + 1)
+}
+
+/// The parser's message on one line: control characters (a newline inside a quoted field name
+/// or variant, which the message repeats) are escaped.
+fn one_line(message: &str) -> String {
+    let mut out = String::with_capacity(message.len());
+    for c in message.chars() {
+        if c.is_control() {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    out
 }
 
 fn parse_ron(text: &str, location: &str) -> Result<RawScene, GeomError> {
     ron::from_str(text).map_err(|e| GeomError::Parse {
         location: location.to_string(),
-        line: e.span.start.line,
-        column: e.span.start.col,
-        message: e.code.to_string(),
+        line: e.span.start.line.max(1),
+        column: e.span.start.col.max(1),
+        message: one_line(&e.code.to_string()),
+    })
+}
+
+/// The file's text; a file that is not UTF-8 (a binary file) is a parse error at the first bad
+/// byte, not an I/O error without a position.
+fn read_text(path: &Path, location: &str) -> Result<String, GeomError> {
+    let bytes = std::fs::read(path).map_err(|error| GeomError::Io {
+        path: path.to_path_buf(),
+        error,
+    })?;
+    String::from_utf8(bytes).map_err(|e| {
+        let good = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+        let good = std::str::from_utf8(good).unwrap_or_default();
+        let line = good.matches('\n').count() + 1;
+        let column = good.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+        let byte = e.as_bytes()[good.len()];
+        GeomError::Parse {
+            location: location.to_string(),
+            line,
+            column,
+            message: format!("not a text file: invalid UTF-8 byte 0x{byte:02x}"),
+        }
     })
 }
 
@@ -69,11 +120,8 @@ impl Scene {
     pub fn load(path: impl AsRef<Path>) -> Result<Scene, GeomError> {
         let path = path.as_ref();
         let format = format_of(path)?;
-        let text = std::fs::read_to_string(path).map_err(|error| GeomError::Io {
-            path: path.to_path_buf(),
-            error,
-        })?;
         let location = format!("{}:", path.display());
+        let text = read_text(path, &location)?;
         let raw = match format {
             Format::Ron => parse_ron(&text, &location)?,
             Format::Json => parse_json(&text, &location)?,
