@@ -559,7 +559,12 @@ impl ViewerApp {
                     .as_ref()
                     .map(|s| format!(": final rel. L2 {}", format_errors(&s.errors)))
                     .unwrap_or_default();
-                (format!("stopped ({r:?}){errs}"), false)
+                let hint = if r == kernel_fit::StopReason::TargetCells {
+                    "; raise the target cells and press Play to go on"
+                } else {
+                    ""
+                };
+                (format!("stopped ({r:?}){errs}{hint}"), false)
             })
         } else {
             None

@@ -135,3 +135,28 @@ pub fn run_with(options: Options) -> Result<(), ViewerError> {
     )
     .map_err(|e| ViewerError::Window(e.to_string()))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn errors_can_cross_threads_and_into_anyhow() {
+        fn check<T: std::error::Error + Send + Sync + 'static>() {}
+        check::<ViewerError>();
+    }
+
+    #[test]
+    fn bundled_scenes_load() {
+        for (name, text) in BUNDLED_SCENES {
+            flatland_geom::Scene::from_ron_str(text).unwrap_or_else(|e| panic!("{name}: {e}"));
+        }
+    }
+
+    #[test]
+    fn a_bad_scene_path_is_refused_before_a_window_opens() {
+        let err = run(Some(PathBuf::from("/nonexistent/scene.ron"))).unwrap_err();
+        assert!(matches!(err, ViewerError::Scene { .. }), "{err}");
+        assert!(err.to_string().contains("/nonexistent/scene.ron"), "{err}");
+    }
+}
