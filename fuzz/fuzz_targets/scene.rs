@@ -41,7 +41,10 @@ fuzz_target!(|data: &[u8]| {
     let kernel = Kernel::new(scene);
     for &s in &PROBES {
         let p = kernel.scene().point(s);
-        assert!(p.position.is_finite() && p.normal.is_finite(), "point({s}) = {p:?}");
+        assert!(
+            p.position.is_finite() && p.normal.is_finite(),
+            "point({s}) = {p:?}"
+        );
         for &t in &PROBES {
             let k = kernel.k(s, t);
             let zeta = kernel.zeta(s, t);
