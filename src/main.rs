@@ -24,6 +24,8 @@ enum Command {
     Fit(cmd::fit::Args),
     /// Evaluate a saved model on a grid (CSV or PNG) and report its errors.
     Eval(cmd::eval::Args),
+    /// The desktop viewer: watch the cells grow over the (s, t) kernel plot.
+    View(cmd::view::Args),
     /// Regenerate RESULTS.md and its plots: every experiment, measured.
     Results(cmd::results::Args),
     /// The paper's Fig. 3 panels as PNGs: geometry, kernel, cells, approximation, error.
@@ -45,6 +47,7 @@ fn main() {
         Some(Command::Bench(args)) => cmd::bench::run(&args),
         Some(Command::Figure(args)) => cmd::figure::run(&args),
         Some(Command::Results(args)) => cmd::results::run(&args),
+        Some(Command::View(args)) => cmd::view::run(&args),
         None => cmd::default_job(),
     };
     if let Err(err) = result {

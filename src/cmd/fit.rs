@@ -71,6 +71,19 @@ pub struct Args {
 }
 
 impl Args {
+    /// The defaults of `flatland fit` on `scene` (the bundled `fig3` when `None`).
+    pub fn for_scene(scene: Option<PathBuf>) -> Args {
+        use clap::Parser;
+        #[derive(Parser)]
+        struct Defaults {
+            #[command(flatten)]
+            fit: Args,
+        }
+        let mut args = Defaults::parse_from(["flatland"]).fit;
+        args.scene.scene = scene;
+        args
+    }
+
     /// The fit parameters these arguments ask for.
     pub fn params(&self) -> FitParams {
         let d = FitParams::default();

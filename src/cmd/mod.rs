@@ -17,6 +17,7 @@ pub mod fit;
 pub mod kernel;
 pub mod results;
 pub mod stress;
+pub mod view;
 
 /// The scene a command works on: a file, or the bundled default, optionally subdivided.
 #[derive(clap::Args, Debug, Clone)]
@@ -72,14 +73,8 @@ pub fn progress_bar(len: u64, unit: &str) -> ProgressBar {
     bar
 }
 
-/// What `cargo run --release` does with no arguments: fit the bundled scene and print the
-/// summary.
+/// What `cargo run --release` does with no arguments: the viewer on the bundled scene, or,
+/// without a display, the headless fit and its summary.
 pub fn default_job() -> Result<()> {
-    use clap::Parser;
-    #[derive(Parser)]
-    struct Defaults {
-        #[command(flatten)]
-        fit: fit::Args,
-    }
-    fit::run(&Defaults::parse_from(["flatland"]).fit)
+    view::run(&view::Args { scene: None })
 }
