@@ -71,3 +71,28 @@ fn stress_only_filters_cases_and_refuses_an_empty_selection() {
     assert_eq!(stderr.lines().count(), 1, "{stderr}");
     assert!(stderr.contains("no stress case matches"), "{stderr}");
 }
+
+/// Open bug in `kernel-fit` (found by the full suite, reported, not fixed here): a ζ above 1e100
+/// — from a valid scene, e.g. fig3 with its light at emission 1e200, or fig3 scaled by 1e-120 —
+/// makes `Fit::step` panic inside `sgcs::Network::step` ("zeta must be finite and at most 1e100
+/// in magnitude"). Un-ignore once the fit normalises ζ.
+#[test]
+#[ignore = "open kernel-fit bug: ζ > 1e100 panics in Fit::step"]
+fn regression_huge_zeta_does_not_panic_the_fit() {
+    for case in ["emission 1e200", "scale ×1e-120"] {
+        let out = flatland(&["stress", "--only", case]);
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(out.status.success(), "{case}: {stdout}");
+    }
+}
+
+/// Open bug in `kernel-fit` (found by the full suite): for ζ around 1e-200 (fig3 with emission
+/// 1e-200) squared errors underflow, the resource counters stay 0 and the same fit ends with a
+/// held-out error of 0.98 instead of 0.64. Un-ignore once the fit normalises ζ.
+#[test]
+#[ignore = "open kernel-fit bug: learning degrades for ζ ≲ 1e-150"]
+fn regression_tiny_zeta_learns_like_unit_zeta() {
+    let out = flatland(&["stress", "--only", "emission 1e-200"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{stdout}");
+}
