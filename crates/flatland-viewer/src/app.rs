@@ -569,19 +569,21 @@ impl ViewerApp {
         } else {
             None
         };
-        if let Some((text, is_error)) = line {
-            ui.horizontal(|ui| {
-                let color = if is_error {
-                    Color32::from_rgb(255, 110, 90)
-                } else {
-                    ui.visuals().weak_text_color()
-                };
-                ui.label(RichText::new(text).color(color));
-                if is_error && ui.small_button("dismiss").clicked() {
-                    self.message = None;
-                }
-            });
-        }
+        // The line is always there (empty if nothing to say) so the layout never jumps under
+        // the pointer, e.g. while an end point is being dragged.
+        let (text, is_error) = line.unwrap_or_default();
+        ui.horizontal(|ui| {
+            ui.set_min_height(ui.spacing().interact_size.y);
+            let color = if is_error {
+                Color32::from_rgb(255, 110, 90)
+            } else {
+                ui.visuals().weak_text_color()
+            };
+            ui.label(RichText::new(text).color(color));
+            if is_error && ui.small_button("dismiss").clicked() {
+                self.message = None;
+            }
+        });
     }
 
     fn controls(&mut self, ui: &mut egui::Ui) {

@@ -2,6 +2,8 @@
 //! Functions of what they show plus a little interaction state; nothing here trains or waits.
 
 use std::f32::consts::FRAC_PI_2;
+#[cfg(test)]
+use std::sync::Arc;
 
 use egui::{
     Align2, Color32, ColorImage, FontId, Pos2, Rect, Sense, Shape, Stroke, TextureId, Vec2,
@@ -418,7 +420,8 @@ pub fn scene_view(
             .map(|(p, _)| p)
     };
     if response.drag_started()
-        && let Some(p) = response.interact_pointer_pos().and_then(nearest_end)
+        // Where the button went down, not where the pointer is once the drag is recognised.
+        && let Some(p) = ui.input(|i| i.pointer.press_origin()).and_then(nearest_end)
     {
         *drag = Some(SceneDrag { from: p, to: p });
     }
@@ -688,5 +691,71 @@ mod tests {
         assert!(moved.edges().iter().all(|e| e.a != from && e.b != from));
         // Collapsing an edge is refused, not panicking.
         assert!(moved_scene(&scene, from, DVec2::new(0.0, 0.0)).is_err());
+    }
+}
+
+#[cfg(test)]
+mod drag_tests {
+    use super::*;
+    use crate::worker::World;
+    use egui::{Event, PointerButton};
+    use egui_kittest::Harness;
+    use flatland_geom::Kernel;
+    use kernel_fit::Reference;
+
+    #[test]
+    fn dragging_an_end_point_reports_the_move() {
+        let scene = Scene::from_ron_str(crate::BUNDLED_SCENES[0].1).unwrap();
+        let kernel = Arc::new(Kernel::new(scene.clone()));
+        let world = World {
+            id: 1,
+            scene: scene.clone(),
+            reference: Arc::new(Reference::new(&kernel, 4, 16, 1)),
+            kernel,
+            exact_small: Vec::new(),
+        };
+        let rect = Rect::from_min_size(pos2(0.0, 0.0), vec2(400.0, 300.0));
+        let state = (None::<SceneDrag>, Vec::<(DVec2, DVec2)>::new());
+        let mut h = Harness::builder().with_size([400.0, 300.0]).build_ui_state(
+            move |ui, state: &mut (Option<SceneDrag>, Vec<(DVec2, DVec2)>)| {
+                let out = scene_view(ui, rect, &scene, &world, &Hover::default(), &mut state.0);
+                state.1.extend(out.moved);
+            },
+            state,
+        );
+        // The blocker's first end point, through the same mapping the view uses.
+        let inner = Rect::from_min_max(
+            rect.min + vec2(18.0, TITLE_H + 8.0),
+            rect.max - vec2(18.0, 14.0),
+        );
+        let view = View::of(
+            &Scene::from_ron_str(crate::BUNDLED_SCENES[0].1).unwrap(),
+            inner,
+        );
+        let from = DVec2::new(1.2, 1.7);
+        let p = view.screen(from);
+        let press = |pos, pressed| Event::PointerButton {
+            pos,
+            button: PointerButton::Primary,
+            pressed,
+            modifiers: Default::default(),
+        };
+        h.event(Event::PointerMoved(p));
+        h.run_steps(1);
+        h.event(press(p, true));
+        h.run_steps(1);
+        for k in 1..=5 {
+            h.event(Event::PointerMoved(
+                p + vec2(-6.0 * k as f32, -4.0 * k as f32),
+            ));
+            h.run_steps(1);
+        }
+        assert!(h.state().0.is_some(), "a drag is under way");
+        h.event(press(p + vec2(-30.0, -20.0), false));
+        h.run_steps(2);
+        let moved = &h.state().1;
+        assert_eq!(moved.len(), 1, "{moved:?}");
+        assert_eq!(moved[0].0, from);
+        assert!(moved[0].1.x < from.x && moved[0].1.y > from.y, "{moved:?}");
     }
 }
