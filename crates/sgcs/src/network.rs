@@ -489,6 +489,9 @@ impl Network {
     }
 
     /// `κ(ξ)` of a network with one output (the first output otherwise).
+    ///
+    /// # Panics
+    /// If `xi.len() != n` (as every query taking `xi`).
     pub fn predict1(&self, xi: &[f64]) -> f64 {
         let m = self.m;
         self.active(xi)
@@ -504,6 +507,9 @@ impl Network {
 
     /// `(D_A(ξ), D_ACC(ξ))`: the activation of all cells and of the cells flagged in `critical`
     /// (length `len()`, e.g. from [`Network::critical_cells`]), in one pass.
+    ///
+    /// # Panics
+    /// If `critical.len() != len()` or `xi.len() != n`.
     pub fn activation_sums(&self, xi: &[f64], critical: &[bool]) -> (f64, f64) {
         assert_eq!(
             critical.len(),
