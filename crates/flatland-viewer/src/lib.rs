@@ -119,6 +119,8 @@ pub fn run_with(options: Options) -> Result<(), ViewerError> {
             .with_inner_size([1280.0, 800.0])
             .with_min_inner_size([900.0, 600.0]),
         renderer: eframe::Renderer::Glow,
+        // Dithering costs shader work per pixel, which Mesa's software rasterizer pays on the CPU.
+        dithering: false,
         // Frames are paced by the app (≤ 60/s while training, on demand otherwise). With vsync,
         // a frame that misses a (software) vblank waits for the next one: measured under Xvfb,
         // 14–20 frames/s with vsync against 2–3× that without.

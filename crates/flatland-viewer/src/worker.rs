@@ -21,7 +21,7 @@ pub const REFERENCE_RES: usize = 256;
 /// Resolution of the approximation and error panels.
 pub const APPROX_RES: usize = 128;
 /// Shortest time between two published snapshots.
-pub const PUBLISH_EVERY: Duration = Duration::from_millis(33);
+pub const PUBLISH_EVERY: Duration = Duration::from_millis(50);
 /// Shortest time between two published approximations while training.
 pub const APPROX_EVERY: Duration = Duration::from_millis(600);
 /// Longest uninterrupted training slice: commands are read at least this often.
