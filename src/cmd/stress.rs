@@ -643,6 +643,29 @@ fn reflectance_cases(suite: &mut Suite) {
         );
         Ok(())
     });
+    suite.case(
+        "degenerate scenes",
+        "ζ ≡ 0 (one edge; collinear; dark): fit 0",
+        |row| {
+            let one = vec![Edge::surface(v(0.0, 0.0), v(1.0, 0.0), 0.5).with_emission(1.0)];
+            let collinear = vec![
+                Edge::surface(v(0.0, 0.0), v(1.0, 0.0), 0.5).with_emission(1.0),
+                Edge::surface(v(1.0, 0.0), v(3.0, 0.0), 0.5),
+                Edge::surface(v(-1.0, 0.0), v(-2.0, 0.0), 0.5),
+            ];
+            let dark = room(&[v(0.0, 0.0), v(2.0, 0.0), v(1.0, 1.5)], 0.5);
+            for edges in [one, collinear, dark] {
+                let scene = Scene::new(edges)?;
+                let (summary, fit) = small_fit(&scene, FitParams::default())?;
+                inspect_fit(row, &summary, &fit);
+                row.require(
+                    summary.errors.heldout == 0.0 && summary.errors.grid == 0.0,
+                    || format!("error {:?} ≠ 0 for ζ ≡ 0", summary.errors),
+                );
+            }
+            Ok(())
+        },
+    );
     suite.case("rho 1", "energy conservation; fit finite", |row| {
         let scene = Scene::new(light(room(
             &[v(0.0, 0.0), v(3.0, 0.0), v(3.0, 2.0), v(0.0, 2.0)],
@@ -921,6 +944,16 @@ fn parameter_cases(suite: &mut Suite, fig3: &Scene) {
         ("phi 1e9", FitParams { phi: 1e9, ..d }),
         ("psi 1e-3", FitParams { psi: 1e-3, ..d }),
         ("psi 1", FitParams { psi: 1.0, ..d }),
+        (
+            "smallest sets and scan",
+            FitParams {
+                initial_samples: 3,
+                min_set_size: 1,
+                scan_factor: 1,
+                heldout: 16,
+                ..d
+            },
+        ),
     ];
     if !suite.quick {
         extremes.extend([
