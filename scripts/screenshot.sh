@@ -15,7 +15,8 @@ OUT="${3:-docs/viewer.png}"
 
 if ! command -v xvfb-run >/dev/null || ! command -v import >/dev/null; then
     echo "installing xvfb and imagemagick" >&2
-    apt-get install -y --no-install-recommends xvfb xauth imagemagick >/dev/null
+    apt-get install -y --no-install-recommends xvfb xauth imagemagick >/dev/null \
+        || { apt-get update >/dev/null && apt-get install -y --no-install-recommends xvfb xauth imagemagick >/dev/null; }
 fi
 
 cargo build --release -p flatland-viewer --example viewer
@@ -36,7 +37,17 @@ env -u WAYLAND_DISPLAY XDG_RUNTIME_DIR="$RUNTIME_DIR" \
         wait "$pid" || true
     ' _ "$BIN" "$CELLS" "$LOG" "$SECONDS_TO_RUN" "$OUT"
 
-echo "saved $OUT"
 echo "viewer log (fps measured by the app over the last second, every 2 s):"
 cat "$LOG"
+# The window must have drawn and trained: fps lines in the log, and a picture that is not blank.
+if ! grep -q '^fps' "$LOG"; then
+    echo "error: the viewer logged no frames" >&2
+    exit 1
+fi
+spread="$(identify -format '%[fx:standard_deviation]' "$OUT")"
+if awk -v s="$spread" 'BEGIN { exit !(s < 0.02) }'; then
+    echo "error: $OUT looks blank (standard deviation $spread)" >&2
+    exit 1
+fi
 rm -rf "$LOG" "$RUNTIME_DIR"
+echo "saved $OUT"

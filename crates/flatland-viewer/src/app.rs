@@ -420,17 +420,10 @@ impl ViewerApp {
         if let Some(e) = mail.error {
             self.message = Some((e, true));
         }
-        if mail.busy.is_some() {
-            self.busy = mail.busy;
-        } else if self.busy.is_some()
-            && self.world.is_some()
-            && self
-                .status
-                .as_ref()
-                .is_some_and(|s| Some(s.world) == self.world.as_ref().map(|w| w.id))
-        {
-            self.busy = None;
-        }
+        // The learner's own state; before its first reference, say that it is starting.
+        self.busy = mail
+            .busy
+            .or_else(|| self.world.is_none().then_some("starting…"));
     }
 
     /// Sends changed parameters (when valid) to the learner.

@@ -153,7 +153,9 @@ impl WorkerHandle {
     /// holds the lock right now (try again next frame).
     pub fn take(&self) -> Option<Mailbox> {
         let mut guard = self.mailbox.try_lock().ok()?;
-        Some(std::mem::take(&mut *guard))
+        let mail = std::mem::take(&mut *guard);
+        guard.busy = mail.busy; // a state, not an event: it stays until the learner clears it
+        Some(mail)
     }
 }
 
@@ -436,9 +438,15 @@ impl Learner {
             self.running = false;
             self.steps_left = 0;
             if self.summary.is_none() && reason != StopReason::Interrupted {
-                match fit.finish() {
-                    Ok(summary) => self.summary = Some(summary),
-                    Err(e) => self.report(e.to_string()),
+                // Publish the stop first: the refit can take seconds at 1000 cells.
+                self.publish(true);
+                self.set_busy(Some("least-squares refit of the output weights…"));
+                let finished = self.fit.as_mut().map(Fit::finish);
+                self.set_busy(None);
+                match finished {
+                    Some(Ok(summary)) => self.summary = Some(summary),
+                    Some(Err(e)) => self.report(e.to_string()),
+                    None => {}
                 }
                 self.approx_steps = None; // the refit changed ζ̃
             }
