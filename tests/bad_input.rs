@@ -442,6 +442,7 @@ proptest! {
     fn mutated_files_on_disk_never_panic((json, bytes) in mutated()) {
         let dir = temp_dir("prop");
         let _ = check_file(&dir, if json { "m.json" } else { "m.ron" }, &bytes);
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }
 
