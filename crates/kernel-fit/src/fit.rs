@@ -472,10 +472,12 @@ impl Fit {
             crate::relative_l2(&predicted, &check_y)
         };
         let mut best = (score(&self.model.network), None);
+        // Φ and ΦᵀΦ are assembled once per sample set; each ridge is then one CG solve.
+        let system = self.model.network.refit_system(&fit_x, &fit_y)?;
         for k in 0..RIDGE_DECADES {
             let ridge = self.params.ridge * 10f64.powi(k);
             let mut trial = self.model.network.clone();
-            trial.refit_outputs(&fit_x, &fit_y, ridge)?;
+            trial.refit_with(&system, ridge)?;
             let error = score(&trial);
             if error < best.0 {
                 best = (error, Some(ridge));
