@@ -84,7 +84,7 @@ impl Default for FitParams {
             psi: 0.05,
             initial_samples: 500,
             min_set_size: 50,
-            scan_factor: 64,
+            scan_factor: 16,
             target_cells: 400,
             max_steps: 50_000_000,
             ray_budget: u64::MAX,
