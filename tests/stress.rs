@@ -72,12 +72,11 @@ fn stress_only_filters_cases_and_refuses_an_empty_selection() {
     assert!(stderr.contains("no stress case matches"), "{stderr}");
 }
 
-/// Open bug in `kernel-fit` (found by the full suite, reported, not fixed here): a ζ above 1e100
-/// — from a valid scene, e.g. fig3 with its light at emission 1e200, or fig3 scaled by 1e-120 —
-/// makes `Fit::step` panic inside `sgcs::Network::step` ("zeta must be finite and at most 1e100
-/// in magnitude"). Un-ignore once the fit normalises ζ.
+/// Regression (found by the full suite): a ζ above 1e100 — from a valid scene, e.g. fig3 with
+/// its light at emission 1e200, or fig3 scaled by 1e-120 — made `Fit::step` panic inside
+/// `sgcs::Network::step` ("zeta must be finite and at most 1e100 in magnitude"). The fit now
+/// trains on ζ divided by the RMS of S₀'s targets.
 #[test]
-#[ignore = "open kernel-fit bug: ζ > 1e100 panics in Fit::step"]
 fn regression_huge_zeta_does_not_panic_the_fit() {
     for case in ["emission 1e200", "scale ×1e-120"] {
         let out = flatland(&["stress", "--only", case]);
@@ -86,12 +85,10 @@ fn regression_huge_zeta_does_not_panic_the_fit() {
     }
 }
 
-/// Open bug in `kernel-fit` (found by the full suite): for ζ around 1e-200 (fig3 with emission
-/// 1e-200) squared errors underflow, the resource counters stay 0 and the same fit ends 20–50 %
-/// worse than at emission 1 (held-out 0.91 vs 0.75 at 9616ec3). Un-ignore once the fit
-/// normalises ζ.
+/// Regression (found by the full suite): for ζ around 1e-200 (fig3 with emission 1e-200)
+/// squared errors underflowed, the resource counters stayed 0 and the same fit ended 20–50 %
+/// worse than at emission 1 (held-out 0.91 vs 0.75 at 9616ec3). Fixed by the same normalisation.
 #[test]
-#[ignore = "open kernel-fit bug: learning degrades for ζ ≲ 1e-150"]
 fn regression_tiny_zeta_learns_like_unit_zeta() {
     let out = flatland(&["stress", "--only", "emission 1e-200"]);
     let stdout = String::from_utf8_lossy(&out.stdout);

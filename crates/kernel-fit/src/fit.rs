@@ -27,6 +27,15 @@ pub struct LearnedKernel {
     /// E' per edge when the network learns k ([`Target::FactoredEmission`]); empty otherwise.
     #[serde(default)]
     emission_factor: Vec<f64>,
+    /// The network learns target / `output_scale` (the RMS of S₀'s targets), so its weights
+    /// and errors are O(1) whatever the emission or the units: ζ of 1e200 or 1e-200 neither
+    /// overflows the network nor underflows its squared errors.
+    #[serde(default = "unit_scale")]
+    output_scale: f64,
+}
+
+fn unit_scale() -> f64 {
+    1.0
 }
 
 impl LearnedKernel {
@@ -42,6 +51,7 @@ impl LearnedKernel {
             frame,
             network,
             emission_factor,
+            output_scale: 1.0,
         }
     }
     /// The scene it was learned on.
@@ -64,7 +74,7 @@ impl LearnedKernel {
 
 impl Approximation for LearnedKernel {
     fn zeta(&self, s: f64, t: f64) -> f64 {
-        let kappa = self.network.predict1(&self.input(s, t));
+        let kappa = self.network.predict1(&self.input(s, t)) * self.output_scale;
         if self.emission_factor.is_empty() {
             kappa
         } else {
@@ -245,7 +255,11 @@ impl Fit {
         let points: Vec<[f64; 2]> = (0..params.initial_samples)
             .map(|_| [initial_rng.random::<f64>(), initial_rng.random::<f64>()])
             .collect();
-        let samples = make_samples(&kernel, &scene, frame, params.target, &points);
+        let mut samples = make_samples(&kernel, &scene, frame, params.target, 1.0, &points);
+        let output_scale = rms_scale(samples.iter().map(|s| s.target));
+        for sample in &mut samples {
+            sample.target /= output_scale;
+        }
         let mut net_params = params.network;
         net_params.max_cells = params.target_cells;
         let simplex: Vec<Vec<f64>> = pick_simplex(&samples, &mut initial_rng);
@@ -258,6 +272,7 @@ impl Fit {
                 frame,
                 network,
                 emission_factor: emission_factor(&kernel, params.target),
+                output_scale,
             },
             kernel,
             reference,
@@ -559,6 +574,7 @@ impl Fit {
             &self.model.scene,
             self.model.frame,
             p.target,
+            self.model.output_scale,
             &accepted,
         );
         self.rays += new.len() as u64;
@@ -654,6 +670,7 @@ impl Fit {
             &scene,
             self.model.frame,
             self.params.target,
+            self.model.output_scale,
             &points,
         );
         self.rays += n as u64;
@@ -851,6 +868,7 @@ fn make_samples(
     scene: &Scene,
     frame: InputFrame,
     target: Target,
+    scale: f64,
     points: &[[f64; 2]],
 ) -> Vec<Sample> {
     let values = match target {
@@ -863,9 +881,30 @@ fn make_samples(
         .map(|(&[s, t], target)| Sample {
             st: [s, t],
             xi: frame.gamma(scene, s, t),
-            target,
+            target: target / scale,
         })
         .collect()
+}
+
+/// The root mean square of `values`, computed without overflow or underflow; 1 when it is 0 or
+/// not finite (a scene that is dark everywhere S₀ looked).
+fn rms_scale(values: impl Iterator<Item = f64> + Clone) -> f64 {
+    let max = values.clone().fold(
+        0.0_f64,
+        |m, v| if v.is_finite() { m.max(v.abs()) } else { m },
+    );
+    if max == 0.0 {
+        return 1.0;
+    }
+    let (sum, n) = values.fold((0.0, 0usize), |(sum, n), v| {
+        (sum + (v / max).powi(2), n + 1)
+    });
+    let rms = max * (sum / n as f64).sqrt();
+    if rms.is_finite() && rms > 0.0 {
+        rms
+    } else {
+        1.0
+    }
 }
 
 /// E' per edge when the emission is factored out of the target, empty otherwise.
@@ -1154,5 +1193,31 @@ mod tests {
             "{stale:?} -> {:?}",
             after.errors
         );
+    }
+
+    #[test]
+    fn emission_scale_does_not_change_the_learning() {
+        let scene = fig3().scene().clone();
+        let scaled = |factor: f64| {
+            let edges = scene.edges().iter().map(|e| flatland_geom::Edge {
+                emission: e.emission * factor,
+                ..*e
+            });
+            Arc::new(Kernel::new(Scene::new(edges.collect()).unwrap()))
+        };
+        let base = run(&mut fit_with(&scaled(1.0), small(40)));
+        for factor in [1e-200, 1e-12, 1e12, 1e200] {
+            let other = run(&mut fit_with(&scaled(factor), small(40)));
+            for (a, b) in [
+                (base.errors.grid, other.errors.grid),
+                (base.errors.heldout, other.errors.heldout),
+            ] {
+                // Equal up to rounding (the targets are divided by a different scale).
+                assert!(
+                    (a - b).abs() <= 1e-4 * a,
+                    "emission ×{factor:e}: {b} vs {a}"
+                );
+            }
+        }
     }
 }
