@@ -794,10 +794,10 @@ impl ViewerApp {
                 row(
                     ui,
                     "ridge",
-                    "refit's Tikhonov weight",
+                    "smallest refit ridge tried (×10⁰…10⁶, best on S₀ kept)",
                     &mut p.ridge,
-                    0.0..=1.0,
-                    "≥ 0",
+                    1e-12..=1.0,
+                    "> 0",
                     1e-7,
                 );
                 row(
