@@ -117,9 +117,22 @@ pub fn run(args: &Args) -> Result<()> {
         let ratio = density_ratio(&mask, RES, &f.1).unwrap_or(f64::NAN);
         writeln!(doc, "| {name} | {ratio:.1} |")?;
     }
+    super::figure::run(&super::figure::Args {
+        scene: super::SceneArgs {
+            scene: Some(args.scenes.join("fig3.ron")),
+            subdivide: 1,
+        },
+        cells: FitParams::default().target_cells,
+        seed: FitParams::default().seed,
+        res: 512,
+        log: false,
+        out: plots.join("figure"),
+    })?;
     writeln!(
         doc,
-        "\nThe panels of `flatland figure --out docs/results/figure` show it: ![cells](docs/results/figure/c_cells.png)\n"
+        "\nThe panels of `flatland figure --out docs/results/figure` (the paper's Fig. 3: \
+         geometry, kernel, cells, approximation, error) show it:\n\n\
+         ![cells](docs/results/figure/c_cells.png)\n"
     )?;
 
     // R2: subdivision.
