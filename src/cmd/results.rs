@@ -286,6 +286,34 @@ pub fn run(args: &Args) -> Result<()> {
             "\nhr-ff at 400: {} links, relative L2 grid {:.3}, held out {:.3}.\n",
             ff.basis_functions, ff_errors.grid, ff_errors.heldout
         )?;
+        let mean_at_400 = |m: Method| {
+            let at: Vec<_> = rows
+                .iter()
+                .filter(|r| r.method == m && r.budget == 400)
+                .collect();
+            let n = at.len().max(1) as f64;
+            (
+                at.iter().map(|r| r.errors.grid).sum::<f64>() / n,
+                at.iter().map(|r| r.errors.heldout).sum::<f64>() / n,
+            )
+        };
+        if budgets.contains(&400) {
+            let (sgcs, paper) = (mean_at_400(Method::Sgcs), mean_at_400(Method::SgcsNoRefit));
+            let hr = mean_at_400(Method::Hr);
+            writeln!(
+                doc,
+                "**R4 on {name}** (paper: SGCS's error about half of HR's at ~400): error ratio \
+                 SGCS / HR = {:.2} on the grid, {:.2} held out (the paper's network without the \
+                 refit: {:.2}, {:.2}); SGCS / plain form-factor HR = {:.2}, {:.2}. A ratio below \
+                 1 means SGCS wins.\n",
+                sgcs.0 / hr.0,
+                sgcs.1 / hr.1,
+                paper.0 / hr.0,
+                paper.1 / hr.1,
+                sgcs.0 / ff_errors.grid,
+                sgcs.1 / ff_errors.heldout,
+            )?;
+        }
         writeln!(
             doc,
             "![error vs basis functions](docs/results/{name}/error_vs_basis.png)\n\
@@ -308,7 +336,14 @@ pub fn run(args: &Args) -> Result<()> {
     }
     let output = cmd.output().context("running the stress suite")?;
     writeln!(doc, "```\n{}```\n", String::from_utf8_lossy(&output.stdout))?;
-    writeln!(doc, "Exit status: {}.\n", output.status)?;
+    writeln!(
+        doc,
+        "Exit code: {}.\n",
+        output
+            .status
+            .code()
+            .map_or("none (killed)".to_owned(), |c| c.to_string())
+    )?;
 
     writeln!(
         doc,
