@@ -37,6 +37,16 @@ pub fn register_font() {
     });
 }
 
+/// A tick label with as many digits as its size needs (log axes span decades).
+fn tick(v: f64) -> String {
+    match v.abs() {
+        a if a >= 100.0 => format!("{v:.0}"),
+        a if a >= 1.0 => format!("{v:.1}"),
+        a if a >= 0.01 => format!("{v:.2}"),
+        _ => format!("{v:.0e}"),
+    }
+}
+
 /// Draws a log–log chart of `series` to a PNG at `path` (atomically).
 pub fn log_log(
     path: &Path,
@@ -86,6 +96,10 @@ pub fn log_log(
             .configure_mesh()
             .x_desc(x_label)
             .y_desc(y_label)
+            .x_labels(8)
+            .y_labels(8)
+            .x_label_formatter(&|v| tick(*v))
+            .y_label_formatter(&|v| tick(*v))
             .label_style(("sans-serif", 15))
             .draw()
             .map_err(|e| err(e.to_string()))?;
