@@ -120,14 +120,13 @@ impl Network {
             return Err(SgcsError::Refit(format!("non-finite sample value {x}")));
         }
 
-        // Φ in compressed rows (cells ascending within a row). Rows are stored in a spatial
-        // order (by their most active cell's place in the index's leaf order) so that the
-        // column-by-column assembly below reads rows that are already in cache.
+        // Φ in compressed rows (cells ascending within a row). Rows are grouped by their most
+        // active cell so that the column-by-column assembly below reads nearby rows together.
+        // The key is the cell's id, not its place in the index: the index's shape depends on
+        // its history (a reloaded network rebuilds it), and the row order fixes the summation
+        // order of ΦᵀΦ, so an index-based key made a resumed fit differ in the last bits.
         let order = self.spatial_order();
-        let mut rank = vec![0u32; len];
-        for (k, &c) in order.iter().enumerate() {
-            rank[c as usize] = k as u32;
-        }
+        let rank: Vec<u32> = (0..len as u32).collect();
         let mut rows: Vec<(u32, u32)> = Vec::with_capacity(samples); // (key, sample)
         let mut all: Vec<Vec<(u32, f64)>> = Vec::with_capacity(samples);
         let mut found = Vec::new();
