@@ -6,9 +6,8 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use anyhow::{Context, Result};
-use kernel_fit::baselines::{HrParams, UniformParams};
+use kernel_fit::Reference;
 use kernel_fit::bench::{BenchPlan, BenchRow, Method, run_bench};
-use kernel_fit::{FitParams, Reference};
 
 use super::SceneArgs;
 use crate::plot::{Series, log_log};
@@ -46,14 +45,7 @@ pub fn run(args: &Args) -> Result<()> {
         .iter()
         .map(|m| Method::parse(m.trim()))
         .collect::<Result<Vec<_>, _>>()?;
-    let plan = BenchPlan {
-        methods,
-        budgets: args.budgets.clone(),
-        seeds: args.seeds,
-        fit: FitParams::default(),
-        hr: HrParams::default(),
-        uniform: UniformParams::default(),
-    };
+    let plan = BenchPlan::new(methods, args.budgets.clone(), args.seeds);
     plan.validate()?;
     anyhow::ensure!(args.res >= 1, "--res must be at least 1, got {}", args.res);
     let (kernel, label) = args.scene.kernel()?;

@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use flatland_geom::{Kernel, Scene};
-use kernel_fit::baselines::{HrParams, Oracle, UniformParams, count_initial_links};
+use kernel_fit::baselines::{HrParams, Oracle, count_initial_links};
 use kernel_fit::bench::{BenchPlan, Method, run_bench};
 use kernel_fit::{FitParams, FitSummary, Reference, Resampling, density_ratio, discontinuity_mask};
 
@@ -256,19 +256,7 @@ pub fn run(args: &Args) -> Result<()> {
             FitParams::default().heldout,
             0,
         ));
-        let plan = BenchPlan {
-            methods: vec![
-                Method::Sgcs,
-                Method::SgcsNoRefit,
-                Method::Hr,
-                Method::Uniform,
-            ],
-            budgets: budgets.clone(),
-            seeds,
-            fit: FitParams::default(),
-            hr: HrParams::default(),
-            uniform: UniformParams::default(),
-        };
+        let plan = BenchPlan::new(Method::ALL.to_vec(), budgets.clone(), seeds);
         let rows = run_bench(&kernel, &reference, &plan, |_, _| {})?;
         let dir = plots.join(name);
         std::fs::create_dir_all(&dir)?;

@@ -8,7 +8,7 @@ use std::time::Instant;
 use flatland_geom::Kernel;
 use serde::{Deserialize, Serialize};
 
-use crate::baselines::{HrParams, UniformParams, run_hr_at_budget, run_uniform};
+use crate::baselines::{BaselineRun, HrParams, UniformParams, run_hr_at_budget, run_uniform};
 use crate::{Approximation, Errors, Fit, FitError, FitParams, Reference};
 
 /// A method the benchmark compares.
@@ -26,6 +26,14 @@ pub enum Method {
 }
 
 impl Method {
+    /// Every method, in the order tables list them.
+    pub const ALL: [Method; 4] = [
+        Method::Sgcs,
+        Method::SgcsNoRefit,
+        Method::Hr,
+        Method::Uniform,
+    ];
+
     /// The name used in files and on the command line.
     pub fn name(self) -> &'static str {
         match self {
@@ -91,6 +99,18 @@ pub struct BenchPlan {
 }
 
 impl BenchPlan {
+    /// A plan with every method's default parameters.
+    pub fn new(methods: Vec<Method>, budgets: Vec<usize>, seeds: u64) -> BenchPlan {
+        BenchPlan {
+            methods,
+            budgets,
+            seeds,
+            fit: FitParams::default(),
+            hr: HrParams::default(),
+            uniform: UniformParams::default(),
+        }
+    }
+
     /// Checks the plan; errors name the parameter and the valid range.
     pub fn validate(&self) -> Result<(), FitError> {
         let bad =
@@ -146,30 +166,20 @@ pub fn run_bench(
                     Method::SgcsNoRefit => {
                         sgcs.as_ref().map(|r| r.1.clone()).expect("fitted above")
                     }
-                    Method::Hr => {
-                        let run = run_hr_at_budget(kernel, budget, seed, &plan.hr)?;
-                        row(
-                            method,
-                            budget,
-                            seed,
-                            &run.approx,
-                            reference,
-                            run.rays,
-                            run.wall.as_secs_f64(),
-                        )
-                    }
-                    Method::Uniform => {
-                        let run = run_uniform(kernel, budget, seed, &plan.uniform)?;
-                        row(
-                            method,
-                            budget,
-                            seed,
-                            &run.approx,
-                            reference,
-                            run.rays,
-                            run.wall.as_secs_f64(),
-                        )
-                    }
+                    Method::Hr => baseline_row(
+                        method,
+                        budget,
+                        seed,
+                        run_hr_at_budget(kernel, budget, seed, &plan.hr)?,
+                        reference,
+                    ),
+                    Method::Uniform => baseline_row(
+                        method,
+                        budget,
+                        seed,
+                        run_uniform(kernel, budget, seed, &plan.uniform)?,
+                        reference,
+                    ),
                 };
                 rows.push(row);
                 progress(rows.len(), total);
@@ -198,6 +208,26 @@ fn row(
         wall_s,
         memory_bytes: approx.memory_bytes(),
     }
+}
+
+/// The row of a baseline run.
+fn baseline_row<A: Approximation>(
+    method: Method,
+    budget: usize,
+    seed: u64,
+    run: BaselineRun<A>,
+    reference: &Reference,
+) -> BenchRow {
+    let wall_s = run.wall.as_secs_f64();
+    row(
+        method,
+        budget,
+        seed,
+        &run.approx,
+        reference,
+        run.rays,
+        wall_s,
+    )
 }
 
 /// One SGCS fit at `budget` cells: the row after the refit and the row before it.
@@ -253,19 +283,7 @@ mod tests {
         let scene = Scene::from_ron_str(include_str!("../../../scenes/box.ron")).unwrap();
         let kernel = Arc::new(Kernel::new(scene));
         let reference = Arc::new(Reference::new(&kernel, 48, 512, 3));
-        let plan = BenchPlan {
-            methods: vec![
-                Method::Sgcs,
-                Method::SgcsNoRefit,
-                Method::Hr,
-                Method::Uniform,
-            ],
-            budgets: vec![30, 60],
-            seeds: 2,
-            fit: FitParams::default(),
-            hr: HrParams::default(),
-            uniform: UniformParams::default(),
-        };
+        let plan = BenchPlan::new(Method::ALL.to_vec(), vec![30, 60], 2);
         let mut calls = 0;
         let rows = run_bench(&kernel, &reference, &plan, |done, total| {
             calls += 1;
@@ -307,14 +325,7 @@ mod tests {
 
     #[test]
     fn bad_plans_are_refused_with_the_parameter_named() {
-        let base = BenchPlan {
-            methods: vec![Method::Uniform],
-            budgets: vec![10],
-            seeds: 1,
-            fit: FitParams::default(),
-            hr: HrParams::default(),
-            uniform: UniformParams::default(),
-        };
+        let base = BenchPlan::new(vec![Method::Uniform], vec![10], 1);
         for (plan, name) in [
             (
                 BenchPlan {

@@ -222,6 +222,13 @@ const HISTORY_HELDOUT: usize = 1024;
 pub struct Fit {
     kernel: Arc<Kernel>,
     reference: Arc<Reference>,
+    state: FitState,
+}
+
+/// Everything of a fit that a checkpoint saves; the kernel and the reference are rebuilt from
+/// the scene the model embeds.
+#[derive(Clone, Serialize, Deserialize)]
+struct FitState {
     params: FitParams,
     model: LearnedKernel,
     samples: Vec<Sample>,
@@ -265,42 +272,45 @@ impl Fit {
         let simplex: Vec<Vec<f64>> = pick_simplex(&samples, &mut initial_rng);
         let network = Network::new(net_params, INPUT_DIM, 1, &simplex)?;
         let rays = samples.len() as u64;
+        let model = LearnedKernel {
+            scene,
+            frame,
+            network,
+            emission_factor: emission_factor(&kernel, params.target),
+            output_scale,
+        };
         Ok(Fit {
-            cell_stats: vec![CellStats::default(); network.len()],
-            model: LearnedKernel {
-                scene,
-                frame,
-                network,
-                emission_factor: emission_factor(&kernel, params.target),
-                output_scale,
-            },
             kernel,
             reference,
-            samples,
-            set_starts: vec![0],
-            rays,
-            steps_at_last_growth: 0,
-            resample_not_before: 0,
-            train_rng: stream(params.seed, STREAM_TRAIN),
-            resample_rng: stream(params.seed, STREAM_RESAMPLE),
-            history: Vec::new(),
-            stop: None,
-            wall_s: 0.0,
-            params,
+            state: FitState {
+                cell_stats: vec![CellStats::default(); model.network.len()],
+                model,
+                samples,
+                set_starts: vec![0],
+                rays,
+                steps_at_last_growth: 0,
+                resample_not_before: 0,
+                train_rng: stream(params.seed, STREAM_TRAIN),
+                resample_rng: stream(params.seed, STREAM_RESAMPLE),
+                history: Vec::new(),
+                stop: None,
+                wall_s: 0.0,
+                params,
+            },
         })
     }
 
     /// The parameters.
     pub fn params(&self) -> &FitParams {
-        &self.params
+        &self.state.params
     }
     /// The learned kernel so far.
     pub fn model(&self) -> &LearnedKernel {
-        &self.model
+        &self.state.model
     }
     /// The network so far.
     pub fn network(&self) -> &Network {
-        &self.model.network
+        &self.state.model.network
     }
     /// The exact kernel being learned.
     pub fn kernel(&self) -> &Arc<Kernel> {
@@ -312,87 +322,93 @@ impl Fit {
     }
     /// Rays cast for training so far.
     pub fn rays(&self) -> u64 {
-        self.rays
+        self.state.rays
     }
     /// Training samples so far.
     pub fn sample_count(&self) -> usize {
-        self.samples.len()
+        self.state.samples.len()
     }
     /// Sample sets so far.
     pub fn set_count(&self) -> usize {
-        self.set_starts.len()
+        self.state.set_starts.len()
     }
     /// Training steps so far.
     pub fn steps(&self) -> u64 {
-        self.model.network.steps()
+        self.state.model.network.steps()
     }
     /// Why the fit stopped, once it has.
     pub fn stopped(&self) -> Option<StopReason> {
-        self.stop
+        self.state.stop
     }
     /// The learning curve so far.
     pub fn history(&self) -> &[HistoryPoint] {
-        &self.history
+        &self.state.history
     }
 
     /// One training step: resample if `|A| / |S| > ψ`, draw a set uniformly and a sample from
     /// it, adapt the network, record who won. Returns the stop reason once a rule fires.
     pub fn step(&mut self) -> Option<StopReason> {
-        if self.stop.is_some() {
-            return self.stop;
+        if self.state.stop.is_some() {
+            return self.state.stop;
         }
         let steps = self.steps();
-        let cells = self.model.network.len();
-        if cells as f64 > self.params.psi * self.samples.len() as f64
-            && steps >= self.resample_not_before
-            && self.rays < self.params.ray_budget
+        let cells = self.state.model.network.len();
+        if cells as f64 > self.state.params.psi * self.state.samples.len() as f64
+            && steps >= self.state.resample_not_before
+            && self.state.rays < self.state.params.ray_budget
         {
             self.resample();
         }
-        let set = self.train_rng.random_range(0..self.set_starts.len());
-        let start = self.set_starts[set];
+        let set = self
+            .state
+            .train_rng
+            .random_range(0..self.state.set_starts.len());
+        let start = self.state.set_starts[set];
         let end = self
+            .state
             .set_starts
             .get(set + 1)
             .copied()
-            .unwrap_or(self.samples.len());
-        let sample = self.samples[self.train_rng.random_range(start..end)];
-        let outcome = self.model.network.step(&sample.xi, &[sample.target]);
+            .unwrap_or(self.state.samples.len());
+        let sample = self.state.samples[self.state.train_rng.random_range(start..end)];
+        let outcome = self.state.model.network.step(&sample.xi, &[sample.target]);
         if let Some(new) = outcome.inserted {
-            debug_assert_eq!(new, self.cell_stats.len());
-            self.cell_stats.push(CellStats::default());
-            self.steps_at_last_growth = self.steps();
+            debug_assert_eq!(new, self.state.cell_stats.len());
+            self.state.cell_stats.push(CellStats::default());
+            self.state.steps_at_last_growth = self.steps();
         }
-        let stats = &mut self.cell_stats[outcome.bmu];
+        let stats = &mut self.state.cell_stats[outcome.bmu];
         stats.sum_s += sample.st[0];
         stats.sum_t += sample.st[1];
         stats.wins += 1;
 
         let steps = self.steps();
-        if self.params.eval_every > 0 && steps.is_multiple_of(self.params.eval_every) {
+        if self.state.params.eval_every > 0 && steps.is_multiple_of(self.state.params.eval_every) {
             self.record_history();
         }
-        self.stop = self.stop_reason();
-        self.stop
+        self.state.stop = self.stop_reason();
+        self.state.stop
     }
 
     fn stop_reason(&self) -> Option<StopReason> {
-        let p = &self.params;
+        let p = &self.state.params;
         let steps = self.steps();
         let lambda = u64::from(p.network.lambda);
-        if self.model.network.len() >= p.target_cells && steps - self.steps_at_last_growth >= lambda
+        if self.state.model.network.len() >= p.target_cells
+            && steps - self.state.steps_at_last_growth >= lambda
         {
             return Some(StopReason::TargetCells);
         }
         if p.target_error > 0.0
             && self
+                .state
                 .history
                 .last()
                 .is_some_and(|h| h.steps == steps && h.rel_l2_heldout <= p.target_error)
         {
             return Some(StopReason::TargetError);
         }
-        if self.rays >= p.ray_budget {
+        if self.state.rays >= p.ray_budget {
             return Some(StopReason::RayBudget);
         }
         if steps >= p.max_steps {
@@ -416,11 +432,11 @@ impl Fit {
                 break reason;
             }
             if self.steps().is_multiple_of(every) && progress(self).is_break() {
-                self.stop = Some(StopReason::Interrupted);
+                self.state.stop = Some(StopReason::Interrupted);
                 break StopReason::Interrupted;
             }
         };
-        self.wall_s += started.elapsed().as_secs_f64();
+        self.state.wall_s += started.elapsed().as_secs_f64();
         let _ = progress(self);
         reason
     }
@@ -439,21 +455,21 @@ impl Fit {
     pub fn finish(&mut self) -> Result<FitSummary, FitError> {
         let started = Instant::now();
         let mut errors_before_refit = None;
-        if self.params.refit {
-            errors_before_refit = Some(self.reference.errors(&self.model));
+        if self.state.params.refit {
+            errors_before_refit = Some(self.reference.errors(&self.state.model));
             self.refit()?;
         }
-        self.wall_s += started.elapsed().as_secs_f64();
+        self.state.wall_s += started.elapsed().as_secs_f64();
         Ok(FitSummary {
-            cells: self.model.network.len(),
-            samples: self.samples.len(),
-            sets: self.set_starts.len(),
-            rays: self.rays,
+            cells: self.state.model.network.len(),
+            samples: self.state.samples.len(),
+            sets: self.state.set_starts.len(),
+            rays: self.state.rays,
             steps: self.steps(),
-            errors: self.reference.errors(&self.model),
+            errors: self.reference.errors(&self.state.model),
             errors_before_refit,
-            wall_s: self.wall_s,
-            stop: self.stop.unwrap_or(StopReason::Interrupted),
+            wall_s: self.state.wall_s,
+            stop: self.state.stop.unwrap_or(StopReason::Interrupted),
         })
     }
 
@@ -470,12 +486,13 @@ impl Fit {
         // over-represent critical zones, so scoring on them rewards a fit that is good there and
         // poor elsewhere.
         let s0_end = self
+            .state
             .set_starts
             .get(1)
             .copied()
-            .unwrap_or(self.samples.len());
+            .unwrap_or(self.state.samples.len());
         let (mut fit_part, mut check_part) = (Vec::new(), Vec::new());
-        for (i, sample) in self.samples.iter().enumerate() {
+        for (i, sample) in self.state.samples.iter().enumerate() {
             if i < s0_end && i % VALIDATION_STRIDE == VALIDATION_STRIDE - 1 {
                 check_part.push(sample);
             } else {
@@ -494,12 +511,12 @@ impl Fit {
             let predicted: Vec<f64> = check_x.chunks(INPUT_DIM).map(|x| net.predict1(x)).collect();
             crate::relative_l2(&predicted, &check_y)
         };
-        let mut best = (score(&self.model.network), None);
+        let mut best = (score(&self.state.model.network), None);
         // Φ and ΦᵀΦ are assembled once per sample set; each ridge is then one CG solve.
-        let system = self.model.network.refit_system(&fit_x, &fit_y)?;
+        let system = self.state.model.network.refit_system(&fit_x, &fit_y)?;
         for k in 0..RIDGE_DECADES {
-            let ridge = self.params.ridge * 10f64.powi(k);
-            let mut trial = self.model.network.clone();
+            let ridge = self.state.params.ridge * 10f64.powi(k);
+            let mut trial = self.state.model.network.clone();
             trial.refit_with(&system, ridge)?;
             let error = score(&trial);
             if error < best.0 {
@@ -507,8 +524,11 @@ impl Fit {
             }
         }
         if let Some(ridge) = best.1 {
-            let (all_x, all_y) = flatten(&self.samples.iter().collect::<Vec<_>>());
-            self.model.network.refit_outputs(&all_x, &all_y, ridge)?;
+            let (all_x, all_y) = flatten(&self.state.samples.iter().collect::<Vec<_>>());
+            self.state
+                .model
+                .network
+                .refit_outputs(&all_x, &all_y, ridge)?;
         }
         Ok(RefitChoice {
             ridge: best.1,
@@ -519,13 +539,14 @@ impl Fit {
     /// A new sample set chosen by θ(ξ) = ρ_ACC(ξ) ∨ ¬ρ_A(ξ) (SPEC erratum 3): candidates are
     /// scanned in parallel without casting a ray; only accepted ones cost a ray.
     fn resample(&mut self) {
-        let p = self.params;
-        let cells = self.model.network.len() as f64;
+        let p = self.state.params;
+        let cells = self.state.model.network.len() as f64;
         let wanted = ((cells / p.psi).ceil() as usize)
-            .saturating_sub(self.samples.len())
+            .saturating_sub(self.state.samples.len())
             .max(p.min_set_size);
-        let wanted = wanted.min(usize::try_from(p.ray_budget - self.rays).unwrap_or(usize::MAX));
-        let critical = self.model.network.critical_cells(p.omega);
+        let wanted =
+            wanted.min(usize::try_from(p.ray_budget - self.state.rays).unwrap_or(usize::MAX));
+        let critical = self.state.model.network.critical_cells(p.omega);
         let scan_limit = wanted.saturating_mul(p.scan_factor);
         let chunk = (wanted * 4).clamp(256, 1 << 16);
         let mut accepted: Vec<[f64; 2]> = Vec::with_capacity(wanted);
@@ -535,13 +556,13 @@ impl Fit {
             let candidates: Vec<[f64; 2]> = (0..n)
                 .map(|_| {
                     [
-                        self.resample_rng.random::<f64>(),
-                        self.resample_rng.random::<f64>(),
+                        self.state.resample_rng.random::<f64>(),
+                        self.state.resample_rng.random::<f64>(),
                     ]
                 })
                 .collect();
             scanned += n;
-            let model = &self.model;
+            let model = &self.state.model;
             if p.resampling == Resampling::Uniform {
                 accepted.extend(candidates);
                 continue;
@@ -564,22 +585,22 @@ impl Fit {
         accepted.truncate(wanted);
         if accepted.len() < wanted {
             // θ found too few places worth a ray; do not rescan every step.
-            self.resample_not_before = self.steps() + u64::from(p.network.lambda);
+            self.state.resample_not_before = self.steps() + u64::from(p.network.lambda);
         }
         if accepted.is_empty() {
             return;
         }
         let new = make_samples(
             &self.kernel,
-            &self.model.scene,
-            self.model.frame,
+            &self.state.model.scene,
+            self.state.model.frame,
             p.target,
-            self.model.output_scale,
+            self.state.model.output_scale,
             &accepted,
         );
-        self.rays += new.len() as u64;
-        self.set_starts.push(self.samples.len());
-        self.samples.extend(new);
+        self.state.rays += new.len() as u64;
+        self.state.set_starts.push(self.state.samples.len());
+        self.state.samples.extend(new);
     }
 
     fn record_history(&mut self) {
@@ -587,20 +608,21 @@ impl Fit {
         let n = points.len().min(HISTORY_HELDOUT);
         let predicted: Vec<f64> = points[..n]
             .par_iter()
-            .map(|&[s, t]| self.model.zeta(s, t))
+            .map(|&[s, t]| self.state.model.zeta(s, t))
             .collect();
-        self.history.push(HistoryPoint {
+        self.state.history.push(HistoryPoint {
             steps: self.steps(),
-            rays: self.rays,
-            cells: self.model.network.len(),
-            samples: self.samples.len(),
+            rays: self.state.rays,
+            cells: self.state.model.network.len(),
+            samples: self.state.samples.len(),
             rel_l2_heldout: crate::relative_l2(&predicted, &values[..n]),
         });
     }
 
     /// The re-projected (s, t) of every cell (paper Fig. 3c); `None` for a cell that never won.
     pub fn cell_st(&self) -> Vec<Option<[f64; 2]>> {
-        self.cell_stats
+        self.state
+            .cell_stats
             .iter()
             .map(|c| (c.wins > 0).then(|| [c.sum_s / c.wins as f64, c.sum_t / c.wins as f64]))
             .collect()
@@ -608,8 +630,8 @@ impl Fit {
 
     /// A cheap copy of the state for a progress display or the viewer.
     pub fn snapshot(&self) -> Snapshot {
-        let net = &self.model.network;
-        let critical = net.critical_cells(self.params.omega);
+        let net = &self.state.model.network;
+        let critical = net.critical_cells(self.state.params.omega);
         let st = self.cell_st();
         let cells = (0..net.len())
             .map(|c| CellSnapshot {
@@ -620,22 +642,23 @@ impl Fit {
                 output: net.output(c)[0],
             })
             .collect();
-        let mut samples = Vec::with_capacity(self.samples.len());
-        for (set, &start) in self.set_starts.iter().enumerate() {
+        let mut samples = Vec::with_capacity(self.state.samples.len());
+        for (set, &start) in self.state.set_starts.iter().enumerate() {
             let end = self
+                .state
                 .set_starts
                 .get(set + 1)
                 .copied()
-                .unwrap_or(self.samples.len());
+                .unwrap_or(self.state.samples.len());
             samples.extend(
-                self.samples[start..end]
+                self.state.samples[start..end]
                     .iter()
                     .map(|s| ([s.st[0] as f32, s.st[1] as f32], set as u32)),
             );
         }
         Snapshot {
             steps: self.steps(),
-            rays: self.rays,
+            rays: self.state.rays,
             cells,
             edges: net
                 .edges()
@@ -643,8 +666,8 @@ impl Fit {
                 .map(|(a, b)| [a as u32, b as u32])
                 .collect(),
             samples,
-            sets: self.set_starts.len(),
-            history: self.history.clone(),
+            sets: self.state.set_starts.len(),
+            history: self.state.history.clone(),
         }
     }
 
@@ -655,32 +678,32 @@ impl Fit {
     /// new S₀ of `max(|S₀|, |A|/ψ)` uniform samples is drawn from the new kernel.
     pub fn set_kernel(&mut self, kernel: Arc<Kernel>, reference: Arc<Reference>) {
         let scene = kernel.scene().clone();
-        let n = (self.params.initial_samples)
-            .max((self.model.network.len() as f64 / self.params.psi).ceil() as usize);
+        let n = (self.state.params.initial_samples)
+            .max((self.state.model.network.len() as f64 / self.state.params.psi).ceil() as usize);
         let points: Vec<[f64; 2]> = (0..n)
             .map(|_| {
                 [
-                    self.resample_rng.random::<f64>(),
-                    self.resample_rng.random::<f64>(),
+                    self.state.resample_rng.random::<f64>(),
+                    self.state.resample_rng.random::<f64>(),
                 ]
             })
             .collect();
-        self.samples = make_samples(
+        self.state.samples = make_samples(
             &kernel,
             &scene,
-            self.model.frame,
-            self.params.target,
-            self.model.output_scale,
+            self.state.model.frame,
+            self.state.params.target,
+            self.state.model.output_scale,
             &points,
         );
-        self.rays += n as u64;
-        self.set_starts = vec![0];
-        self.cell_stats = vec![CellStats::default(); self.model.network.len()];
-        self.model.scene = scene;
-        self.model.emission_factor = emission_factor(&kernel, self.params.target);
+        self.state.rays += n as u64;
+        self.state.set_starts = vec![0];
+        self.state.cell_stats = vec![CellStats::default(); self.state.model.network.len()];
+        self.state.model.scene = scene;
+        self.state.model.emission_factor = emission_factor(&kernel, self.state.params.target);
         self.kernel = kernel;
         self.reference = reference;
-        self.stop = None;
+        self.state.stop = None;
     }
 
     /// Changes the parameters of a running fit (the viewer's controls).
@@ -688,9 +711,9 @@ impl Fit {
         params.validate()?;
         let mut net_params = params.network;
         net_params.max_cells = params.target_cells;
-        self.model.network.set_params(net_params)?;
-        self.params = params;
-        self.stop = None;
+        self.state.model.network.set_params(net_params)?;
+        self.state.params = params;
+        self.state.stop = None;
         Ok(())
     }
 }
@@ -700,28 +723,15 @@ pub const CHECKPOINT_FORMAT: &str = "flatland-checkpoint";
 /// The checkpoint version this build reads and writes.
 pub const CHECKPOINT_VERSION: u32 = 1;
 
-/// Everything a fit needs to continue exactly where it was (the kernel and the reference are
-/// rebuilt from the scene, which the model embeds).
+/// A checkpoint file: a header that identifies it, then the state (borrowed when written).
 #[derive(Serialize, Deserialize)]
-struct Checkpoint {
+struct Checkpoint<S> {
     format: String,
     version: u32,
     scene_fingerprint: String,
     reference_res: usize,
     reference_heldout: usize,
-    params: FitParams,
-    model: LearnedKernel,
-    samples: Vec<Sample>,
-    set_starts: Vec<usize>,
-    cell_stats: Vec<CellStats>,
-    rays: u64,
-    steps_at_last_growth: u64,
-    resample_not_before: u64,
-    train_rng: ChaCha8Rng,
-    resample_rng: ChaCha8Rng,
-    history: Vec<HistoryPoint>,
-    stop: Option<StopReason>,
-    wall_s: f64,
+    state: S,
 }
 
 impl Fit {
@@ -732,22 +742,10 @@ impl Fit {
         let checkpoint = Checkpoint {
             format: CHECKPOINT_FORMAT.to_owned(),
             version: CHECKPOINT_VERSION,
-            scene_fingerprint: crate::fingerprint_hex(&self.model.scene),
+            scene_fingerprint: crate::fingerprint_hex(&self.state.model.scene),
             reference_res: self.reference.res(),
             reference_heldout: self.reference.heldout().0.len(),
-            params: self.params,
-            model: self.model.clone(),
-            samples: self.samples.clone(),
-            set_starts: self.set_starts.clone(),
-            cell_stats: self.cell_stats.clone(),
-            rays: self.rays,
-            steps_at_last_growth: self.steps_at_last_growth,
-            resample_not_before: self.resample_not_before,
-            train_rng: self.train_rng.clone(),
-            resample_rng: self.resample_rng.clone(),
-            history: self.history.clone(),
-            stop: self.stop,
-            wall_s: self.wall_s,
+            state: &self.state,
         };
         let text = serde_json::to_vec(&checkpoint).map_err(|e| FitError::Model {
             path: path.to_owned(),
@@ -794,65 +792,61 @@ impl Fit {
                 header.version
             )));
         }
-        let c: Checkpoint = serde_json::from_slice(&text).map_err(|e| {
+        let c: Checkpoint<FitState> = serde_json::from_slice(&text).map_err(|e| {
             bad(format!(
                 "malformed checkpoint (line {}, column {}): {e}",
                 e.line(),
                 e.column()
             ))
         })?;
-        if crate::fingerprint_hex(&c.model.scene) != c.scene_fingerprint {
+        let mut state = c.state;
+        if crate::fingerprint_hex(&state.model.scene) != c.scene_fingerprint {
             return Err(bad(
                 "the embedded scene does not match its fingerprint".to_owned()
             ));
         }
-        c.params.validate()?;
-        let kernel = Arc::new(Kernel::with_params(c.model.scene.clone(), kernel_params)?);
+        state.params.validate()?;
+        let kernel = Arc::new(Kernel::with_params(
+            state.model.scene.clone(),
+            kernel_params,
+        )?);
         let reference = Arc::new(Reference::new(
             &kernel,
             c.reference_res,
             c.reference_heldout,
-            c.params.seed,
+            state.params.seed,
         ));
-        if c.cell_stats.len() != c.model.network.len()
-            || c.set_starts.first() != Some(&0)
-            || c.set_starts.windows(2).any(|w| w[0] >= w[1])
-            || c.set_starts.last().is_some_and(|&l| l >= c.samples.len())
+        if state.cell_stats.len() != state.model.network.len()
+            || state.set_starts.first() != Some(&0)
+            || state.set_starts.windows(2).any(|w| w[0] >= w[1])
+            || state
+                .set_starts
+                .last()
+                .is_some_and(|&l| l >= state.samples.len())
         {
             return Err(bad(
                 "inconsistent checkpoint (cells, sets or samples)".to_owned()
             ));
         }
+        // An interrupted fit resumes; a finished one stays finished.
+        state.stop = state.stop.filter(|&r| r != StopReason::Interrupted);
         Ok(Fit {
             kernel,
             reference,
-            params: c.params,
-            model: c.model,
-            samples: c.samples,
-            set_starts: c.set_starts,
-            cell_stats: c.cell_stats,
-            rays: c.rays,
-            steps_at_last_growth: c.steps_at_last_growth,
-            resample_not_before: c.resample_not_before,
-            train_rng: c.train_rng,
-            resample_rng: c.resample_rng,
-            history: c.history,
-            // An interrupted fit resumes; a finished one stays finished.
-            stop: c.stop.filter(|&r| r != StopReason::Interrupted),
-            wall_s: c.wall_s,
+            state,
         })
     }
 }
 
 impl Approximation for Fit {
     fn zeta(&self, s: f64, t: f64) -> f64 {
-        self.model.zeta(s, t)
+        self.state.model.zeta(s, t)
     }
     fn basis_functions(&self) -> usize {
-        self.model.basis_functions()
+        self.state.model.basis_functions()
     }
     fn memory_bytes(&self) -> usize {
-        self.model.memory_bytes()
+        self.state.model.memory_bytes()
     }
 }
 
