@@ -1,5 +1,6 @@
 //! The radiosity kernel `k(s, t)` and the learning target `ζ(s, t)` (SPEC §2).
 
+use std::borrow::Cow;
 use std::sync::OnceLock;
 
 use glam::DVec2;
@@ -7,7 +8,9 @@ use rayon::prelude::*;
 
 use crate::GeomError;
 use crate::scene::{Role, Scene, SurfacePoint};
-use crate::visibility::{Bvh, Segment, Shaft, Side, classify, open_segment_hits};
+#[cfg(test)]
+use crate::visibility::Candidates;
+use crate::visibility::{Bvh, PairEvents, Segment, Shaft, Side, classify, open_segment_hits};
 
 /// Settings of a [`Kernel`], checked by [`Kernel::with_params`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -65,12 +68,47 @@ pub enum PairVisibility {
     SameEdge,
     /// The edges never face each other: `k = 0`, no ray.
     NeverFacing,
-    /// Nothing can occlude a facing ray: `V = 1`, no ray.
+    /// No occluder cuts a facing ray between interior points of the edges: `V = 1`, no ray.
+    /// (A ray from an end point may still be checked: one running along a wall that touches
+    /// the pair's corner is blocked by the grazing rule.)
     Clear,
-    /// This edge cuts every ray between them: `V = 0`, no ray.
+    /// This edge cuts every facing ray between interior points of the two edges: `V = 0`.
     Blocked(usize),
     /// Rays are needed, against these occluders only.
     Rays(Vec<usize>),
+}
+
+/// How visibility behaves over all facing rays between interior points of two parent surface
+/// edges, known from geometry alone (see [`Kernel::pair_class`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PairClass {
+    /// The same parent edge, or edges that never face each other: `k = 0`.
+    Zero,
+    /// Every such ray is visible: `V = 1`.
+    Visible,
+    /// Every such ray is blocked: `V = 0`.
+    Hidden,
+    /// Some rays are blocked and some are not; the boundaries are the curves of the pair's
+    /// [`Kernel::visibility_events`].
+    Varies,
+}
+
+/// The kernel at one `(s, t)` without its visibility: what geometry gives without a ray.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Unoccluded {
+    /// Rank of the sender's parent surface edge (its place among the parent surface edges in
+    /// parameter order; pieces of one subdivided edge share it).
+    pub sender: usize,
+    /// Rank of the receiver's parent surface edge.
+    pub receiver: usize,
+    /// The sender point `x = point(s)`.
+    pub x: DVec2,
+    /// The receiver point `y = point(t)`.
+    pub y: DVec2,
+    /// `ρ(e_y) · G(x, y)`: `k(s, t)` when `x` and `y` see each other (0 on one parent edge).
+    pub k: f64,
+    /// `E'(e_x) · ρ(e_y) · G(x, y)`: `ζ(s, t)` when `x` and `y` see each other.
+    pub zeta: f64,
 }
 
 /// What the hot loop needs of one parent edge, packed together.
@@ -230,6 +268,100 @@ impl Kernel {
         self.parents[gx].weight * self.k_parents(gx, ux, gy, uy)
     }
 
+    /// `k` and `ζ` at `(s, t)` as if nothing occluded: `ζ(s, t) = unoccluded(s, t).zeta · V(x, y)`.
+    /// No ray is cast.
+    #[must_use]
+    #[inline]
+    pub fn unoccluded(&self, s: f64, t: f64) -> Unoccluded {
+        let (gx, ux) = self.scene.locate(s);
+        let (gy, uy) = self.scene.locate(t);
+        let (px, py) = (&self.parents[gx], &self.parents[gy]);
+        let x = px.a + px.d * ux;
+        let y = py.a + py.d * uy;
+        let k = if gx == gy {
+            0.0
+        } else {
+            py.reflectance * self.geometry(gx, x, gy, y)
+        };
+        Unoccluded {
+            sender: px.rank,
+            receiver: py.rank,
+            x,
+            y,
+            k,
+            zeta: px.weight * k,
+        }
+    }
+
+    /// Number of parent surface edges (the ranks of [`Unoccluded`] run over `0..this`).
+    #[must_use]
+    pub fn surface_parents(&self) -> usize {
+        self.surface_parents.len()
+    }
+
+    /// `E'` of the parent surface edge of rank `rank` (see [`Kernel::source_weight`]).
+    ///
+    /// # Panics
+    /// If `rank >= surface_parents()`.
+    #[must_use]
+    pub fn source_weight_of_rank(&self, rank: usize) -> f64 {
+        self.parents[self.surface_parents[rank]].weight
+    }
+
+    /// How visibility behaves between the parent surface edges of ranks `a` and `b`, without a
+    /// ray (symmetric). Exact for every facing ray between interior points of the two edges.
+    ///
+    /// # Panics
+    /// If a rank is `>= surface_parents()`.
+    #[must_use]
+    pub fn pair_class(&self, a: usize, b: usize) -> PairClass {
+        if a == b {
+            return PairClass::Zero;
+        }
+        let (ga, gb) = (self.surface_parents[a], self.surface_parents[b]);
+        let class = |shaft: &Shaft| match shaft {
+            Shaft::NoFacing => PairClass::Zero,
+            Shaft::Clear => PairClass::Visible,
+            Shaft::Blocked(_) => PairClass::Hidden,
+            Shaft::Candidates(c) => match c.interior {
+                Some(true) => PairClass::Visible,
+                Some(false) => PairClass::Hidden,
+                None => PairClass::Varies,
+            },
+        };
+        match self.shaft(ga, gb) {
+            Some(shaft) => class(shaft),
+            None => class(&self.classify_ranks(a.min(b), a.max(b))),
+        }
+    }
+
+    /// Where visibility can change between the parent surface edges of ranks `a` (the sender
+    /// side, `x`) and `b` (the receiver side, `y`): see [`PairEvents`]. `None` unless
+    /// [`Kernel::pair_class`] is [`PairClass::Varies`]. No ray is cast.
+    ///
+    /// # Panics
+    /// If a rank is `>= surface_parents()`.
+    #[must_use]
+    pub fn visibility_events(&self, a: usize, b: usize) -> Option<Cow<'_, PairEvents>> {
+        if a == b {
+            return None;
+        }
+        let (ga, gb) = (self.surface_parents[a], self.surface_parents[b]);
+        // The shaft is stored for the lower rank first.
+        let which = usize::from(a > b);
+        match self.shaft(ga, gb) {
+            Some(Shaft::Candidates(c)) => c.events.as_ref().map(|e| Cow::Borrowed(&e[which])),
+            Some(_) => None,
+            None => match self.classify_ranks(a.min(b), a.max(b)) {
+                Shaft::Candidates(c) => c.events.map(|e| {
+                    let [forward, backward] = *e;
+                    Cow::Owned(if which == 0 { forward } else { backward })
+                }),
+                _ => None,
+            },
+        }
+    }
+
     /// Everything about one `(s, t)`: both points, `G`, `V`, `k` and `ζ`.
     #[must_use]
     pub fn eval(&self, s: f64, t: f64) -> KernelSample {
@@ -381,7 +513,11 @@ impl Kernel {
             Shaft::NoFacing => PairVisibility::NeverFacing,
             Shaft::Clear => PairVisibility::Clear,
             Shaft::Blocked(g) => PairVisibility::Blocked(edge(*g)),
-            Shaft::Candidates(c) => PairVisibility::Rays(c.iter().map(|&g| edge(g)).collect()),
+            Shaft::Candidates(c) => match c.interior {
+                Some(true) => PairVisibility::Clear,
+                Some(false) => PairVisibility::Blocked(edge(c.occluders[0])),
+                None => PairVisibility::Rays(c.occluders.iter().map(|&g| edge(g)).collect()),
+            },
         })
     }
 
@@ -390,6 +526,14 @@ impl Kernel {
     fn classify_ranks(&self, r0: usize, r1: usize) -> Shaft {
         let (g0, g1) = (self.surface_parents[r0], self.surface_parents[r1]);
         classify(&self.segments, &self.bvh, self.side(g0), self.side(g1))
+    }
+
+    /// Whether `p` is on parent `g` but not one of its end points (a point of the
+    /// parameterization at `u` strictly between 0 and 1).
+    #[inline]
+    fn strictly_inside(&self, p: DVec2, g: usize) -> bool {
+        let s = self.segments[g];
+        p != s.a && p != s.b
     }
 
     /// Whether `p` is within rounding of parent `g` (false for `usize::MAX`): a loose check,
@@ -479,13 +623,15 @@ impl Kernel {
                 return match shaft {
                     Shaft::Clear => true,
                     Shaft::Blocked(_) => false,
-                    Shaft::Candidates(c) if c.len() <= 8 => !c.iter().any(|&i| {
-                        let s = self.segments[i as usize];
-                        open_segment_hits(x, y, s.a, s.b)
-                    }),
-                    Shaft::Candidates(_) | Shaft::NoFacing => {
-                        !self.bvh.any_hit(&self.segments, x, y, gx, gy)
-                    }
+                    Shaft::Candidates(c) => match c.interior {
+                        Some(v) if self.strictly_inside(x, gx) && self.strictly_inside(y, gy) => v,
+                        _ if c.occluders.len() <= 8 => !c.occluders.iter().any(|&i| {
+                            let s = self.segments[i as usize];
+                            open_segment_hits(x, y, s.a, s.b)
+                        }),
+                        _ => !self.bvh.any_hit(&self.segments, x, y, gx, gy),
+                    },
+                    Shaft::NoFacing => !self.bvh.any_hit(&self.segments, x, y, gx, gy),
                 };
             }
         }
@@ -863,9 +1009,29 @@ mod tests {
             shaft(vec![Edge::blocker(v(-1.0, 0.5), v(2.0, 0.5))]),
             Shaft::Blocked(2)
         );
+        // A short floating blocker: its two end points are the events where V changes.
+        let events = |extra: Vec<Edge>| {
+            let mut edges = vec![floor, ceiling];
+            edges.extend(extra);
+            let kernel = Kernel::new(Scene::new(edges).unwrap());
+            assert_eq!(kernel.pair_class(0, 1), PairClass::Varies);
+            let e = kernel.visibility_events(0, 1).unwrap().into_owned();
+            assert_eq!(e.sub_pair(v(0.3, 0.0), v(0.7, 1.0)), 0, "no sub-pairs");
+            e.points(0).to_vec()
+        };
         assert_eq!(
-            shaft(vec![Edge::blocker(v(0.2, 0.5), v(0.4, 0.5))]),
-            Shaft::Candidates(vec![2].into())
+            events(vec![Edge::blocker(v(0.2, 0.5), v(0.4, 0.5))]),
+            vec![v(0.2, 0.5), v(0.4, 0.5)]
+        );
+        // A blocker standing on the floor: both its foot (on the floor) and its top are events;
+        // one crossing the floor gives its top and the crossing point.
+        assert_eq!(
+            events(vec![Edge::blocker(v(0.5, 0.0), v(0.5, 0.3))]),
+            vec![v(0.5, 0.0), v(0.5, 0.3)]
+        );
+        assert_eq!(
+            events(vec![Edge::blocker(v(0.5, -0.5), v(0.5, 0.3))]),
+            vec![v(0.5, 0.3), v(0.5, 0.0)]
         );
         // A blocker outside the shaft, and one behind the floor.
         assert_eq!(
@@ -886,15 +1052,20 @@ mod tests {
         for (a, b) in [(0, 1), (1, 2), (2, 3), (0, 3)] {
             assert_eq!(kernel.shaft(a, b), Some(&Shaft::Clear), "{a} {b}");
         }
+        // They touch it only at its corners, so no event: every ray between interior points
+        // is visible, and only rays from a corner are still tested against them.
         assert_eq!(
             kernel.shaft(0, 2),
-            Some(&Shaft::Candidates(vec![1, 3].into()))
+            Some(&Shaft::Candidates(Candidates {
+                occluders: vec![1, 3].into(),
+                events: None,
+                interior: Some(true),
+            }))
         );
+        assert_eq!(kernel.pair_class(0, 2), PairClass::Visible);
         assert!(!kernel.visible(v(1.0, 0.0), 0, v(1.0, 1.0), 2));
-        assert_eq!(
-            kernel.pair_visibility(0, 2),
-            Some(PairVisibility::Rays(vec![1, 3]))
-        );
+        assert!(kernel.visible(v(0.5, 0.0), 0, v(0.25, 1.0), 2));
+        assert_eq!(kernel.pair_visibility(0, 2), Some(PairVisibility::Clear));
         assert_eq!(kernel.pair_visibility(0, 1), Some(PairVisibility::Clear));
         assert_eq!(kernel.pair_visibility(0, 0), Some(PairVisibility::SameEdge));
         assert_eq!(kernel.pair_visibility(0, 9), None);
@@ -997,6 +1168,64 @@ mod tests {
                     // coincident edges, which a non-snapped random scene has with probability 0.
                     let (s, t) = (r.random_range(0.0..1.0), r.random_range(0.0..1.0));
                     prop_assert_eq!(kernel.k(s, t), kernel.k_naive(s, t));
+                }
+            }
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 200, ..ProptestConfig::default() })]
+
+        /// `V` is constant between the curves of the event points: two facing rays of one pair
+        /// that see every event point on the same side have the same visibility; pairs said to
+        /// be `Visible` or `Hidden` are so for every ray between interior points.
+        #[test]
+        fn visibility_is_constant_between_event_curves(seed in any::<u64>(), snap in any::<bool>()) {
+            let kernel = Kernel::new(random_scene(seed, snap));
+            let n = kernel.surface_parents();
+            let mut r = rng(seed ^ 0xe7e);
+            let side = |x: DVec2, y: DVec2, v: DVec2| crate::visibility::orient(x, y, v) > 0.0;
+            for _ in 0..50 {
+                let (a, b) = (r.random_range(0..n), r.random_range(0..n));
+                // Where an occluder lies on the line of one of the two edges, rounding of x or
+                // y decides whether a ray touches it (see `visible_brute_force`): skip.
+                let (ga, gb) = (kernel.surface_parents[a], kernel.surface_parents[b]);
+                let on_line = |g: usize, e: &crate::Edge| {
+                    let l = kernel.segments[g];
+                    use crate::visibility::orient;
+                    orient(l.a, l.b, e.a) == 0.0 && orient(l.a, l.b, e.b) == 0.0
+                };
+                if kernel.scene().edges().iter().enumerate().any(|(i, e)| {
+                    let g = kernel.scene().group_of(i);
+                    g != ga && g != gb && (on_line(ga, e) || on_line(gb, e))
+                }) {
+                    continue;
+                }
+                let class = kernel.pair_class(a, b);
+                let events = kernel.visibility_events(a, b);
+                prop_assert_eq!(class == PairClass::Varies, events.is_some(), "{:?} {:?}", class, events);
+                prop_assert_eq!(class, kernel.pair_class(b, a), "symmetric");
+                let mut seen: Vec<((DVec2, DVec2), bool)> = Vec::new();
+                for _ in 0..200 {
+                    let (s, t) = (r.random_range(0.0..1.0), r.random_range(0.0..1.0));
+                    let u = kernel.unoccluded(s, t);
+                    if (u.sender, u.receiver) != (a, b) || u.k == 0.0 {
+                        continue;
+                    }
+                    let visible = kernel.k(s, t) > 0.0;
+                    match class {
+                        // Only rounding can make G > 0 here (e.g. two coincident edges).
+                        PairClass::Zero => {}
+                        PairClass::Visible => prop_assert!(visible),
+                        PairClass::Hidden => prop_assert!(!visible),
+                        PairClass::Varies => {
+                            let e = events.as_ref().unwrap();
+                            if let Some((_, v)) = seen.iter().find(|(ray, _)| e.same_face(*ray, (u.x, u.y))) {
+                                prop_assert_eq!(*v, visible, "same face, other V: {} {} {:?} {:?} pair {} {} events {:?}", s, t, u.x, u.y, a, b, e);
+                            }
+                            seen.push(((u.x, u.y), visible));
+                        }
+                    }
                 }
             }
         }

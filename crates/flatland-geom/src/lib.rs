@@ -51,5 +51,6 @@ mod test_support;
 pub use error::GeomError;
 pub use glam::DVec2;
 pub use io::write_atomic;
-pub use kernel::{Kernel, KernelParams, KernelSample, PairVisibility};
+pub use kernel::{Kernel, KernelParams, KernelSample, PairClass, PairVisibility, Unoccluded};
 pub use scene::{Edge, Role, Scene, SurfacePoint};
+pub use visibility::PairEvents;

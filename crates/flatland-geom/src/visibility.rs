@@ -247,8 +247,99 @@ pub(crate) enum Shaft {
     Clear,
     /// This occluder cuts every segment from `P` to `Q`: `V = 0`, no ray.
     Blocked(u32),
-    /// Only these occluders (sorted) can cut a facing segment.
-    Candidates(Box<[u32]>),
+    /// Only these occluders can cut a facing segment; see [`Candidates`].
+    Candidates(Candidates),
+}
+
+/// The occluders of a shaft that some facing segments meet and others do not, and where the
+/// answer can change (see [`PairEvents`]).
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Candidates {
+    /// The occluders (sorted) that can cut a facing segment.
+    pub occluders: Box<[u32]>,
+    /// Where visibility changes, for rays from `P` to `Q` and from `Q` to `P`; `None` when it
+    /// cannot change between interior points.
+    pub events: Option<Box<[PairEvents; 2]>>,
+    /// Visibility of every segment between interior points of `P` and `Q`, when there are no
+    /// events (decided by one ray).
+    pub interior: Option<bool>,
+}
+
+/// Where the visibility between two parent surface edges `P` and `Q` can change.
+///
+/// Visibility between `x` on `P` and `y` on `Q` changes only where the segment `x–y` sweeps
+/// over an **event point**: an end point of an occluder (the ray starts or stops meeting it),
+/// or a point where an occluder crosses `P` or `Q` (an end of the ray crosses the occluder's
+/// line on the occluder). Every segment from `P` to `Q` lies in the convex hull of the two
+/// edges, so only event points in that closed hull matter; the end points of `P` and `Q`
+/// themselves are events only where the other edge reaches that edge's line (a ray through
+/// one of them runs along that line). With no event point, visibility is the same for all rays
+/// between interior points of `P` and `Q`.
+///
+/// **Faces.** When `P` and `Q` both lie on the boundary of their convex hull, a ray through an
+/// event point has it between its ends, so in the `(s, t)` rectangle of the pair the rays
+/// through one event point form one arc from border to border, two arcs cross at most once (one
+/// line passes through two points), and the regions where a ray has every event point on the
+/// same side are connected: visibility is constant on each. An edge that crosses the other's
+/// line is first cut there into pieces that do not, giving up to four **sub-pairs**, each with
+/// its own event points. So two rays with the same [`PairEvents::sub_pair`] and the same side
+/// of each of that sub-pair's [`PairEvents::points`] have the same visibility.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PairEvents {
+    /// The lines of `P` and `Q` (end points).
+    p: [DVec2; 2],
+    q: [DVec2; 2],
+    /// Whether `P` strictly crosses the line of `Q`, and `Q` that of `P`.
+    split_p: bool,
+    split_q: bool,
+    /// Event points of sub-pair `2·side(x) + side(y)`.
+    sub: [Box<[DVec2]>; 4],
+}
+
+impl PairEvents {
+    /// The sub-pair (0..4) of the ray from `x` on `P` to `y` on `Q`: which side of the line of
+    /// `Q` `x` is on, if `P` crosses it, and which side of the line of `P` `y` is on.
+    #[must_use]
+    #[inline]
+    pub fn sub_pair(&self, x: DVec2, y: DVec2) -> usize {
+        let sx = self.split_p && orient(self.q[0], self.q[1], x) > 0.0;
+        let sy = self.split_q && orient(self.p[0], self.p[1], y) > 0.0;
+        2 * usize::from(sx) + usize::from(sy)
+    }
+
+    /// The event points of sub-pair `sub` (empty for a sub-pair that does not exist).
+    ///
+    /// # Panics
+    /// If `sub >= 4`.
+    #[must_use]
+    pub fn points(&self, sub: usize) -> &[DVec2] {
+        &self.sub[sub]
+    }
+
+    /// Whether two rays from `P` to `Q` lie in the same face: the same sub-pair and the same
+    /// side of each of its event points. Then their visibility is the same.
+    #[must_use]
+    pub fn same_face(&self, (x1, y1): (DVec2, DVec2), (x2, y2): (DVec2, DVec2)) -> bool {
+        let sub = self.sub_pair(x1, y1);
+        sub == self.sub_pair(x2, y2)
+            && self.sub[sub]
+                .iter()
+                .all(|&v| (orient(x1, y1, v) > 0.0) == (orient(x2, y2, v) > 0.0))
+    }
+
+    /// The same events seen from `Q` to `P` (rays reversed).
+    #[must_use]
+    pub fn reversed(&self) -> PairEvents {
+        let [a, b, c, d] = self.sub.clone();
+        PairEvents {
+            p: self.q,
+            q: self.p,
+            split_p: self.split_q,
+            split_q: self.split_p,
+            // Index 2·side(x) + side(y) with the roles of x and y exchanged.
+            sub: [a, c, b, d],
+        }
+    }
 }
 
 /// One side of a shaft: a parent edge and whether it is two-sided.
@@ -304,10 +395,142 @@ pub(crate) fn classify(segments: &[Segment], bvh: &Bvh, p: Side, q: Side) -> Sha
         candidates.push(o);
     }
     if candidates.is_empty() {
-        Shaft::Clear
-    } else {
-        Shaft::Candidates(candidates.into())
+        return Shaft::Clear;
     }
+    let whole = event_points(segments, &candidates, p, q);
+    let interior = whole.is_empty().then(|| {
+        let (mp, mq) = ((p.a + p.b) * 0.5, (q.a + q.b) * 0.5);
+        !candidates.iter().any(|&i| {
+            let s = segments[i as usize];
+            open_segment_hits(mp, mq, s.a, s.b)
+        })
+    });
+    let events = (!whole.is_empty()).then(|| {
+        let forward = pair_events(segments, &candidates, p, q);
+        let backward = forward.reversed();
+        Box::new([forward, backward])
+    });
+    Shaft::Candidates(Candidates {
+        occluders: candidates.into(),
+        events,
+        interior,
+    })
+}
+
+/// The [`PairEvents`] of `p` and `q`: each edge cut where it crosses the other's line, and the
+/// event points of every resulting sub-pair.
+fn pair_events(segments: &[Segment], candidates: &[u32], p: Side, q: Side) -> PairEvents {
+    // The pieces of `own` on side 0 and side 1 of the line of `other` (one piece if it does not
+    // cross it, then on side 0).
+    let pieces = |own: Side, other: Side| -> (bool, [Option<Side>; 2]) {
+        let (oa, ob) = (
+            orient(other.a, other.b, own.a),
+            orient(other.a, other.b, own.b),
+        );
+        if !strictly_opposite(oa, ob) {
+            return (false, [Some(own), None]);
+        }
+        let z = own.a + (own.b - own.a) * (oa / (oa - ob));
+        let (first, second) = (Side { b: z, ..own }, Side { a: z, ..own });
+        // Side 1 is the positive side of the other's line.
+        let split = if oa > 0.0 {
+            [Some(second), Some(first)]
+        } else {
+            [Some(first), Some(second)]
+        };
+        (true, split)
+    };
+    let (split_p, p_pieces) = pieces(p, q);
+    let (split_q, q_pieces) = pieces(q, p);
+    let mut sub: [Box<[DVec2]>; 4] = Default::default();
+    for (sx, pp) in p_pieces.iter().enumerate() {
+        for (sy, qq) in q_pieces.iter().enumerate() {
+            if let (Some(pp), Some(qq)) = (pp, qq) {
+                sub[2 * sx + sy] = event_points(segments, candidates, *pp, *qq).into();
+            }
+        }
+    }
+    PairEvents {
+        p: [p.a, p.b],
+        q: [q.a, q.b],
+        split_p,
+        split_q,
+        sub,
+    }
+}
+
+/// The event points of the shaft between `p` and `q` with occluders `candidates` (see
+/// [`PairEvents`]): occluder end points in the closed hull of the two edges (their own end
+/// points excepted) and the points where an occluder crosses `p` or `q` inside it.
+fn event_points(segments: &[Segment], candidates: &[u32], p: Side, q: Side) -> Vec<DVec2> {
+    let corners = [p.a, p.b, q.a, q.b];
+    // A ray from x on P through P's own end point runs along P's line, so it can only reach a
+    // point y of Q on that line. Unless Q lies on P's line there (its end point there is the
+    // pair's corner, a boundary of the (s, t) rectangle), that end point of P sweeps over no ray
+    // between interior points and is no event. Likewise for Q's end points.
+    let ignorable = |e: DVec2, own: Side, other: Side| {
+        (e == own.a || e == own.b)
+            && !on_closed_segment(e, other.a, other.b)
+            && !strictly_opposite(orient(own.a, own.b, other.a), orient(own.a, own.b, other.b))
+    };
+    let corner_of_only_one = |e: DVec2| ignorable(e, p, q) || ignorable(e, q, p);
+    let mut events: Vec<DVec2> = Vec::new();
+    let push = |e: DVec2, events: &mut Vec<DVec2>| {
+        if !corner_of_only_one(e) && !events.contains(&e) {
+            events.push(e);
+        }
+    };
+    for &i in candidates {
+        let s = segments[i as usize];
+        for e in [s.a, s.b] {
+            if in_closed_hull(e, &corners) {
+                push(e, &mut events);
+            }
+        }
+        for edge in [p, q] {
+            if let Some(c) = proper_crossing(s.a, s.b, edge.a, edge.b) {
+                push(c, &mut events);
+            }
+        }
+    }
+    events
+}
+
+fn strictly_opposite(u: f64, v: f64) -> bool {
+    (u > 0.0 && v < 0.0) || (u < 0.0 && v > 0.0)
+}
+
+/// Whether `e` lies on the closed segment `[a, b]` (exactly).
+fn on_closed_segment(e: DVec2, a: DVec2, b: DVec2) -> bool {
+    orient(a, b, e) == 0.0
+        && e.x >= a.x.min(b.x)
+        && e.x <= a.x.max(b.x)
+        && e.y >= a.y.min(b.y)
+        && e.y <= a.y.max(b.y)
+}
+
+/// Whether `e` lies in the closed convex hull of the four points (in one of their triangles).
+fn in_closed_hull(e: DVec2, pts: &[DVec2; 4]) -> bool {
+    const TRIANGLES: [[usize; 3]; 4] = [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]];
+    TRIANGLES.iter().any(|&[i, j, k]| {
+        let (a, b, c) = (pts[i], pts[j], pts[k]);
+        let o = [orient(a, b, e), orient(b, c, e), orient(c, a, e)];
+        o.iter().all(|&v| v >= 0.0) || o.iter().all(|&v| v <= 0.0)
+    })
+}
+
+/// The point where segment `[a, b]` crosses segment `[c, d]` strictly inside both (not at an
+/// end point, not collinear), rounded; `None` otherwise.
+fn proper_crossing(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> Option<DVec2> {
+    let (o1, o2) = (orient(a, b, c), orient(a, b, d));
+    let (o3, o4) = (orient(c, d, a), orient(c, d, b));
+    if !(strictly_opposite(o1, o2) && strictly_opposite(o3, o4)) {
+        return None;
+    }
+    // o3 and o4 are twice the signed areas of (c, d, a) and (c, d, b): the crossing divides
+    // [a, b] in their ratio.
+    let u = o3 / (o3 - o4);
+    Some(a + (b - a) * u)
 }
 
 /// Whether the closed segment `s` cannot meet any facing open segment from `P` to `Q`, decided
@@ -493,11 +716,16 @@ mod tests {
                         Shaft::Clear => prop_assert!(truth, "Clear but blocked: {x:?} {y:?}"),
                         Shaft::Blocked(_) => prop_assert!(!truth, "Blocked but visible: {x:?} {y:?}"),
                         Shaft::Candidates(c) => {
-                            let by_candidates = !c.iter().any(|&k| {
+                            let by_candidates = !c.occluders.iter().any(|&k| {
                                 let s = segments[k as usize];
                                 open_segment_hits(x, y, s.a, s.b)
                             });
                             prop_assert_eq!(by_candidates, truth);
+                            let interior = ![segments[i].a, segments[i].b].contains(&x)
+                                && ![segments[j].a, segments[j].b].contains(&y);
+                            if let (Some(v), true) = (c.interior, interior) {
+                                prop_assert_eq!(v, truth, "constant interior visibility {:?} {:?}", x, y);
+                            }
                         }
                     }
                 }
