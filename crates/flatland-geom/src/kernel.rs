@@ -1184,7 +1184,6 @@ mod tests {
             let kernel = Kernel::new(random_scene(seed, snap));
             let n = kernel.surface_parents();
             let mut r = rng(seed ^ 0xe7e);
-            let side = |x: DVec2, y: DVec2, v: DVec2| crate::visibility::orient(x, y, v) > 0.0;
             for _ in 0..50 {
                 let (a, b) = (r.random_range(0..n), r.random_range(0..n));
                 // Where an occluder lies on the line of one of the two edges, rounding of x or
