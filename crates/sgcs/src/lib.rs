@@ -111,6 +111,6 @@ mod refit;
 mod test_support;
 
 pub use error::SgcsError;
-pub use network::{CellId, FORMAT_VERSION, Network, SIMPLEX_DIM, StepOutcome};
-pub use params::{InsertRule, OutputRule, Params};
+pub use network::{CellId, FORMAT_VERSION, Gate, Network, Open, SIMPLEX_DIM, StepOutcome};
+pub use params::{InsertRule, Insertion, OutputMode, OutputRule, Params, Resource};
 pub use refit::{RefitReport, RefitSystem};

@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 
 use crate::index::{Index, dist_sq};
-use crate::{InsertRule, OutputRule, Params, SgcsError};
+use crate::{InsertRule, Insertion, OutputMode, OutputRule, Params, Resource, SgcsError};
 
 /// A cell's index. Stable: cells are never removed, a new cell gets id `len() - 1`.
 pub type CellId = usize;
@@ -24,6 +24,62 @@ pub(crate) const MIN_WIDTH: f64 = 1e-100;
 /// Largest magnitude accepted in inputs and targets: squares stay finite.
 const MAX_ABS_VALUE: f64 = 1e100;
 
+/// Which cells may respond to, and learn from, one input.
+///
+/// A caller that knows where its target jumps (a discontinuity it can compute without a sample)
+/// gives each query a gate that admits only the cells on the input's side of every such jump;
+/// then no cell straddles one, and [`OutputMode::Normalized`] reproduces a piecewise constant
+/// target exactly up to the jumps. A gated query uses only admitted cells: output, best
+/// matching unit, weight updates and movement. When no admitted cell is active, the output
+/// falls back to the ungated one (the network's best guess), the sample's error is booked on
+/// the nearest cell (so growth goes there) and nothing moves or learns.
+///
+/// A gate may also **name** its cells ([`Gate::region`]): all the cells of the input's region,
+/// ascending. Then exactly those respond, however far away — no spatial search and no
+/// activation cutoff; with [`OutputMode::Normalized`] their weights are computed relative to
+/// the nearest one (in `|ξ − w_c|² / δ_c²`), so the output never underflows to 0: a region
+/// with one cell anywhere in it has that cell's value. Where the region has no cell, the
+/// output is the normalised blend of [`Gate::fallback`] (if it names any cells) or the ungated
+/// output.
+pub trait Gate {
+    /// Whether `cell` may respond to the input.
+    fn admits(&self, cell: CellId) -> bool;
+    /// True only for a gate that admits every cell (the paper's network, [`Open`]).
+    fn is_open(&self) -> bool {
+        false
+    }
+    /// Every admitted cell, ascending, when the caller keeps them by region.
+    fn region(&self) -> Option<&[CellId]> {
+        None
+    }
+    /// With [`Gate::region`]: the cells to blend when the region has none (ascending).
+    fn fallback(&self) -> Option<&[CellId]> {
+        None
+    }
+}
+
+/// The gate that admits every cell: the ungated network.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Open;
+
+impl Gate for Open {
+    #[inline]
+    fn admits(&self, _: CellId) -> bool {
+        true
+    }
+    #[inline]
+    fn is_open(&self) -> bool {
+        true
+    }
+}
+
+impl<F: Fn(CellId) -> bool> Gate for F {
+    #[inline]
+    fn admits(&self, cell: CellId) -> bool {
+        self(cell)
+    }
+}
+
 /// What one learning step did: the hook for callers keeping their own per-cell statistics.
 #[derive(Clone, Copy, Debug)]
 pub struct StepOutcome {
@@ -33,6 +89,8 @@ pub struct StepOutcome {
     pub error_sq: f64,
     /// The cell inserted at the end of this step, if any (always `len() - 1`).
     pub inserted: Option<CellId>,
+    /// Whether some admitted cell was active (always true ungated): the cells moved and learned.
+    pub covered: bool,
 }
 
 /// A supervised growing cell structures network `Rⁿ → Rᵐ`. See the crate docs.
@@ -59,7 +117,15 @@ pub struct Network {
     /// `τ_cnt` as of step `stamp[c]`.
     cnt: Vec<f64>,
     stamp: Vec<u64>,
+    /// [`Insertion::WorstSample`]: per cell the largest weighted squared error of a sample it
+    /// won, as of step `worst_stamp[c]` (decayed like the counters), and that sample.
+    worst_err: Vec<f64>,
+    worst_stamp: Vec<u64>,
+    worst_in: Vec<f64>,
+    worst_out: Vec<f64>,
     steps: u64,
+    /// Cells whose position or width changed in the last step.
+    changed: Vec<CellId>,
     index: Index,
     scratch: Scratch,
 }
@@ -69,6 +135,7 @@ struct Scratch {
     stack: Vec<u32>,
     ids: Vec<u32>,
     found: Vec<(u32, f64)>,
+    admitted: Vec<(u32, f64)>,
     kappa: Vec<f64>,
     touched: Vec<CellId>,
 }
@@ -154,6 +221,7 @@ impl Network {
             vec![0.0; 3],
             vec![0.0; 3],
             vec![0; 3],
+            None,
             0,
         )
     }
@@ -170,9 +238,25 @@ impl Network {
         err_mean: Vec<f64>,
         cnt: Vec<f64>,
         stamp: Vec<u64>,
+        worst: Option<WorstSamples>,
         steps: u64,
     ) -> Result<Network, SgcsError> {
         let len = err_mean.len();
+        let worst = worst.unwrap_or_else(|| WorstSamples {
+            error: vec![0.0; len],
+            stamp: vec![0; len],
+            inputs: vec![0.0; len * n],
+            targets: vec![0.0; len * m],
+        });
+        if worst.error.len() != len
+            || worst.stamp.len() != len
+            || worst.inputs.len() != len * n
+            || worst.targets.len() != len * m
+        {
+            return Err(SgcsError::Corrupt(
+                "worst-sample arrays disagree in length".into(),
+            ));
+        }
         let mut nbrs = vec![Vec::new(); len];
         let mut cell_tris = vec![Vec::new(); len];
         for (t, tri) in tris.iter().enumerate() {
@@ -206,7 +290,12 @@ impl Network {
             err_mean,
             cnt,
             stamp,
+            worst_err: worst.error,
+            worst_stamp: worst.stamp,
+            worst_in: worst.inputs,
+            worst_out: worst.targets,
             steps,
+            changed: Vec::new(),
             index: Index::default(),
             scratch: Scratch::default(),
         };
@@ -263,6 +352,13 @@ impl Network {
         self.steps
     }
 
+    /// The cells whose position or width changed in the last step (ascending, with repeats
+    /// removed; an inserted cell included): what a caller keeping per-cell data derived from
+    /// positions and widths must refresh.
+    pub fn changed_cells(&self) -> &[CellId] {
+        &self.changed
+    }
+
     /// One learning step on the sample `(xi, zeta)`, including an insertion every `λ` steps.
     ///
     /// # Panics
@@ -275,8 +371,27 @@ impl Network {
     /// [`Network::step`] that returns an error instead of panicking on a bad sample (and then
     /// leaves the network unchanged).
     pub fn try_step(&mut self, xi: &[f64], zeta: &[f64]) -> Result<StepOutcome, SgcsError> {
+        self.try_step_gated(xi, zeta, 1.0, &Open)
+    }
+
+    /// One learning step on a sample with importance `weight` (its squared error counts
+    /// `weight` times in the resource), using only the cells `gate` admits (see [`Gate`]).
+    /// `try_step_gated(xi, zeta, 1.0, &Open)` is [`Network::try_step`].
+    pub fn try_step_gated<G: Gate>(
+        &mut self,
+        xi: &[f64],
+        zeta: &[f64],
+        weight: f64,
+        gate: &G,
+    ) -> Result<StepOutcome, SgcsError> {
         check_values("xi", xi, self.n)?;
         check_values("zeta", zeta, self.m)?;
+        if !(weight.is_finite() && (0.0..=MAX_ABS_VALUE).contains(&weight)) {
+            return Err(SgcsError::NonFinite {
+                what: "sample weight",
+                value: weight,
+            });
+        }
         let m = self.m;
         self.steps += 1;
         let now = self.steps;
@@ -286,57 +401,104 @@ impl Network {
         }
         let mut sc = std::mem::take(&mut self.scratch);
 
-        // Best matching unit and the activations above the cutoff, in id order.
-        let s = self.index.nearest(xi, &self.pos, &mut sc.stack);
-        self.collect_active(xi, &mut sc.stack, &mut sc.ids, &mut sc.found);
+        // Best matching unit and the activations above the cutoff, in id order (or the
+        // gate's region, weighted relative to its nearest cell).
+        let (s, covered) = if let Some(region) = gate.region() {
+            match self.nearest_in(xi, region) {
+                Some(c) => {
+                    self.region_weights(xi, region, &mut sc.found);
+                    (c, true)
+                }
+                None => {
+                    match gate.fallback().filter(|f| !f.is_empty()) {
+                        Some(list) => self.region_weights(xi, list, &mut sc.found),
+                        None => self.collect_active(xi, &mut sc.stack, &mut sc.ids, &mut sc.found),
+                    }
+                    (self.index.nearest(xi, &self.pos, &mut sc.stack), false)
+                }
+            }
+        } else if gate.is_open() {
+            self.collect_active(xi, &mut sc.stack, &mut sc.ids, &mut sc.found);
+            (self.index.nearest(xi, &self.pos, &mut sc.stack), true)
+        } else {
+            self.collect_active(xi, &mut sc.stack, &mut sc.ids, &mut sc.found);
+            sc.admitted.clear();
+            sc.admitted
+                .extend(sc.found.iter().filter(|e| gate.admits(e.0 as usize)));
+            match self.nearest_of(xi, &sc.admitted) {
+                Some(c) => {
+                    std::mem::swap(&mut sc.found, &mut sc.admitted);
+                    (c, true)
+                }
+                None => (self.index.nearest(xi, &self.pos, &mut sc.stack), false),
+            }
+        };
 
-        // Output and error.
+        // Output and error (against the ungated fallback where no admitted cell is active).
         sc.kappa.clear();
         sc.kappa.resize(m, 0.0);
-        let mut sum_m2 = 0.0;
-        for &(c, a) in &sc.found {
-            let v = &self.out[c as usize * m..(c as usize + 1) * m];
-            for j in 0..m {
-                sc.kappa[j] += v[j] * a;
-            }
-            sum_m2 += a * a;
-        }
+        let (sum_m, sum_m2) = self.combine(&sc.found, &mut sc.kappa);
         let mut error_sq = 0.0;
         for j in 0..m {
             sc.kappa[j] = zeta[j] - sc.kappa[j]; // now the error ζ − κ
             error_sq += sc.kappa[j] * sc.kappa[j];
         }
 
-        // Output weights (delta rule, normalised by default).
-        let gain = match self.params.output_rule {
-            OutputRule::Normalized => self.params.eta / sum_m2.max(1.0),
-            OutputRule::Plain => self.params.eta,
-        };
-        for &(c, a) in &sc.found {
-            let v = &mut self.out[c as usize * m..(c as usize + 1) * m];
+        if covered && self.params.output_rule == OutputRule::Local {
+            let v = &mut self.out[s * m..(s + 1) * m];
             for j in 0..m {
-                v[j] += gain * sc.kappa[j] * a;
+                v[j] += self.params.eta * (zeta[j] - v[j]);
+            }
+        } else if covered {
+            // Output weights (delta rule; normalised by default).
+            let gain = match (self.params.output_mode, self.params.output_rule) {
+                // φ_c = M_c / Σ M sums to 1, so Σ φ² ≤ 1 and NLMS is the plain rule.
+                (OutputMode::Normalized, _) if sum_m > 0.0 => self.params.eta / sum_m,
+                (OutputMode::Normalized, _) => 0.0,
+                (OutputMode::Sum, OutputRule::Normalized) => self.params.eta / sum_m2.max(1.0),
+                (OutputMode::Sum, OutputRule::Plain) => self.params.eta,
+                (OutputMode::Sum, OutputRule::Local) => unreachable!("handled above"),
+            };
+            for &(c, a) in &sc.found {
+                let v = &mut self.out[c as usize * m..(c as usize + 1) * m];
+                for j in 0..m {
+                    v[j] += gain * sc.kappa[j] * a;
+                }
             }
         }
 
         // Resource counters of the BMU (everyone else decays lazily).
-        self.touch(s, error_sq, now);
+        let weighted = weight * error_sq;
+        self.touch(s, weighted, now);
+        if self.params.insertion == Insertion::WorstSample {
+            self.remember_worst(s, weighted, xi, zeta, now);
+        }
 
-        // Move the BMU and its neighbours; widths change for them and their neighbours.
-        self.move_cell(s, xi, self.params.eps_b);
+        // Move the BMU and its (admitted) neighbours; widths change for them and their
+        // neighbours.
         sc.touched.clear();
-        sc.touched.push(s);
-        for i in 0..self.nbrs[s].len() {
-            let b = self.nbrs[s][i];
-            self.move_cell(b, xi, self.params.eps_n);
-            sc.touched.push(b);
-            sc.touched.extend_from_slice(&self.nbrs[b]);
+        if covered {
+            self.move_cell(s, xi, self.params.eps_b);
+            sc.touched.push(s);
+            // Every neighbour's width depends on s; a neighbour that moves also changes its own
+            // neighbours' widths.
+            sc.touched.extend_from_slice(&self.nbrs[s]);
+            for i in 0..self.nbrs[s].len() {
+                let b = self.nbrs[s][i];
+                if !gate.admits(b) {
+                    continue;
+                }
+                self.move_cell(b, xi, self.params.eps_n);
+                sc.touched.extend_from_slice(&self.nbrs[b]);
+            }
+            sc.touched.sort_unstable();
+            sc.touched.dedup();
+            for &c in &sc.touched {
+                self.refresh_width(c);
+            }
         }
-        sc.touched.sort_unstable();
-        sc.touched.dedup();
-        for &c in &sc.touched {
-            self.refresh_width(c);
-        }
+        self.changed.clear();
+        self.changed.extend_from_slice(&sc.touched);
         self.scratch = sc;
 
         let inserted = if now.is_multiple_of(u64::from(self.params.lambda)) {
@@ -348,7 +510,90 @@ impl Network {
             bmu: s,
             error_sq,
             inserted,
+            covered,
         })
+    }
+
+    /// The cell of `list` nearest to `xi` (lowest id on ties), if any.
+    fn nearest_in(&self, xi: &[f64], list: &[CellId]) -> Option<CellId> {
+        let n = self.n;
+        let mut best: Option<(f64, CellId)> = None;
+        for &c in list {
+            let d2 = dist_sq(&self.pos[c * n..(c + 1) * n], xi);
+            if best.is_none_or(|(b, _)| d2 < b) {
+                best = Some((d2, c));
+            }
+        }
+        best.map(|b| b.1)
+    }
+
+    /// The weights of the cells of `list` at `xi` into `out`: their activations, or for
+    /// [`OutputMode::Normalized`] their activations divided by the largest one (the same
+    /// normalised output, without underflow however far the cells are).
+    fn region_weights(&self, xi: &[f64], list: &[CellId], out: &mut Vec<(u32, f64)>) {
+        let n = self.n;
+        out.clear();
+        out.extend(list.iter().map(|&c| {
+            let d2 = dist_sq(&self.pos[c * n..(c + 1) * n], xi);
+            let w = self.width[c];
+            (c as u32, d2 / (w * w))
+        }));
+        let shift = match self.params.output_mode {
+            OutputMode::Normalized => out.iter().map(|e| e.1).fold(f64::INFINITY, f64::min),
+            OutputMode::Sum => 0.0,
+        };
+        for e in out.iter_mut() {
+            let a = e.1 - shift;
+            e.1 = if a > 700.0 { 0.0 } else { (-a).exp() };
+        }
+    }
+
+    /// The cell of `list` nearest to `xi` (lowest id on ties), if any.
+    fn nearest_of(&self, xi: &[f64], list: &[(u32, f64)]) -> Option<CellId> {
+        let n = self.n;
+        let mut best: Option<(f64, CellId)> = None;
+        for &(c, _) in list {
+            let c = c as usize;
+            let d2 = dist_sq(&self.pos[c * n..(c + 1) * n], xi);
+            if best.is_none_or(|(b, _)| d2 < b) {
+                best = Some((d2, c));
+            }
+        }
+        best.map(|b| b.1)
+    }
+
+    /// The output of the active cells `list` into `out` (zeroed by the caller) by the output
+    /// mode; returns `(Σ M_c, Σ M_c²)`.
+    #[inline]
+    fn combine(&self, list: &[(u32, f64)], out: &mut [f64]) -> (f64, f64) {
+        let m = self.m;
+        let (mut sum, mut sum2) = (0.0, 0.0);
+        for &(c, a) in list {
+            let v = &self.out[c as usize * m..(c as usize + 1) * m];
+            for j in 0..m {
+                out[j] += v[j] * a;
+            }
+            sum += a;
+            sum2 += a * a;
+        }
+        if self.params.output_mode == OutputMode::Normalized && sum > 0.0 {
+            for o in out.iter_mut() {
+                *o /= sum;
+            }
+        }
+        (sum, sum2)
+    }
+
+    /// Keeps the sample with the largest weighted squared error `c` has won (decayed).
+    fn remember_worst(&mut self, c: CellId, e2: f64, xi: &[f64], zeta: &[f64], now: u64) {
+        let (n, m) = (self.n, self.m);
+        let held = self.worst_err[c] * decay(self.ln_keep(), now - self.worst_stamp[c]);
+        if e2 > 0.0 && e2 >= held {
+            self.worst_err[c] = flush(e2);
+            self.worst_stamp[c] = now;
+            self.worst_in[c * n..(c + 1) * n].copy_from_slice(xi);
+            self.worst_out[c * m..(c + 1) * m].copy_from_slice(zeta);
+        }
     }
 
     fn move_cell(&mut self, c: CellId, xi: &[f64], rate: f64) {
@@ -472,20 +717,13 @@ impl Network {
             .collect()
     }
 
-    /// The network output `κ(ξ) = Σ_c v_c M_c(ξ)` into `out` (length `m`).
+    /// The network output `κ(ξ) = Σ_c v_c M_c(ξ)` (divided by `Σ_c M_c(ξ)` with
+    /// [`OutputMode::Normalized`]) into `out` (length `m`).
     ///
     /// # Panics
     /// If `xi.len() != n` or `out.len() != m`.
     pub fn predict(&self, xi: &[f64], out: &mut [f64]) {
-        assert_eq!(out.len(), self.m, "sgcs: output slice has the wrong length");
-        out.fill(0.0);
-        let m = self.m;
-        for (c, a) in self.active(xi) {
-            let v = &self.out[c as usize * m..(c as usize + 1) * m];
-            for j in 0..m {
-                out[j] += v[j] * a;
-            }
-        }
+        self.predict_gated(xi, &Open, out);
     }
 
     /// `κ(ξ)` of a network with one output (the first output otherwise).
@@ -493,11 +731,54 @@ impl Network {
     /// # Panics
     /// If `xi.len() != n` (as every query taking `xi`).
     pub fn predict1(&self, xi: &[f64]) -> f64 {
-        let m = self.m;
-        self.active(xi)
-            .iter()
-            .map(|&(c, a)| self.out[c as usize * m] * a)
-            .sum()
+        self.predict1_gated(xi, &Open)
+    }
+
+    /// `κ(ξ)` from the cells `gate` admits into `out`, falling back to the ungated output when
+    /// none of them is active (see [`Gate`]). Returns the admitted cells' activation sum
+    /// (0 when it fell back).
+    ///
+    /// # Panics
+    /// If `xi.len() != n` or `out.len() != m`.
+    pub fn predict_gated<G: Gate>(&self, xi: &[f64], gate: &G, out: &mut [f64]) -> f64 {
+        assert_eq!(out.len(), self.m, "sgcs: output slice has the wrong length");
+        assert_eq!(xi.len(), self.n, "sgcs: xi has the wrong length");
+        out.fill(0.0);
+        if let Some(region) = gate.region() {
+            let mut weights = Vec::with_capacity(region.len());
+            if !region.is_empty() {
+                self.region_weights(xi, region, &mut weights);
+                return self.combine(&weights, out).0;
+            }
+            match gate.fallback().filter(|f| !f.is_empty()) {
+                Some(list) => self.region_weights(xi, list, &mut weights),
+                None => weights = self.active(xi),
+            }
+            self.combine(&weights, out);
+            return 0.0;
+        }
+        let mut active = self.active(xi);
+        if !gate.is_open() {
+            let all = active.len();
+            active.retain(|e| gate.admits(e.0 as usize));
+            if active.is_empty() && all > 0 {
+                self.combine(&self.active(xi), out);
+                return 0.0;
+            }
+        }
+        self.combine(&active, out).0
+    }
+
+    /// [`Network::predict_gated`] of the first output.
+    pub fn predict1_gated<G: Gate>(&self, xi: &[f64], gate: &G) -> f64 {
+        let mut out = [0.0];
+        if self.m == 1 {
+            self.predict_gated(xi, gate, &mut out);
+            return out[0];
+        }
+        let mut all = vec![0.0; self.m];
+        self.predict_gated(xi, gate, &mut all);
+        all[0]
     }
 
     /// The network activation `D_A(ξ) = Σ_c M_c(ξ)`.
@@ -511,6 +792,20 @@ impl Network {
     /// # Panics
     /// If `critical.len() != len()` or `xi.len() != n`.
     pub fn activation_sums(&self, xi: &[f64], critical: &[bool]) -> (f64, f64) {
+        self.activation_sums_gated(xi, critical, &Open)
+    }
+
+    /// [`Network::activation_sums`] over the cells `gate` admits only (no fallback: an input
+    /// no admitted cell reaches has `D_A = 0`, it lies outside the network).
+    ///
+    /// # Panics
+    /// If `critical.len() != len()` or `xi.len() != n`.
+    pub fn activation_sums_gated<G: Gate>(
+        &self,
+        xi: &[f64],
+        critical: &[bool],
+        gate: &G,
+    ) -> (f64, f64) {
         assert_eq!(
             critical.len(),
             self.len(),
@@ -518,7 +813,24 @@ impl Network {
         );
         let mut all = 0.0;
         let mut crit = 0.0;
-        for (c, a) in self.active(xi) {
+        let list = match gate.region() {
+            Some(region) => {
+                // True activations (no cutoff): a region's far cells count little.
+                let n = self.n;
+                region
+                    .iter()
+                    .map(|&c| {
+                        let d2 = dist_sq(&self.pos[c * n..(c + 1) * n], xi);
+                        (c as u32, activation(d2, self.width[c]))
+                    })
+                    .collect()
+            }
+            None => self.active(xi),
+        };
+        for (c, a) in list {
+            if !gate.admits(c as usize) {
+                continue;
+            }
             all += a;
             if critical[c as usize] {
                 crit += a;
@@ -550,14 +862,32 @@ impl Network {
         &self.out[c * self.m..(c + 1) * self.m]
     }
 
+    /// Sets `v_c` (e.g. the initial cells' weights to their samples' targets).
+    pub fn set_output(&mut self, c: CellId, v: &[f64]) -> Result<(), SgcsError> {
+        if c >= self.len() {
+            return Err(SgcsError::Dimension {
+                what: "cell id",
+                expected: self.len(),
+                got: c,
+            });
+        }
+        check_values("output weight", v, self.m)?;
+        self.out[c * self.m..(c + 1) * self.m].copy_from_slice(v);
+        Ok(())
+    }
+
     /// `δ_c`, the mean length of the cell's edges (floored at `1e-100`).
     pub fn width(&self, c: CellId) -> f64 {
         self.width[c]
     }
 
-    /// The resource `τ_c = τ_err,c / τ_cnt,c · |F_c|` with `|F_c| = δ_c^k` (0 for a cell never hit).
+    /// The resource: `τ_c = τ_err,c / τ_cnt,c · |F_c|` with `|F_c| = δ_c^k`, or `τ_err,c` for
+    /// [`Resource::ErrorSum`] (0 for a cell never hit).
     pub fn resource(&self, c: CellId) -> f64 {
-        self.err_mean[c] * self.volume(c)
+        match self.params.resource {
+            Resource::MeanTimesVolume => self.err_mean[c] * self.volume(c),
+            Resource::ErrorSum => self.err_mean[c] * self.count_at(c, self.steps),
+        }
     }
 
     /// `τ_err,c / τ_cnt,c`: the decayed mean squared error of the samples `c` won.
@@ -595,9 +925,19 @@ impl Network {
             return None;
         }
         let (n, m) = (self.n, self.m);
+        // With insertion at the worst sample, only cells holding one compete (a cell whose
+        // worst sample was just used waits for new errors); the largest resource wins. While no
+        // cell holds one, every recent sample was predicted exactly: growth waits.
+        let worst_only = self.params.insertion == Insertion::WorstSample;
+        if worst_only && self.worst_err.iter().all(|&e| e == 0.0) {
+            return None;
+        }
         let mut q = 0;
         let mut best = f64::NEG_INFINITY;
         for c in 0..self.len() {
+            if worst_only && self.worst_err[c] == 0.0 {
+                continue;
+            }
             let t = self.resource(c);
             if t > best {
                 best = t;
@@ -615,11 +955,22 @@ impl Network {
             }
         }
         let r = self.len();
-        let wr: Vec<f64> = wq
-            .iter()
-            .zip(self.position(f))
-            .map(|(a, b)| 0.5 * (a + b))
-            .collect();
+        let worst = (self.params.insertion == Insertion::WorstSample && self.worst_err[q] > 0.0)
+            .then(|| {
+                (
+                    self.worst_in[q * n..(q + 1) * n].to_vec(),
+                    self.worst_out[q * m..(q + 1) * m].to_vec(),
+                )
+            });
+        self.worst_err[q] = 0.0;
+        let wr: Vec<f64> = match &worst {
+            Some((input, _)) => input.clone(),
+            None => wq
+                .iter()
+                .zip(self.position(f))
+                .map(|(a, b)| 0.5 * (a + b))
+                .collect(),
+        };
         // Triangles on the split edge and their third corners, in corner order.
         let mut opp: Vec<(CellId, usize)> = self.cell_tris[q]
             .iter()
@@ -635,7 +986,10 @@ impl Network {
         let old_vol: Vec<f64> = affected.iter().map(|&c| self.volume(c)).collect();
         let old_tau: Vec<f64> = affected.iter().map(|&c| self.resource(c)).collect();
         let mut kappa_before = vec![0.0; m];
-        if self.params.insert_rule == InsertRule::PreserveOutput {
+        if matches!(
+            self.params.insert_rule,
+            InsertRule::PreserveOutput | InsertRule::SampleTarget
+        ) {
             self.predict(&wr, &mut kappa_before);
         }
 
@@ -667,6 +1021,10 @@ impl Network {
         self.err_mean.push(0.0);
         self.cnt.push(0.0);
         self.stamp.push(now);
+        self.worst_err.push(0.0);
+        self.worst_stamp.push(now);
+        self.worst_in.extend(std::iter::repeat_n(0.0, n));
+        self.worst_out.extend(std::iter::repeat_n(0.0, m));
         self.width.push(MIN_WIDTH);
         self.width[r] = self.compute_width(r);
         self.index
@@ -674,6 +1032,10 @@ impl Network {
         for &c in &affected {
             self.refresh_width(c);
         }
+        self.changed.extend_from_slice(&affected);
+        self.changed.push(r);
+        self.changed.sort_unstable();
+        self.changed.dedup();
 
         // Counters: a neighbour's τ = mean·|F| follows its new volume by itself, which is
         // exactly Δτ_c = (|F|new − |F|old)/|F|old · τ_c; r receives what they lose.
@@ -691,11 +1053,25 @@ impl Network {
                 weighted[j] += lost * self.out[c * m + j];
             }
         }
-        self.err_mean[r] = flush(tau_r.max(0.0) / self.volume(r));
-        self.cnt[r] = flush(cnt_r);
+        if worst.is_some() {
+            // r sits where q's worst error was; that error is being dealt with, so q's mean
+            // error starts over (its decayed count keeps the new mean cautious) and r starts
+            // clean.
+            self.err_mean[q] = 0.0;
+        } else {
+            self.err_mean[r] = flush(tau_r.max(0.0) / self.volume(r));
+            self.cnt[r] = flush(cnt_r);
+        }
 
-        let v_r: Vec<f64> = match self.params.insert_rule {
-            InsertRule::PreserveOutput => {
+        let v_r: Vec<f64> = match (self.params.insert_rule, worst) {
+            (InsertRule::SampleTarget, Some((_, target))) => target,
+            (InsertRule::PreserveOutput | InsertRule::SampleTarget, _)
+                if self.params.output_mode == OutputMode::Normalized =>
+            {
+                // A normalised output at w_r is a weighted mean; giving r that mean keeps it.
+                kappa_before
+            }
+            (InsertRule::PreserveOutput | InsertRule::SampleTarget, _) => {
                 let mut after = vec![0.0; m];
                 self.predict(&wr, &mut after);
                 kappa_before
@@ -704,10 +1080,10 @@ impl Network {
                     .map(|(b, a)| b - a)
                     .collect()
             }
-            InsertRule::VolumeWeighted if lost_sum > 0.0 => {
+            (InsertRule::VolumeWeighted, _) if lost_sum > 0.0 => {
                 weighted.iter().map(|w| w / lost_sum).collect()
             }
-            InsertRule::VolumeWeighted => (0..m)
+            (InsertRule::VolumeWeighted, _) => (0..m)
                 .map(|j| 0.5 * (self.out[q * m + j] + self.out[f * m + j]))
                 .collect(),
         };
@@ -794,12 +1170,31 @@ impl Network {
         if euler != 1 {
             return Err(format!("Euler characteristic {euler}, a disk has 1"));
         }
-        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
-        if !finite(&self.pos) || !finite(&self.out) || !finite(&self.err_mean) || !finite(&self.cnt)
+        if self.worst_err.len() != len
+            || self.worst_stamp.len() != len
+            || self.worst_in.len() != len * n
+            || self.worst_out.len() != len * m
         {
-            return Err("a position, output weight or counter is not finite".into());
+            return Err("worst-sample arrays disagree in length".into());
         }
-        if self.err_mean.iter().chain(&self.cnt).any(|&x| x < 0.0) {
+        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        if !finite(&self.pos)
+            || !finite(&self.out)
+            || !finite(&self.err_mean)
+            || !finite(&self.cnt)
+            || !finite(&self.worst_err)
+            || !finite(&self.worst_in)
+            || !finite(&self.worst_out)
+        {
+            return Err("a position, output weight, counter or worst sample is not finite".into());
+        }
+        if self
+            .err_mean
+            .iter()
+            .chain(&self.cnt)
+            .chain(&self.worst_err)
+            .any(|&x| x < 0.0)
+        {
             return Err("a counter is negative".into());
         }
         for c in 0..len {
@@ -883,6 +1278,18 @@ struct NetworkData {
     error_mean: Vec<f64>,
     count: Vec<f64>,
     stamp: Vec<u64>,
+    /// Only with [`Insertion::WorstSample`] (absent: all zero).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    worst: Option<WorstSamples>,
+}
+
+/// The per-cell worst samples of [`Insertion::WorstSample`], as saved.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct WorstSamples {
+    error: Vec<f64>,
+    stamp: Vec<u64>,
+    inputs: Vec<f64>,
+    targets: Vec<f64>,
 }
 
 impl From<Network> for NetworkData {
@@ -900,6 +1307,12 @@ impl From<Network> for NetworkData {
             error_mean: net.err_mean,
             count: net.cnt,
             stamp: net.stamp,
+            worst: (net.params.insertion == Insertion::WorstSample).then_some(WorstSamples {
+                error: net.worst_err,
+                stamp: net.worst_stamp,
+                inputs: net.worst_in,
+                targets: net.worst_out,
+            }),
         }
     }
 }
@@ -940,6 +1353,7 @@ impl TryFrom<NetworkData> for Network {
             d.error_mean,
             d.count,
             d.stamp,
+            d.worst,
             d.steps,
         )?;
         net.check_invariants().map_err(SgcsError::Corrupt)?;
@@ -1697,5 +2111,224 @@ mod tests {
     fn network_is_send_and_sync() {
         fn check<T: Send + Sync>() {}
         check::<Network>();
+    }
+
+    /// What a caller that knows where its target jumps keeps: the side of `x = 0.5` of every
+    /// cell, and the cells of each side (ascending).
+    #[derive(Default)]
+    struct Halves {
+        of: Vec<bool>,
+        sides: [Vec<CellId>; 2],
+    }
+
+    impl Halves {
+        fn update(&mut self, net: &Network) {
+            self.of = (0..net.len()).map(|c| net.position(c)[0] > 0.5).collect();
+            for side in 0..2 {
+                self.sides[side] = (0..net.len())
+                    .filter(|&c| usize::from(self.of[c]) == side)
+                    .collect();
+            }
+        }
+        fn gate(&self, x: f64) -> HalfGate<'_> {
+            let right = x > 0.5;
+            HalfGate {
+                of: &self.of,
+                right,
+                cells: &self.sides[usize::from(right)],
+            }
+        }
+    }
+
+    struct HalfGate<'a> {
+        of: &'a [bool],
+        right: bool,
+        cells: &'a [CellId],
+    }
+
+    impl Gate for HalfGate<'_> {
+        fn admits(&self, c: CellId) -> bool {
+            self.of[c] == self.right
+        }
+        fn region(&self) -> Option<&[CellId]> {
+            Some(self.cells)
+        }
+    }
+
+    fn gated_params() -> Params {
+        Params {
+            lambda: 20,
+            output_rule: OutputRule::Local,
+            output_mode: OutputMode::Normalized,
+            insertion: Insertion::WorstSample,
+            insert_rule: InsertRule::SampleTarget,
+            resource: Resource::ErrorSum,
+            ..Params::default()
+        }
+    }
+
+    /// A step target with its jump known to the caller: gated cells never straddle it, so a
+    /// normalised network reproduces it exactly on both sides; the same network ungated blurs
+    /// the jump.
+    #[test]
+    fn gated_normalized_cells_reproduce_a_known_jump_exactly() {
+        let step = |x: f64| if x > 0.5 { 1.0 } else { 0.25 };
+        let train = |gated: bool| {
+            let mut net = Network::new(gated_params(), 2, 1, &unit_triangle()).unwrap();
+            // The initial cells start from the target at their centres (as inserted ones do).
+            for c in 0..3 {
+                let x = net.position(c)[0];
+                net.set_output(c, &[step(x)]).unwrap();
+            }
+            let mut halves = Halves::default();
+            halves.update(&net);
+            let mut r = rng(11);
+            for _ in 0..4_000 {
+                let (x, y) = (r.random::<f64>(), r.random::<f64>());
+                if gated {
+                    net.try_step_gated(&[x, y], &[step(x)], 1.0, &halves.gate(x))
+                        .unwrap();
+                } else {
+                    net.step(&[x, y], &[step(x)]);
+                }
+                halves.update(&net);
+                if net.steps().is_multiple_of(500) {
+                    net.check_invariants().unwrap();
+                }
+            }
+            (net, halves)
+        };
+        let (net, halves) = train(true);
+        let (open, _) = train(false);
+        let (mut gated_worst, mut open_worst) = (0.0f64, 0.0f64);
+        for p in unit_square_points(12, 2_000) {
+            let gated = net.predict1_gated(&p, &halves.gate(p[0]));
+            gated_worst = gated_worst.max((gated - step(p[0])).abs());
+            open_worst = open_worst.max((open.predict1(&p) - step(p[0])).abs());
+        }
+        assert!(gated_worst < 1e-9, "gated: worst error {gated_worst}");
+        assert!(
+            open_worst > 0.2,
+            "ungated blurs the jump: worst error {open_worst}"
+        );
+    }
+
+    /// A gate naming a region with one far cell gives that cell's value (no underflow), and an
+    /// empty region books the error on the nearest cell, moves and teaches nothing.
+    #[test]
+    fn region_gates_reach_far_cells_and_uncovered_inputs_only_book_error() {
+        let mut net = Network::new(gated_params(), 2, 1, &unit_triangle()).unwrap();
+        net.out = vec![0.5, 2.0, 3.0];
+        let far = [1e3, 1e3];
+        let one: &[CellId] = &[1];
+        struct Named<'a>(&'a [CellId]);
+        impl Gate for Named<'_> {
+            fn admits(&self, c: CellId) -> bool {
+                self.0.contains(&c)
+            }
+            fn region(&self) -> Option<&[CellId]> {
+                Some(self.0)
+            }
+        }
+        assert_eq!(net.predict1_gated(&far, &Named(one)), 2.0);
+        assert_eq!(
+            net.predict1(&far),
+            0.0,
+            "ungated: every activation underflows"
+        );
+        let before = net.to_json();
+        let (pos, out) = (net.pos.clone(), net.out.clone());
+        let outcome = net
+            .try_step_gated(&[0.1, 0.1], &[9.0], 2.0, &Named(&[]))
+            .unwrap();
+        assert!(!outcome.covered);
+        assert_eq!(outcome.bmu, 0, "the nearest cell takes the error");
+        assert_eq!((net.pos.clone(), net.out.clone()), (pos, out));
+        assert!(net.resource(0) > 0.0 && net.resource(1) == 0.0);
+        assert_ne!(net.to_json(), before);
+    }
+
+    /// The error-sum resource is the decayed sum of weighted squared errors.
+    #[test]
+    fn error_sum_resource_sums_weighted_errors() {
+        let params = Params {
+            alpha: 0.0,
+            lambda: 1_000,
+            ..gated_params()
+        };
+        let mut net = Network::new(params, 2, 1, &unit_triangle()).unwrap();
+        let at_cell_0 = [0.0, 0.0];
+        let mut expected = 0.0;
+        for (target, weight) in [(1.0, 1.0), (2.0, 0.5), (-1.0, 3.0)] {
+            let predicted = net.predict1(&at_cell_0);
+            let outcome = net
+                .try_step_gated(&at_cell_0, &[target], weight, &Open)
+                .unwrap();
+            assert_eq!(outcome.bmu, 0);
+            expected += weight * (target - predicted).powi(2);
+        }
+        assert_close!(net.resource(0), expected, 1e-12 * expected);
+    }
+
+    /// Insertion at the worst sample puts the new cell exactly there, with that sample's target.
+    #[test]
+    fn worst_sample_insertion_places_the_cell_at_the_worst_error() {
+        let params = Params {
+            lambda: 5,
+            ..gated_params()
+        };
+        let mut net = Network::new(params, 2, 1, &unit_triangle()).unwrap();
+        let spike = [0.15, 0.2];
+        for i in 0..5 {
+            let (xi, z) = if i == 3 {
+                (spike, 10.0)
+            } else {
+                ([0.9, 0.05 * i as f64], 0.01)
+            };
+            let outcome = net.step(&xi, &[z]);
+            assert_eq!(outcome.inserted.is_some(), i == 4);
+        }
+        net.check_invariants().unwrap();
+        assert_eq!(net.position(3), &spike);
+        assert_eq!(net.output(3), &[10.0]);
+        assert!(net.changed_cells().contains(&3));
+    }
+
+    /// Worst samples are saved: a reloaded network trains on exactly like the original.
+    #[test]
+    fn worst_samples_survive_save_and_load() {
+        let f = |x: f64, y: f64| if x + y > 1.0 { 1.0 } else { 0.0 };
+        let mut a = grown(gated_params(), 3_000, 5, f);
+        let mut b = Network::from_json(&a.to_json()).unwrap();
+        let mut r = rng(6);
+        for _ in 0..2_000 {
+            let (x, y) = (r.random::<f64>(), r.random::<f64>());
+            a.step(&[x, y], &[f(x, y)]);
+            b.step(&[x, y], &[f(x, y)]);
+        }
+        assert_eq!(a.to_json(), b.to_json());
+    }
+
+    /// The refit of a normalised network fits the normalised output.
+    #[test]
+    fn refit_of_a_normalized_network_lowers_its_training_error() {
+        let params = Params {
+            output_mode: OutputMode::Normalized,
+            lambda: 50,
+            ..Params::default()
+        };
+        let mut net = grown(params, 10_000, 8, bump_ridge);
+        let points = unit_square_points(9, 3_000);
+        let inputs: Vec<f64> = points.iter().flatten().copied().collect();
+        let targets: Vec<f64> = points.iter().map(|p| bump_ridge(p[0], p[1])).collect();
+        let report = net.refit_outputs(&inputs, &targets, 1e-6).unwrap();
+        assert!(report.rms_after < 0.9 * report.rms_before, "{report:?}");
+        let rms: f64 = (points
+            .iter()
+            .map(|p| (net.predict1(p) - bump_ridge(p[0], p[1])).powi(2))
+            .sum::<f64>()
+            / points.len() as f64)
+            .sqrt();
+        assert_close!(rms, report.rms_after, 1e-9);
     }
 }

@@ -17,6 +17,13 @@ pub enum OutputRule {
     /// The paper's delta rule `Δv_c = η (ζ − κ(ξ)) M_c`. Diverges when `η Σ M_c² > 2`
     /// (many overlapping cells); kept for comparison with the paper.
     Plain,
+    /// Only the best matching unit learns, towards the target itself: `Δv_s = η (ζ − v_s)`.
+    /// Each cell's weight becomes a decayed mean of the targets it wins, so where the target
+    /// is constant over a region whose cells never straddle its edges (see [`crate::Gate`]),
+    /// every weight converges to that constant and a normalised output reproduces it exactly;
+    /// the least-squares rules instead spread errors over overlapping cells that cancel only
+    /// at the samples.
+    Local,
 }
 
 /// The output weight given to a freshly inserted cell `r`.
@@ -31,6 +38,53 @@ pub enum InsertRule {
     /// `|F_c|` it loses to the new cell (the rule SPEC §3 suggests, consistent with the counters).
     /// Falls back to the plain mean of the split edge's two ends when no neighbour loses volume.
     VolumeWeighted,
+    /// The target of the sample the cell is put at ([`Insertion::WorstSample`]); the
+    /// [`InsertRule::PreserveOutput`] value when it is put at a midpoint. Right where the target
+    /// is piecewise constant and cells never straddle a jump (see [`crate::Gate`]).
+    SampleTarget,
+}
+
+/// How the cells' outputs combine into the network's output.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum OutputMode {
+    /// `κ(ξ) = Σ_c v_c M_c(ξ)`, the paper's radial-basis sum (the default).
+    #[default]
+    Sum,
+    /// `κ(ξ) = Σ_c v_c M_c(ξ) / Σ_c M_c(ξ)`: a partition of unity (normalised RBF). A region
+    /// whose cells all hold the same `v` reproduces it exactly, however the cells overlap; far
+    /// from every cell (no activation above the cutoff) the output is 0.
+    Normalized,
+}
+
+/// Where a new cell is put.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Insertion {
+    /// At the midpoint of the longest edge of the cell `q` with the largest resource (Fritzke,
+    /// the paper; the default).
+    #[default]
+    Midpoint,
+    /// At the input of the sample with the largest (weighted) squared error that `q` won,
+    /// decayed like the resource counters, so a recent bad sample outranks an old one; `q` is
+    /// the cell with the largest resource among those holding such a sample. Where the target
+    /// jumps, the midpoint of an edge can land on the wrong side; the worst sample is where the
+    /// error is. While no cell holds one (every recent sample was predicted exactly), growth
+    /// waits.
+    WorstSample,
+}
+
+/// What the resource `τ_c` (growth and critical cells) measures.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Resource {
+    /// `τ_c = τ_err,c / τ_cnt,c · |F_c|`: the mean squared error of the samples `c` won times
+    /// its Voronoi volume, an estimate of the error integral over its region when samples are
+    /// uniform (the paper; the default).
+    #[default]
+    MeanTimesVolume,
+    /// `τ_c = τ_err,c`: the decayed sum of the (weighted) squared errors of the samples `c` won.
+    /// With importance-weighted samples this estimates the error integral itself, whatever the
+    /// sampling density, and a cell next to an unlearned region is not diluted by the many
+    /// samples it predicts exactly.
+    ErrorSum,
 }
 
 /// Parameters of a supervised growing cell structures network.
@@ -65,6 +119,12 @@ pub struct Params {
     pub output_rule: OutputRule,
     /// Output weight of an inserted cell.
     pub insert_rule: InsertRule,
+    /// How cell outputs combine.
+    pub output_mode: OutputMode,
+    /// Where an inserted cell goes.
+    pub insertion: Insertion,
+    /// What the resource measures.
+    pub resource: Resource,
 }
 
 impl Default for Params {
@@ -79,6 +139,9 @@ impl Default for Params {
             activation_cutoff: 1e-8,
             output_rule: OutputRule::Normalized,
             insert_rule: InsertRule::PreserveOutput,
+            output_mode: OutputMode::Sum,
+            insertion: Insertion::Midpoint,
+            resource: Resource::MeanTimesVolume,
         }
     }
 }

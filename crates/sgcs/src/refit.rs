@@ -139,6 +139,13 @@ impl Network {
                 &mut ids,
                 &mut found,
             );
+            if self.params().output_mode == crate::OutputMode::Normalized {
+                // The output is Σ v M / Σ M: the design matrix holds the normalised weights.
+                let sum: f64 = found.iter().map(|e| e.1).sum();
+                if sum > 0.0 {
+                    found.iter_mut().for_each(|e| e.1 /= sum);
+                }
+            }
             let top = found.iter().fold((u32::MAX, f64::NEG_INFINITY), |b, e| {
                 if e.1 > b.1 { *e } else { b }
             });
