@@ -13,7 +13,8 @@ use crate::visibility::Candidates;
 use crate::visibility::{Bvh, PairEvents, Segment, Shaft, Side, classify, open_segment_hits};
 
 /// Settings of a [`Kernel`], checked by [`Kernel::with_params`].
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
 pub struct KernelParams {
     /// Source weight `E'` of a non-emitting surface, as a fraction of the largest emission
     /// (SPEC §2: "a small floor, default 1 %"). Valid range `[0, 1]`.
@@ -293,10 +294,30 @@ impl Kernel {
         }
     }
 
+    /// Whether evaluating `k(s, t)` needs a visibility test that geometry cannot decide: the
+    /// points face each other (`k` could be positive) on a pair whose visibility varies
+    /// ([`PairClass::Varies`]). The project counts one **ray** for each such evaluation, for
+    /// every method alike; everything else is known without one.
+    #[must_use]
+    pub fn casts_ray(&self, s: f64, t: f64) -> bool {
+        let u = self.unoccluded(s, t);
+        u.k > 0.0 && self.pair_class(u.sender, u.receiver) == PairClass::Varies
+    }
+
     /// Number of parent surface edges (the ranks of [`Unoccluded`] run over `0..this`).
     #[must_use]
     pub fn surface_parents(&self) -> usize {
         self.surface_parents.len()
+    }
+
+    /// The end points `(a, b)` of the parent surface edge of rank `rank`.
+    ///
+    /// # Panics
+    /// If `rank >= surface_parents()`.
+    #[must_use]
+    pub fn surface_parent(&self, rank: usize) -> (DVec2, DVec2) {
+        let s = self.segments[self.surface_parents[rank]];
+        (s.a, s.b)
     }
 
     /// `E'` of the parent surface edge of rank `rank` (see [`Kernel::source_weight`]).

@@ -270,8 +270,9 @@ pub(crate) struct Candidates {
 /// Visibility between `x` on `P` and `y` on `Q` changes only where the segment `x–y` sweeps
 /// over an **event point**: an end point of an occluder (the ray starts or stops meeting it),
 /// or a point where an occluder crosses `P` or `Q` (an end of the ray crosses the occluder's
-/// line on the occluder). Every segment from `P` to `Q` lies in the convex hull of the two
-/// edges, so only event points in that closed hull matter; the end points of `P` and `Q`
+/// line on the occluder). A segment between interior points of `P` and `Q` lies inside the
+/// convex hull of the two edges, touching its boundary only at its ends, so only event points
+/// strictly inside that hull or on `P` or `Q` matter; the end points of `P` and `Q`
 /// themselves are events only where the other edge reaches that edge's line (a ray through
 /// one of them runs along that line). With no event point, visibility is the same for all rays
 /// between interior points of `P` and `Q`.
@@ -317,14 +318,21 @@ impl PairEvents {
     }
 
     /// Whether two rays from `P` to `Q` lie in the same face: the same sub-pair and the same
-    /// side of each of its event points. Then their visibility is the same.
+    /// [`PairEvents::side`] of each of its event points. Then their visibility is the same.
     #[must_use]
     pub fn same_face(&self, (x1, y1): (DVec2, DVec2), (x2, y2): (DVec2, DVec2)) -> bool {
         let sub = self.sub_pair(x1, y1);
         sub == self.sub_pair(x2, y2)
             && self.sub[sub]
                 .iter()
-                .all(|&v| (orient(x1, y1, v) > 0.0) == (orient(x2, y2, v) > 0.0))
+                .all(|&v| PairEvents::side(x1, y1, v) == PairEvents::side(x2, y2, v))
+    }
+
+    /// The side of the ray `x → y` an event point `v` is on: `true` if strictly left (exact).
+    #[must_use]
+    #[inline]
+    pub fn side(x: DVec2, y: DVec2, v: DVec2) -> bool {
+        orient(x, y, v) > 0.0
     }
 
     /// The same events seen from `Q` to `P` (rays reversed).
@@ -460,8 +468,9 @@ fn pair_events(segments: &[Segment], candidates: &[u32], p: Side, q: Side) -> Pa
 }
 
 /// The event points of the shaft between `p` and `q` with occluders `candidates` (see
-/// [`PairEvents`]): occluder end points in the closed hull of the two edges (their own end
-/// points excepted) and the points where an occluder crosses `p` or `q` inside it.
+/// [`PairEvents`]): occluder end points strictly inside the hull of the two edges or on one of
+/// them (their own end points excepted) and the points where an occluder crosses `p` or `q`
+/// inside it.
 fn event_points(segments: &[Segment], candidates: &[u32], p: Side, q: Side) -> Vec<DVec2> {
     let corners = [p.a, p.b, q.a, q.b];
     // A ray from x on P through P's own end point runs along P's line, so it can only reach a
@@ -483,7 +492,12 @@ fn event_points(segments: &[Segment], candidates: &[u32], p: Side, q: Side) -> V
     for &i in candidates {
         let s = segments[i as usize];
         for e in [s.a, s.b] {
-            if in_closed_hull(e, &corners) {
+            // A ray between interior points of P and Q runs inside the hull: it can sweep over
+            // a point inside it or on P or Q, never over one on the hull's other sides.
+            if strictly_inside_hull(e, &corners)
+                || on_closed_segment(e, p.a, p.b)
+                || on_closed_segment(e, q.a, q.b)
+            {
                 push(e, &mut events);
             }
         }
@@ -509,14 +523,35 @@ fn on_closed_segment(e: DVec2, a: DVec2, b: DVec2) -> bool {
         && e.y <= a.y.max(b.y)
 }
 
-/// Whether `e` lies in the closed convex hull of the four points (in one of their triangles).
-fn in_closed_hull(e: DVec2, pts: &[DVec2; 4]) -> bool {
-    const TRIANGLES: [[usize; 3]; 4] = [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]];
-    TRIANGLES.iter().any(|&[i, j, k]| {
-        let (a, b, c) = (pts[i], pts[j], pts[k]);
-        let o = [orient(a, b, e), orient(b, c, e), orient(c, a, e)];
-        o.iter().all(|&v| v >= 0.0) || o.iter().all(|&v| v <= 0.0)
-    })
+/// Whether `e` lies strictly inside the convex hull of the four points (exact).
+fn strictly_inside_hull(e: DVec2, pts: &[DVec2; 4]) -> bool {
+    // Andrew's monotone chain, dropping collinear points: the hull counter-clockwise.
+    let mut sorted = *pts;
+    // `+ 0.0` makes -0.0 equal to 0.0 for `total_cmp`: equal coordinates must sort by y.
+    sorted.sort_by(|a, b| {
+        (a.x + 0.0)
+            .total_cmp(&(b.x + 0.0))
+            .then((a.y + 0.0).total_cmp(&(b.y + 0.0)))
+    });
+    let mut hull: Vec<DVec2> = Vec::with_capacity(8);
+    for pass in 0..2 {
+        let start = hull.len();
+        let points: Vec<DVec2> = if pass == 0 {
+            sorted.to_vec()
+        } else {
+            sorted.iter().rev().copied().collect()
+        };
+        for p in points {
+            while hull.len() >= start + 2
+                && orient(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0
+            {
+                hull.pop();
+            }
+            hull.push(p);
+        }
+        hull.pop(); // the last point starts the other chain
+    }
+    hull.len() >= 3 && (0..hull.len()).all(|i| orient(hull[i], hull[(i + 1) % hull.len()], e) > 0.0)
 }
 
 /// The point where segment `[a, b]` crosses segment `[c, d]` strictly inside both (not at an
@@ -680,6 +715,19 @@ mod tests {
                 .collect();
             assert_eq!(bvh.overlapping(&segments, lo, hi), boxed);
         }
+    }
+
+    /// Regression: with a `-0.0` coordinate the hull's sort put two points of one vertical line
+    /// out of order, dropped an event point inside the hull and merged two faces.
+    #[test]
+    fn hull_test_ignores_the_sign_of_zero() {
+        let pts = [v(0.0, -2.0 / 3.0), v(1.0, -0.0), v(-0.0, 1.0), v(0.0, 0.5)];
+        assert!(strictly_inside_hull(v(0.5, 0.0), &pts));
+        assert!(
+            !strictly_inside_hull(v(0.0, 0.7), &pts),
+            "on the hull's side"
+        );
+        assert!(!strictly_inside_hull(v(2.0, 0.0), &pts));
     }
 
     proptest! {
