@@ -8,7 +8,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::{Context, Result};
 use flatland_geom::KernelParams;
-use kernel_fit::{Fit, FitParams, FitSummary, ModelFile, Resampling, StopReason, Target};
+use kernel_fit::{Fit, FitParams, FitSummary, ModelFile, Preset, Resampling, StopReason, Target};
 
 use super::SceneArgs;
 
@@ -21,11 +21,35 @@ pub enum ResamplingArg {
     Uniform,
 }
 
+/// `--preset` values.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, Default)]
+pub enum PresetArg {
+    /// The project's learner: visibility only, where geometry cannot decide it, with cells that
+    /// never straddle a shadow boundary.
+    #[default]
+    Default,
+    /// The paper's network: ζ learned from γ(s, t) (plus a least-squares refit).
+    Paper,
+}
+
+impl PresetArg {
+    /// The library's preset.
+    pub fn preset(self) -> Preset {
+        match self {
+            PresetArg::Default => Preset::Default,
+            PresetArg::Paper => Preset::Paper,
+        }
+    }
+}
+
 /// Arguments of `flatland fit`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
     pub scene: SceneArgs,
+    /// Which learner: `default` (the project's) or `paper` (the paper's network).
+    #[arg(long, value_enum, default_value_t = PresetArg::Default)]
+    pub preset: PresetArg,
     /// Stop at this many cells.
     #[arg(long, default_value_t = FitParams::default().target_cells)]
     pub cells: usize,
@@ -44,7 +68,8 @@ pub struct Args {
     /// How new sample sets are chosen: `theta` (the paper) or `uniform` (the control).
     #[arg(long, value_enum, default_value_t = ResamplingArg::Theta)]
     pub resampling: ResamplingArg,
-    /// Let the network learn k and multiply by the known emission E' (instead of learning ζ).
+    /// With `--preset paper`: let the network learn k and multiply by the known emission E'
+    /// (instead of learning ζ).
     #[arg(long)]
     pub factor_emission: bool,
     /// Skip the final least-squares refit of the output weights.
@@ -84,16 +109,20 @@ impl Args {
         args
     }
 
-    /// The fit parameters these arguments ask for.
-    pub fn params(&self) -> FitParams {
-        let d = FitParams::default();
-        FitParams {
+    /// The fit parameters these arguments ask for: the preset's, with the flags given.
+    pub fn params(&self) -> Result<FitParams> {
+        let d = self.preset.preset().params();
+        anyhow::ensure!(
+            !self.factor_emission || d.target == Target::Zeta,
+            "--factor-emission applies to the paper's network (--preset paper), which learns ζ"
+        );
+        Ok(FitParams {
             target_cells: self.cells,
             seed: self.seed,
             max_steps: self.max_steps.unwrap_or(d.max_steps),
             ray_budget: self.rays.unwrap_or(d.ray_budget),
             target_error: self.target_error.unwrap_or(d.target_error),
-            refit: !self.no_refit,
+            refit: d.refit && !self.no_refit,
             resampling: match self.resampling {
                 ResamplingArg::Theta => Resampling::Theta,
                 ResamplingArg::Uniform => Resampling::Uniform,
@@ -101,10 +130,10 @@ impl Args {
             target: if self.factor_emission {
                 Target::FactoredEmission
             } else {
-                Target::Zeta
+                d.target
             },
             ..d
-        }
+        })
     }
 }
 
@@ -120,7 +149,7 @@ pub fn run(args: &Args) -> Result<()> {
         }
         None => {
             let (kernel, label) = args.scene.kernel()?;
-            let params = args.params();
+            let params = args.params()?;
             params.validate()?;
             let reference = Arc::new(super::reference(&kernel, args.res, &params));
             (Fit::new(Arc::new(kernel), reference, params)?, label)

@@ -286,7 +286,10 @@ pub fn run(args: &Args) -> Result<()> {
             )
         };
         if budgets.contains(&400) {
-            let (sgcs, paper) = (mean_at_400(Method::Sgcs), mean_at_400(Method::SgcsNoRefit));
+            let (sgcs, paper) = (
+                mean_at_400(Method::Sgcs),
+                mean_at_400(Method::SgcsPaperNoRefit),
+            );
             let hr = mean_at_400(Method::Hr);
             writeln!(
                 doc,

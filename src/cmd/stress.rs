@@ -21,7 +21,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use flatland_geom::{DVec2, Edge, Kernel, Role, Scene};
-use kernel_fit::{Errors, Fit, FitParams, FitSummary, Reference};
+use kernel_fit::{Errors, Fit, FitParams, FitSummary, Reference, StopReason};
 use sgcs::Network;
 
 use super::BUNDLED_FIG3;
@@ -42,6 +42,8 @@ pub struct Args {
 
 /// Relative tolerance on learned errors under scaling, translation and emission changes.
 const SAME_ERROR: f64 = 0.05;
+/// Errors both below this are the same fit whatever their ratio.
+const TINY_ERROR: f64 = 0.005;
 /// Cells of the small fits the comparisons run.
 const FIT_CELLS: usize = 60;
 /// Reference used by every small fit: grid resolution and held-out points.
@@ -386,14 +388,15 @@ fn inspect_network(row: &mut Row, net: &Network) {
     });
 }
 
-/// `|a − b| / b ≤ tol` for each of the two errors.
+/// `|a − b| / b ≤ tol` for each of the two errors, or both below [`TINY_ERROR`] (the default
+/// learner is often exact: 0 and 0.001 are the same fit, not 100 % apart).
 fn same_errors(row: &mut Row, what: &str, got: Errors, base: Errors) {
     for (name, g, b) in [
         ("held-out", got.heldout, base.heldout),
         ("grid", got.grid, base.grid),
     ] {
         let rel = (g - b).abs() / b;
-        row.require(rel <= SAME_ERROR, || {
+        row.require(rel <= SAME_ERROR || g.max(b) < TINY_ERROR, || {
             format!(
                 "{what}: {name} error {g:.5} vs {b:.5} at the original scale ({:.1} % apart, \
                  allowed {:.0} %)",
@@ -985,9 +988,11 @@ fn parameter_cases(suite: &mut Suite, fig3: &Scene) {
             |row| {
                 let (summary, fit) = small_fit(fig3, params)?;
                 inspect_fit(row, &summary, &fit);
-                row.require(summary.cells == FIT_CELLS, || {
-                    format!("{} cells instead of {FIT_CELLS}", summary.cells)
-                });
+                // The default learner stops early once its error is gone.
+                row.require(
+                    summary.cells == FIT_CELLS || summary.stop == StopReason::Converged,
+                    || format!("{} cells instead of {FIT_CELLS}", summary.cells),
+                );
                 row.require(summary.errors.heldout < NOT_DIVERGED, || {
                     format!(
                         "held-out error {:.3} ≥ {NOT_DIVERGED}: diverged",
@@ -1076,7 +1081,9 @@ fn soak_case(suite: &mut Suite, fig3: &Scene) {
         |row| {
             let inserts = if steps >= 1_000_000 { 200 } else { 100 };
             let lambda = u32::try_from((steps / inserts).max(1)).unwrap_or(u32::MAX);
-            let d = FitParams::default();
+            // The paper's network keeps learning for the whole soak; the default learner would
+            // converge (exactly) and stop.
+            let d = FitParams::paper();
             let params = FitParams {
                 network: sgcs::Params {
                     lambda,
@@ -1237,6 +1244,9 @@ mod tests {
         let errors = |e: f64| Errors {
             grid: e,
             heldout: e,
+            l1_grid: e,
+            l1_heldout: e,
+            heldout_spread: [e, e],
         };
         let mut row = Row::new("x", "y");
         same_errors(&mut row, "x", errors(0.52), errors(0.5));

@@ -21,14 +21,32 @@ pub trait Approximation: Sync {
     fn memory_bytes(&self) -> usize;
 }
 
-/// Relative L2 errors of one approximation, both estimates.
+/// The errors of one approximation against a [`Reference`].
+///
+/// Relative L2 is the paper's measure. Where a light meets another surface at a corner, ζ ~ 1/r
+/// and `∫∫ ζ²` diverges (slowly), so an L2 estimate depends on the few points nearest such
+/// corners: the held-out one comes with a bootstrap interval. Relative L1 (`∫∫ |ζ̃ − ζ| / ∫∫ ζ`)
+/// is finite everywhere: the share of the first-shot energy sent to the wrong place.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Errors {
-    /// On the reference grid.
+    /// Relative L2 on the reference grid.
     pub grid: f64,
-    /// On the held-out random samples.
+    /// Relative L2 on the held-out random samples.
     pub heldout: f64,
+    /// Relative L1 on the reference grid.
+    #[serde(default)]
+    pub l1_grid: f64,
+    /// Relative L1 on the held-out random samples.
+    #[serde(default)]
+    pub l1_heldout: f64,
+    /// The 5th and 95th percentiles of the held-out relative L2 over bootstrap resamples of the
+    /// held-out points ([`BOOTSTRAP_RESAMPLES`], seeded): how much it rests on a few points.
+    #[serde(default)]
+    pub heldout_spread: [f64; 2],
 }
+
+/// Bootstrap resamples behind [`Errors::heldout_spread`].
+pub const BOOTSTRAP_RESAMPLES: usize = 200;
 
 /// The exact ζ on a reference grid and on held-out random points: what errors are measured against.
 #[derive(Clone, Debug)]
@@ -86,17 +104,20 @@ impl Reference {
             .collect()
     }
 
-    /// Both relative L2 errors of `approx`.
+    /// Every error measure of `approx`.
     pub fn errors(&self, approx: &dyn Approximation) -> Errors {
-        let grid = relative_l2(&self.approximate_grid(approx), &self.grid);
+        let grid = self.approximate_grid(approx);
         let predicted: Vec<f64> = self
             .heldout_points
             .par_iter()
             .map(|&[s, t]| approx.zeta(s, t))
             .collect();
         Errors {
-            grid,
+            grid: relative_l2(&grid, &self.grid),
             heldout: relative_l2(&predicted, &self.heldout_values),
+            l1_grid: relative_l1(&grid, &self.grid),
+            l1_heldout: relative_l1(&predicted, &self.heldout_values),
+            heldout_spread: bootstrap_l2(&predicted, &self.heldout_values),
         }
     }
 }
@@ -133,6 +154,70 @@ pub fn relative_l2(approx: &[f64], exact: &[f64]) -> f64 {
     }
     (num / den).sqrt()
 }
+
+/// `Σ |a − b| / Σ |b|`: the relative L1 error, scale-free; the absolute mean error when the
+/// reference is identically zero (like [`relative_l2`]).
+pub fn relative_l1(approx: &[f64], exact: &[f64]) -> f64 {
+    assert_eq!(approx.len(), exact.len(), "relative_l1: length mismatch");
+    let scale =
+        exact.iter().chain(approx).fold(
+            0.0_f64,
+            |m, v| if v.is_finite() { m.max(v.abs()) } else { m },
+        );
+    if scale == 0.0 {
+        return 0.0;
+    }
+    let (mut num, mut den) = (0.0_f64, 0.0_f64);
+    for (a, e) in approx.iter().zip(exact) {
+        num += ((a - e) / scale).abs();
+        den += (e / scale).abs();
+    }
+    if den == 0.0 {
+        return num / exact.len() as f64 * scale;
+    }
+    num / den
+}
+
+/// The 5th and 95th percentiles of [`relative_l2`] over [`BOOTSTRAP_RESAMPLES`] resamples (with
+/// replacement, seeded) of the point pairs.
+pub fn bootstrap_l2(approx: &[f64], exact: &[f64]) -> [f64; 2] {
+    assert_eq!(approx.len(), exact.len(), "bootstrap_l2: length mismatch");
+    let n = exact.len();
+    if n == 0 {
+        return [0.0; 2];
+    }
+    let scale =
+        exact.iter().chain(approx).fold(
+            0.0_f64,
+            |m, v| if v.is_finite() { m.max(v.abs()) } else { m },
+        );
+    if scale == 0.0 {
+        return [0.0; 2];
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(BOOTSTRAP_SEED);
+    let mut values: Vec<f64> = (0..BOOTSTRAP_RESAMPLES)
+        .map(|_| {
+            let (mut num, mut den) = (0.0_f64, 0.0_f64);
+            for _ in 0..n {
+                let i = rng.random_range(0..n);
+                let (a, e) = (approx[i] / scale, exact[i] / scale);
+                num += (a - e) * (a - e);
+                den += e * e;
+            }
+            if den > 0.0 {
+                (num / den).sqrt()
+            } else {
+                (num / n as f64).sqrt() * scale
+            }
+        })
+        .collect();
+    values.sort_by(f64::total_cmp);
+    let at = |q: f64| values[((values.len() - 1) as f64 * q).round() as usize];
+    [at(0.05), at(0.95)]
+}
+
+/// Seed of the bootstrap resampling (fixed: the same errors give the same interval).
+const BOOTSTRAP_SEED: u64 = 0xb007;
 
 /// Grid cells of `grid` (R × R, row ↔ s) next to a jump of the function: some 4-neighbour
 /// differs by more than `jump` (absolute), dilated by `radius` cells. These are the kernel's
@@ -209,6 +294,29 @@ mod tests {
         assert!((relative_l2(&tiny, &exact_tiny) - e).abs() < 1e-9);
         assert_eq!(relative_l2(&[0.0; 3], &[0.0; 3]), 0.0);
         assert!((relative_l2(&[0.0, 0.0], &[3.0, 4.0]) - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn relative_l1_and_the_bootstrap_interval() {
+        let exact = [1.0, 2.0, 3.0, 4.0];
+        let approx = [1.5, 2.0, 2.0, 4.0];
+        assert!((relative_l1(&approx, &exact) - 1.5 / 10.0).abs() < 1e-15);
+        let scaled: Vec<f64> = approx.iter().map(|v| v * 1e-300).collect();
+        let exact_scaled: Vec<f64> = exact.iter().map(|v| v * 1e-300).collect();
+        assert!((relative_l1(&scaled, &exact_scaled) - 0.15).abs() < 1e-12);
+        assert_eq!(relative_l1(&[0.0; 3], &[0.0; 3]), 0.0);
+        // The interval brackets the estimate and is empty of spread for a perfect fit.
+        let exact: Vec<f64> = (0..500).map(|i| 1.0 + (i % 7) as f64).collect();
+        let approx: Vec<f64> = exact
+            .iter()
+            .enumerate()
+            .map(|(i, v)| v + if i % 50 == 0 { 3.0 } else { 0.0 })
+            .collect();
+        let [lo, hi] = bootstrap_l2(&approx, &exact);
+        let e = relative_l2(&approx, &exact);
+        assert!(lo < e && e < hi, "{lo} {e} {hi}");
+        assert_eq!(bootstrap_l2(&exact, &exact), [0.0, 0.0]);
+        assert_eq!(bootstrap_l2(&approx, &exact), [lo, hi], "seeded");
     }
 
     #[test]

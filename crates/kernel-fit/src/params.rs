@@ -47,8 +47,35 @@ pub struct FitParams {
     pub seed: u64,
     /// How new sample sets are chosen: θ (the paper) or uniformly (the control experiment).
     pub resampling: Resampling,
-    /// What the network learns: ζ itself (the paper) or k with the emission factored out.
+    /// What the network learns: ζ itself (the paper), k with the emission factored out, or
+    /// only the visibility where it varies.
     pub target: Target,
+    /// [`Target::Visibility`] only: which known discontinuities no cell may straddle.
+    pub gating: Gating,
+    /// [`Target::Visibility`] only: the share of samples (and θ candidates) drawn in proportion
+    /// to the clipped square of the unoccluded ζ, the rest uniformly over the pairs where
+    /// visibility varies. Valid: [0, 1).
+    pub importance: f64,
+    /// [`Target::Visibility`] only: count each sample's error with its importance weight in
+    /// the resource (so growth follows the error of ζ, not of V). With `importance > 0` the
+    /// weight also undoes the sampling density.
+    pub weighted: bool,
+    /// Training steps after the last insertion before the fit stops (at least λ). Valid: any.
+    pub polish_steps: u64,
+}
+
+/// Which known discontinuities of the target the cells may not straddle ([`Target::Visibility`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Gating {
+    /// Every cell responds to every input (the paper's network).
+    #[default]
+    Off,
+    /// A cell responds only to rays between the same two surface edges as its centre ray.
+    Pairs,
+    /// And only to rays on the same side of every visibility event point within its reach:
+    /// the cells of one face of the visibility structure, where `V` is constant.
+    Faces,
 }
 
 /// What the network's output approximates.
@@ -62,6 +89,11 @@ pub enum Target {
     /// network need not spend cells on its jumps (a light set into a ceiling is a 100× step
     /// along one straight line, invisible to γ).
     FactoredEmission,
+    /// The visibility `V ∈ [0, 1]`, and only on the pairs of surface edges where the geometry
+    /// cannot decide it: `ζ̃ = ζ_unoccluded · Ṽ`, with the unoccluded `ζ = E' ρ G` exact (no ray),
+    /// `Ṽ = 1` where a pair is provably unoccluded and 0 where provably blocked. The network
+    /// spends its cells and rays only on shadows.
+    Visibility,
 }
 
 /// How the sets `S₁, S₂, …` are chosen.
@@ -75,8 +107,91 @@ pub enum Resampling {
     Uniform,
 }
 
+/// A named set of [`FitParams`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Preset {
+    /// The project's learner (the default, [`FitParams::default`]): the network learns only
+    /// the visibility, on the pairs of surface edges where geometry cannot decide it; the
+    /// exact unoccluded kernel does the rest. Its cells never straddle a visibility
+    /// discontinuity, so it improves on the paper's network at a faster rate.
+    #[default]
+    Default,
+    /// The paper's network ([`FitParams::paper`]): SGCS learns ζ itself from `γ(s, t)`, with
+    /// the paper's parameters, plus this project's stability fixes and least-squares refit.
+    Paper,
+}
+
+impl Preset {
+    /// Every preset, in the order tables list them.
+    pub const ALL: [Preset; 2] = [Preset::Default, Preset::Paper];
+
+    /// The name used on the command line and in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Preset::Default => "default",
+            Preset::Paper => "paper",
+        }
+    }
+
+    /// Parses [`Preset::name`].
+    pub fn parse(name: &str) -> Result<Preset, FitError> {
+        Preset::ALL
+            .into_iter()
+            .find(|p| p.name() == name)
+            .ok_or_else(|| FitError::InvalidParameter {
+                name: "preset",
+                value: name.to_owned(),
+                valid: "default or paper",
+            })
+    }
+
+    /// The preset's parameters.
+    pub fn params(self) -> FitParams {
+        match self {
+            Preset::Default => FitParams::default(),
+            Preset::Paper => FitParams::paper(),
+        }
+    }
+}
+
 impl Default for FitParams {
+    /// The project's learner ([`Preset::Default`]). Where it departs from the paper:
+    /// - `target: Visibility`, `gating: Faces`: learn `V` only where it varies, with cells
+    ///   that never straddle a visibility discontinuity (the paper learns ζ everywhere);
+    /// - `output_mode: Normalized`, `output_rule: Local`: a partition of unity whose cells
+    ///   hold the mean target they win, exact on a face of constant `V`;
+    /// - `insertion: WorstSample`, `insert_rule: SampleTarget`, `resource: ErrorSum`: grow
+    ///   where the (importance-weighted) error is, not at an edge midpoint;
+    /// - `importance: 0.7`, `weighted: true`: draw samples where the unoccluded ζ is large;
+    /// - `refit: false`: the local rule converges exactly; there is nothing to refit.
+    ///
+    /// Everything else keeps the paper's values (ε_b, ε_n, η, α, λ, ω, φ, ψ).
     fn default() -> Self {
+        FitParams {
+            network: sgcs::Params {
+                output_mode: sgcs::OutputMode::Normalized,
+                output_rule: sgcs::OutputRule::Local,
+                insertion: sgcs::Insertion::WorstSample,
+                insert_rule: sgcs::InsertRule::SampleTarget,
+                resource: sgcs::Resource::ErrorSum,
+                ..sgcs::Params::default()
+            },
+            refit: false,
+            target: Target::Visibility,
+            gating: Gating::Faces,
+            importance: 0.7,
+            weighted: true,
+            ..FitParams::paper()
+        }
+    }
+}
+
+impl FitParams {
+    /// The paper's network ([`Preset::Paper`]): its parameters (§3.2), ζ learned from
+    /// `γ(s, t)`, θ-resampling, plus the least-squares output refit and NLMS step of this
+    /// project (which change nothing where the paper's rule is stable).
+    pub fn paper() -> FitParams {
         FitParams {
             network: sgcs::Params::default(),
             omega: 0.6,
@@ -96,6 +211,10 @@ impl Default for FitParams {
             seed: 1,
             resampling: Resampling::Theta,
             target: Target::Zeta,
+            gating: Gating::Off,
+            importance: 0.0,
+            weighted: false,
+            polish_steps: 0,
         }
     }
 }
@@ -162,6 +281,12 @@ impl FitParams {
             "finite and ≥ 0",
         )?;
         check("heldout", self.heldout, self.heldout >= 16, "≥ 16")?;
+        check(
+            "importance",
+            self.importance,
+            (0.0..1.0).contains(&self.importance),
+            "in [0, 1)",
+        )?;
         Ok(())
     }
 }

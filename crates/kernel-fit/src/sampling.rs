@@ -43,6 +43,15 @@ impl InputFrame {
         ]
     }
 
+    /// The scene point of frame coordinates `w` (the inverse of [`InputFrame::map`]).
+    #[inline]
+    pub fn unmap(&self, w: [f64; 2]) -> DVec2 {
+        DVec2::new(
+            w[0] / self.inv_scale + self.origin[0],
+            w[1] / self.inv_scale + self.origin[1],
+        )
+    }
+
     /// `γ(s, t)`: sender point then receiver point, in frame coordinates.
     #[inline]
     pub fn gamma(&self, scene: &Scene, s: f64, t: f64) -> [f64; 4] {

@@ -46,7 +46,7 @@
 
 use super::{BaselineRun, mix_seed};
 use crate::{Approximation, FitError};
-use flatland_geom::Kernel;
+use flatland_geom::{Kernel, PairClass};
 use glam::DVec2;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -753,19 +753,32 @@ fn estimate(
     seed: u64,
 ) -> (f64, u64) {
     let n = params.rays_per_link;
+    let (p, q) = (&link.p, &link.q);
+    let weight = surfaces.source_weight[p.ord] * surfaces.reflectance[q.ord];
+    let unoccluded_mean = weight * link.transfer / (p.length() * q.length());
+    if params.estimate == LinkEstimate::FormFactorVisibility {
+        // Where geometry decides the visibility of the whole edge pair, V̂ needs no ray.
+        let mid = kernel.unoccluded((p.s0 + p.s1) / 2.0, (q.s0 + q.s1) / 2.0);
+        match kernel.pair_class(mid.sender, mid.receiver) {
+            PairClass::Visible => return (unoccluded_mean, 0),
+            PairClass::Hidden | PairClass::Zero => return (0.0, 0),
+            PairClass::Varies => {}
+        }
+    }
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     // Latin hypercube: one ray per s-stratum and per t-stratum.
     let mut perm: Vec<usize> = (0..n).collect();
     for k in (1..n).rev() {
         perm.swap(k, rng.random_range(0..=k));
     }
-    let (p, q) = (&link.p, &link.q);
     let inside =
         |lo: f64, hi: f64, u: f64| (lo + (hi - lo) * u).clamp(lo, f64::from_bits(hi.to_bits() - 1));
     let (mut sum_g, mut sum_gv, mut sum_zeta) = (0.0, 0.0, 0.0);
+    let mut rays = 0;
     for (k, &pk) in perm.iter().enumerate() {
         let s = inside(p.s0, p.s1, (k as f64 + rng.random::<f64>()) / n as f64);
         let t = inside(q.s0, q.s1, (pk as f64 + rng.random::<f64>()) / n as f64);
+        rays += u64::from(kernel.casts_ray(s, t));
         let sample = kernel.eval(s, t);
         sum_g += sample.geometry;
         if sample.visible {
@@ -777,11 +790,10 @@ fn estimate(
         LinkEstimate::SampleMean => sum_zeta / n as f64,
         LinkEstimate::FormFactorVisibility => {
             let visible = if sum_g > 0.0 { sum_gv / sum_g } else { 1.0 };
-            let weight = surfaces.source_weight[p.ord] * surfaces.reflectance[q.ord];
-            weight * link.transfer / (p.length() * q.length()) * visible
+            unoccluded_mean * visible
         }
     };
-    (value, n as u64)
+    (value, rays)
 }
 
 impl Approximation for HierarchicalRadiosity {

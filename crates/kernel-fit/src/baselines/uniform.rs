@@ -73,11 +73,11 @@ impl UniformGrid {
             .chunks_exact(m)
             .map(|c| c.iter().sum::<f64>() / m as f64)
             .collect();
-        Ok(UniformGrid {
-            g,
-            values,
-            rays: points.len() as u64,
-        })
+        let rays = points
+            .iter()
+            .filter(|&&[s, t]| kernel.casts_ray(s, t))
+            .count() as u64;
+        Ok(UniformGrid { g, values, rays })
     }
 
     /// Blocks per axis.
@@ -90,7 +90,8 @@ impl UniformGrid {
         &self.values
     }
 
-    /// Rays spent building the grid (g² · m).
+    /// Rays spent building the grid: of its g² · m kernel evaluations, those whose visibility
+    /// geometry could not decide ([`Kernel::casts_ray`]).
     pub fn rays(&self) -> u64 {
         self.rays
     }
@@ -231,15 +232,24 @@ mod tests {
 
     #[test]
     fn rays_and_counts_are_reported() {
-        let kernel = box_kernel();
-        let run = run_uniform(&kernel, 400, 1, &UniformParams { rays_per_block: 3 }).unwrap();
+        // In a closed box without occluders geometry decides every visibility: no ray at all.
+        let run = run_uniform(&box_kernel(), 400, 1, &UniformParams { rays_per_block: 3 }).unwrap();
         assert_eq!(run.basis_functions, 400);
-        assert_eq!(run.rays, 400 * 3);
+        assert_eq!(run.rays, 0);
         assert_eq!(run.memory_bytes, 400 * 8);
+        // With a blocker, the evaluations on the pairs it shadows cost one ray each.
+        let kernel = blocker_kernel();
+        let run = run_uniform(&kernel, 400, 1, &UniformParams { rays_per_block: 3 }).unwrap();
+        let points = sample_points(20, 3, 1);
+        let expected = points
+            .iter()
+            .filter(|&&[s, t]| kernel.casts_ray(s, t))
+            .count();
+        assert!(expected > 0 && expected < 400 * 3);
+        assert_eq!(run.rays, expected as u64);
         // 50 is not a square: the nearest one (49) is used and reported.
         let run = run_uniform(&kernel, 50, 1, &UniformParams::default()).unwrap();
         assert_eq!(run.basis_functions, 49);
-        assert_eq!(run.rays, 49 * 20);
         assert!(
             run.approx
                 .values()

@@ -1,0 +1,354 @@
+//! The visibility learner's geometry: which face of a pair's visibility structure a ray or a
+//! cell lies in, and where its samples are drawn.
+//!
+//! With [`Target::Visibility`](crate::Target::Visibility) the network learns only `V` on the
+//! pairs of surface edges where it varies ([`PairClass::Varies`]); everywhere else the geometry
+//! gives it exactly. On such a pair `V` is constant on the faces cut out by the curves of the
+//! pair's event points ([`flatland_geom::PairEvents`]). A cell belongs to the face of its centre
+//! ray, and a [`FaceGate`] lets only the cells of a query ray's face respond: no cell straddles
+//! a known discontinuity, and a face with one cell anywhere in it has that cell's value.
+
+use std::collections::HashMap;
+
+use flatland_geom::{DVec2, Kernel, PairClass, PairEvents, Unoccluded};
+use rand::{Rng, RngExt};
+use sgcs::{CellId, Gate};
+
+use crate::{Gating, InputFrame};
+
+/// One face of a pair's visibility structure: the ordered pair of surface edges (sender rank,
+/// receiver rank), the sub-pair, and the side of each of the sub-pair's event points (bits).
+/// Visibility is the same for every ray of one face.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub(crate) struct FaceKey {
+    pair: (u32, u32),
+    sub: u8,
+    sides: Box<[u64]>,
+}
+
+impl FaceKey {
+    /// The face of the ray from `x` (on the surface of rank `a`) to `y` (rank `b`); `None`
+    /// unless visibility varies on that pair.
+    pub(crate) fn of(kernel: &Kernel, a: usize, b: usize, x: DVec2, y: DVec2) -> Option<FaceKey> {
+        if a == b || kernel.pair_class(a, b) != PairClass::Varies {
+            return None;
+        }
+        let events = kernel.visibility_events(a, b)?;
+        let sub = events.sub_pair(x, y);
+        let points = events.points(sub);
+        let mut sides = vec![0u64; points.len().div_ceil(64)];
+        for (i, &v) in points.iter().enumerate() {
+            if PairEvents::side(x, y, v) {
+                sides[i / 64] |= 1 << (i % 64);
+            }
+        }
+        Some(FaceKey {
+            pair: (a as u32, b as u32),
+            sub: sub as u8,
+            sides: sides.into(),
+        })
+    }
+
+    /// The face of the ray at `(s, t)`.
+    pub(crate) fn at(kernel: &Kernel, u: &Unoccluded) -> Option<FaceKey> {
+        FaceKey::of(kernel, u.sender, u.receiver, u.x, u.y)
+    }
+}
+
+/// Which face and pair every cell is in, and the cells of each face and each pair (ascending).
+/// Derived from the cells' positions: rebuilt, never saved.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Faces {
+    ids: HashMap<FaceKey, u32>,
+    face_cells: Vec<Vec<CellId>>,
+    pair_cells: HashMap<(u32, u32), Vec<CellId>>,
+    /// Per cell: its face id and pair, `None` when its centre ray is on no varying pair.
+    of_cell: Vec<Option<(u32, (u32, u32))>>,
+}
+
+impl Faces {
+    /// Puts `cell` in the face `key` (moving it out of its old face and pair).
+    pub(crate) fn place(&mut self, cell: CellId, key: Option<FaceKey>) {
+        if self.of_cell.len() <= cell {
+            self.of_cell.resize(cell + 1, None);
+        }
+        let new = key.map(|key| {
+            let pair = key.pair;
+            let next = self.ids.len() as u32;
+            let id = *self.ids.entry(key).or_insert(next);
+            if id as usize == self.face_cells.len() {
+                self.face_cells.push(Vec::new());
+            }
+            (id, pair)
+        });
+        let old = self.of_cell[cell];
+        if old == new {
+            return;
+        }
+        if let Some((face, pair)) = old {
+            remove_sorted(&mut self.face_cells[face as usize], cell);
+            if let Some(list) = self.pair_cells.get_mut(&pair) {
+                remove_sorted(list, cell);
+            }
+        }
+        if let Some((face, pair)) = new {
+            insert_sorted(&mut self.face_cells[face as usize], cell);
+            insert_sorted(self.pair_cells.entry(pair).or_default(), cell);
+        }
+        self.of_cell[cell] = new;
+    }
+
+    /// The gate of a query ray in face `key` (see [`Gating`]).
+    pub(crate) fn gate<'a>(&'a self, key: &FaceKey, gating: Gating) -> FaceGate<'a> {
+        let face = self.ids.get(key).copied();
+        let pair = self
+            .pair_cells
+            .get(&key.pair)
+            .map_or(&[][..], Vec::as_slice);
+        let (region, fallback) = match gating {
+            Gating::Faces => (
+                face.map_or(&[][..], |f| self.face_cells[f as usize].as_slice()),
+                Some(pair),
+            ),
+            _ => (pair, None),
+        };
+        FaceGate {
+            of_cell: &self.of_cell,
+            face,
+            pair: key.pair,
+            gating,
+            region,
+            fallback,
+        }
+    }
+
+    /// Number of distinct faces holding at least one cell.
+    pub(crate) fn occupied(&self) -> usize {
+        self.face_cells.iter().filter(|c| !c.is_empty()).count()
+    }
+
+    /// Checks that the face and pair lists hold exactly the cells `of_cell` says, ascending, and
+    /// that cell `c`'s face is `expected(c)`.
+    pub(crate) fn check(
+        &self,
+        cells: usize,
+        expected: impl Fn(CellId) -> Option<FaceKey>,
+    ) -> Result<(), String> {
+        if self.of_cell.len() != cells {
+            return Err(format!(
+                "faces known for {} of {cells} cells",
+                self.of_cell.len()
+            ));
+        }
+        for c in 0..cells {
+            let want = expected(c).map(|key| (self.ids.get(&key).copied(), key.pair));
+            let have = self.of_cell[c].map(|(face, pair)| (Some(face), pair));
+            if want != have {
+                return Err(format!(
+                    "cell {c} is filed under {have:?}, its centre is in {want:?}"
+                ));
+            }
+        }
+        for (face, list) in self.face_cells.iter().enumerate() {
+            let sorted = list.windows(2).all(|w| w[0] < w[1]);
+            if !sorted
+                || list
+                    .iter()
+                    .any(|&c| self.of_cell[c].map(|f| f.0) != Some(face as u32))
+            {
+                return Err(format!("face {face} lists {list:?}"));
+            }
+        }
+        for (pair, list) in &self.pair_cells {
+            let sorted = list.windows(2).all(|w| w[0] < w[1]);
+            if !sorted
+                || list
+                    .iter()
+                    .any(|&c| self.of_cell[c].map(|f| f.1) != Some(*pair))
+            {
+                return Err(format!("pair {pair:?} lists {list:?}"));
+            }
+        }
+        let filed: usize = self.face_cells.iter().map(Vec::len).sum();
+        if filed != self.of_cell.iter().flatten().count() {
+            return Err("a cell is filed twice or not at all".into());
+        }
+        Ok(())
+    }
+}
+
+fn insert_sorted(list: &mut Vec<CellId>, cell: CellId) {
+    if let Err(at) = list.binary_search(&cell) {
+        list.insert(at, cell);
+    }
+}
+
+fn remove_sorted(list: &mut Vec<CellId>, cell: CellId) {
+    if let Ok(at) = list.binary_search(&cell) {
+        list.remove(at);
+    }
+}
+
+/// Admits the cells of the query's face ([`Gating::Faces`]) or pair ([`Gating::Pairs`]), and
+/// names them, so every one of them responds however far it is (see [`sgcs::Gate::region`]).
+pub(crate) struct FaceGate<'a> {
+    of_cell: &'a [Option<(u32, (u32, u32))>],
+    face: Option<u32>,
+    pair: (u32, u32),
+    gating: Gating,
+    region: &'a [CellId],
+    fallback: Option<&'a [CellId]>,
+}
+
+impl Gate for FaceGate<'_> {
+    #[inline]
+    fn admits(&self, cell: CellId) -> bool {
+        match self.of_cell.get(cell).copied().flatten() {
+            Some((face, pair)) => match self.gating {
+                Gating::Faces => Some(face) == self.face,
+                _ => pair == self.pair,
+            },
+            None => false,
+        }
+    }
+    fn region(&self) -> Option<&[CellId]> {
+        Some(self.region)
+    }
+    fn fallback(&self) -> Option<&[CellId]> {
+        self.fallback
+    }
+}
+
+/// Computes the face of a cell from its position.
+#[derive(Clone, Debug)]
+pub(crate) struct Labeller {
+    frame: InputFrame,
+    parents: Vec<(DVec2, DVec2)>,
+}
+
+impl Labeller {
+    pub(crate) fn new(kernel: &Kernel, frame: InputFrame) -> Labeller {
+        Labeller {
+            frame,
+            parents: (0..kernel.surface_parents())
+                .map(|r| kernel.surface_parent(r))
+                .collect(),
+        }
+    }
+
+    /// The face of the centre ray of a cell at `pos` (frame coordinates, `x₁ y₁ x₂ y₂`): its
+    /// ends are put on the nearest surface edges.
+    pub(crate) fn face(&self, kernel: &Kernel, pos: &[f64]) -> Option<FaceKey> {
+        let x = self.frame.unmap([pos[0], pos[1]]);
+        let y = self.frame.unmap([pos[2], pos[3]]);
+        FaceKey::of(kernel, self.nearest_parent(x), self.nearest_parent(y), x, y)
+    }
+
+    fn nearest_parent(&self, p: DVec2) -> usize {
+        let mut best = (f64::INFINITY, 0);
+        for (r, &(a, b)) in self.parents.iter().enumerate() {
+            let d = distance_to_segment(p, a, b);
+            if d < best.0 {
+                best = (d, r);
+            }
+        }
+        best.1
+    }
+}
+
+fn distance_to_segment(p: DVec2, a: DVec2, b: DVec2) -> f64 {
+    let d = b - a;
+    let len2 = d.length_squared();
+    let u = if len2 > 0.0 {
+        ((p - a).dot(d) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    p.distance(a + d * u)
+}
+
+/// Draws `(s, t)` where visibility varies: a share `importance` in proportion to the clipped
+/// square of the unoccluded target, the rest uniformly, each with the importance weight that
+/// makes weighted sums estimate `∫∫ min(ζ_unoccluded / c, 1)² (·) ds dt` over those pairs.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub(crate) struct Sampler {
+    importance: f64,
+    /// The clip level `c` of the unoccluded ζ (a high quantile of it).
+    clip: f64,
+    /// The mean of `g = min(ζ_unoccluded / c, 1)²` over uniform draws.
+    mean_g: f64,
+}
+
+/// A drawn place: `(s, t)` and its importance weight.
+pub(crate) struct Draw {
+    pub st: [f64; 2],
+    pub weight: f64,
+}
+
+/// Uniform draws tried before concluding that no pair has varying visibility.
+const MAX_TRIES: usize = 1 << 20;
+/// Uniform draws that set the clip level.
+const PILOT: usize = 4096;
+/// The clip level is this quantile of the unoccluded ζ: the 1/r corners of a light must not
+/// take every sample.
+const CLIP_QUANTILE: f64 = 0.99;
+
+impl Sampler {
+    /// Sets the clip level from a pilot of uniform draws; `None` when visibility varies nowhere.
+    pub(crate) fn new(kernel: &Kernel, importance: f64, rng: &mut impl Rng) -> Option<Sampler> {
+        let mut values: Vec<f64> = Vec::with_capacity(PILOT);
+        for _ in 0..PILOT {
+            values.push(uniform_varies(kernel, rng)?.1.zeta);
+        }
+        values.sort_by(f64::total_cmp);
+        let clip = values[((values.len() - 1) as f64 * CLIP_QUANTILE) as usize];
+        let clip = if clip > 0.0 { clip } else { 1.0 };
+        let mean_g = values.iter().map(|&z| g(z, clip)).sum::<f64>() / values.len() as f64;
+        Some(Sampler {
+            importance,
+            clip,
+            mean_g: mean_g.max(f64::MIN_POSITIVE),
+        })
+    }
+
+    /// One draw (no ray is cast).
+    pub(crate) fn draw(&self, kernel: &Kernel, rng: &mut impl Rng) -> Draw {
+        let (st, u) = if rng.random::<f64>() < self.importance {
+            loop {
+                let (st, u) = uniform_varies(kernel, rng).expect("checked by Sampler::new");
+                if rng.random::<f64>() < g(u.zeta, self.clip) {
+                    break (st, u);
+                }
+            }
+        } else {
+            uniform_varies(kernel, rng).expect("checked by Sampler::new")
+        };
+        Draw {
+            st,
+            weight: self.weight(u.zeta),
+        }
+    }
+
+    /// The importance weight of a sample with unoccluded ζ `zeta` (mean 1 over draws).
+    pub(crate) fn weight(&self, zeta: f64) -> f64 {
+        let relative = g(zeta, self.clip) / self.mean_g;
+        relative / ((1.0 - self.importance) + self.importance * relative)
+    }
+}
+
+/// `min(z / c, 1)²`.
+fn g(z: f64, c: f64) -> f64 {
+    (z / c).min(1.0).powi(2)
+}
+
+/// A uniform `(s, t)` on a pair where visibility varies and the unoccluded ζ is positive.
+fn uniform_varies(kernel: &Kernel, rng: &mut impl Rng) -> Option<([f64; 2], Unoccluded)> {
+    for _ in 0..MAX_TRIES {
+        let (s, t) = (rng.random::<f64>(), rng.random::<f64>());
+        let u = kernel.unoccluded(s, t);
+        if u.zeta > 0.0 && kernel.pair_class(u.sender, u.receiver) == PairClass::Varies {
+            return Some(([s, t], u));
+        }
+    }
+    None
+}
