@@ -15,6 +15,10 @@
 //! - **Errors** are measured only against a [`Reference`] the fit never trains on: the exact ζ on
 //!   a midpoint grid and at held-out random points. [`relative_l2`] is SPEC §5's measure.
 //! - **Rays** counted are exact kernel evaluations made for training; evaluation is not counted.
+//! - **Solving.** A kernel is learned to be used: [`solve`] solves the radiosity equation
+//!   `B = E + K B` with any representation through one trait,
+//!   [`solve::KernelRepresentation`] (the exact kernel, the learned model, HR, the uniform grid),
+//!   and measures the solved B against the exact kernel's on a fine mesh.
 //!
 //! ```
 //! use std::sync::Arc;
@@ -47,6 +51,7 @@ mod fit;
 mod model;
 mod params;
 mod sampling;
+pub mod solve;
 
 pub use error::FitError;
 pub use eval::{
