@@ -185,7 +185,10 @@ mod tests {
             let pivot = a[c].clone();
             for row in a.iter_mut().skip(c + 1) {
                 let f = row[c] / pivot[c];
-                row.iter_mut().zip(&pivot).skip(c).for_each(|(v, p)| *v -= f * p);
+                row.iter_mut()
+                    .zip(&pivot)
+                    .skip(c)
+                    .for_each(|(v, p)| *v -= f * p);
             }
         }
         let mut x = vec![0.0; n];

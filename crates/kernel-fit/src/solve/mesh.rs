@@ -30,6 +30,10 @@ pub struct MeshEdge {
     pub source_weight: f64,
     /// Its elements (indices into [`Mesh::elements`]).
     pub elements: Range<usize>,
+    /// Where other edges touch or cross it, as fractions `u ∈ (0, 1)` from `a` to `b`: B jumps
+    /// there (a partition standing on a floor sees different halves of the room from its two
+    /// sides), so element boundaries are placed there.
+    pub junctions: Vec<f64>,
 }
 
 /// One element: an interval of one surface edge, never straddling two. The unknown `B` is
@@ -70,40 +74,42 @@ pub struct Mesh {
 /// Most elements a mesh may have: the dense operators hold N² numbers (8192² · 8 B = 512 MiB).
 pub const MAX_ELEMENTS: usize = 8192;
 
-/// Elements per unit of the default: about this many over the whole scene, and at least
-/// [`MIN_PER_EDGE`] per surface edge (measured: at 512 the exact solve of every bundled scene
-/// is within 0.3 % of the converged one in the reflected part; see the module tests).
+/// The default element count: about this many over the whole scene, and at least
+/// [`MIN_PER_EDGE`] per section of a surface edge. Measured against 8192 elements, 512 put the
+/// reflected part of every bundled scene's exact solve within 0.1 % (`flatland solve
+/// --reference-elements 8192`).
 pub const DEFAULT_ELEMENTS: usize = 512;
 
-/// Fewest elements the default gives a surface edge.
+/// Fewest elements the default gives a section of a surface edge.
 pub const MIN_PER_EDGE: usize = 2;
 
 impl Mesh {
-    /// The default element count for `scene`: [`DEFAULT_ELEMENTS`], raised so every surface edge
-    /// gets [`MIN_PER_EDGE`] elements, capped at [`MAX_ELEMENTS`].
+    /// The default element count for `scene`: [`DEFAULT_ELEMENTS`], raised so every section of
+    /// a surface edge gets [`MIN_PER_EDGE`] elements, capped at [`MAX_ELEMENTS`].
     #[must_use]
     pub fn default_elements(scene: &Scene) -> usize {
-        let edges = surface_runs(scene).len();
+        let sections = Mesh::min_elements(scene);
         DEFAULT_ELEMENTS
-            .max(MIN_PER_EDGE * edges)
-            .min(MAX_ELEMENTS.max(edges))
+            .max(MIN_PER_EDGE * sections)
+            .min(MAX_ELEMENTS.max(sections))
     }
 
     /// `elements` elements over the surfaces of `kernel`'s scene, spread so that their lengths
-    /// are as equal as the edges allow (each edge gets at least one, apportioned by length).
-    /// Errors name the valid range: at least one element per surface edge, at most
-    /// [`MAX_ELEMENTS`].
+    /// are as equal as the sections allow (each section gets at least one, apportioned by
+    /// length). Sections are the parts of a surface edge between its ends and the junctions
+    /// where other edges touch or cross it ([`MeshEdge::junctions`]). Errors name the valid
+    /// range: at least [`Mesh::min_elements`], at most [`MAX_ELEMENTS`].
     pub fn new(kernel: &Kernel, elements: usize) -> Result<Mesh, FitError> {
-        let scene = kernel.scene();
-        let runs = surface_runs(scene);
-        if elements < runs.len() || elements > MAX_ELEMENTS {
+        let fewest = Mesh::min_elements(kernel.scene());
+        if elements < fewest || elements > MAX_ELEMENTS {
             return Err(FitError::InvalidParameter {
                 name: "elements",
                 value: elements.to_string(),
                 valid: if elements > MAX_ELEMENTS {
                     "at most 8192 (the operator is dense: N² numbers)"
                 } else {
-                    "at least one per surface edge (elements never straddle two edges)"
+                    "at least one per section of a surface edge (elements never straddle two \
+                     edges, nor a point where another edge touches or crosses one)"
                 },
             });
         }
@@ -114,6 +120,7 @@ impl Mesh {
         let scene = kernel.scene();
         let runs = surface_runs(scene);
         let total_length = scene.total_length();
+        let cuts: Vec<Vec<f64>> = runs.iter().map(|r| junctions(scene, r)).collect();
         let lengths: Vec<f64> = runs
             .iter()
             .map(|r| {
@@ -121,13 +128,24 @@ impl Mesh {
                 (e[r.end - 1].b - e[r.start].a).length()
             })
             .collect();
-        let counts = apportion(&lengths, elements);
+        // Sections: the parts of each edge between its ends and junctions, in order.
+        let sections: Vec<(usize, f64, f64)> = cuts
+            .iter()
+            .enumerate()
+            .flat_map(|(k, c)| c.windows(2).map(move |w| (k, w[0], w[1])))
+            .collect();
+        let section_lengths: Vec<f64> = sections
+            .iter()
+            .map(|&(k, u0, u1)| (u1 - u0) * lengths[k])
+            .collect();
+        let counts = apportion(&section_lengths, elements);
         let frame = InputFrame::of(scene);
         let local_point = |p: DVec2| DVec2::from(frame.map(p));
-        let mut edges = Vec::with_capacity(runs.len());
+        let mut edges: Vec<MeshEdge> = Vec::with_capacity(runs.len());
         let mut out = Vec::with_capacity(elements);
         let mut local = Vec::with_capacity(elements);
-        for (k, (run, &count)) in runs.iter().zip(&counts).enumerate() {
+        for (&(k, u_start, u_end), &count) in sections.iter().zip(&counts) {
+            let run = &runs[k];
             let first = scene.edges()[run.start];
             let (a, b) = (first.a, scene.edges()[run.end - 1].b);
             let s0 = scene
@@ -138,17 +156,38 @@ impl Mesh {
                 .edge_param_range(run.end - 1)
                 .expect("a surface edge has a parameter range")
                 .1;
-            let start = out.len();
+            if edges.len() == k {
+                edges.push(MeshEdge {
+                    pieces: run.clone(),
+                    s: [s0, s1],
+                    a,
+                    b,
+                    normal: first.normal(),
+                    two_sided: first.two_sided,
+                    reflectance: first.reflectance,
+                    emission: first.emission,
+                    source_weight: kernel.source_weight(run.start),
+                    elements: out.len()..out.len(),
+                    junctions: cuts[k][1..cuts[k].len() - 1].to_vec(),
+                });
+            }
             // Positions as Scene::point computes them (a + (b − a) u), so a midpoint's `s`
             // names that very point.
             let at = |u: f64| if u >= 1.0 { b } else { a + (b - a) * u };
             let param = |u: f64| if u >= 1.0 { s1 } else { s0 + (s1 - s0) * u };
+            let along = |e: f64| {
+                if e >= count as f64 {
+                    u_end
+                } else {
+                    u_start + (u_end - u_start) * e / count as f64
+                }
+            };
             let pieces = run.len();
             for e in 0..count {
                 let (u0, u1, um) = (
-                    e as f64 / count as f64,
-                    (e + 1) as f64 / count as f64,
-                    (e as f64 + 0.5) / count as f64,
+                    along(e as f64),
+                    along(e as f64 + 1.0),
+                    along(e as f64 + 0.5),
                 );
                 let (pa, pb, pm) = (at(u0), at(u1), at(um));
                 out.push(Element {
@@ -159,22 +198,11 @@ impl Mesh {
                     a: pa,
                     b: pb,
                     midpoint: pm,
-                    length: lengths[k] / count as f64,
+                    length: (u1 - u0) * lengths[k],
                 });
                 local.push([local_point(pa), local_point(pb), local_point(pm)]);
             }
-            edges.push(MeshEdge {
-                pieces: run.clone(),
-                s: [s0, s1],
-                a,
-                b,
-                normal: first.normal(),
-                two_sided: first.two_sided,
-                reflectance: first.reflectance,
-                emission: first.emission,
-                source_weight: kernel.source_weight(run.start),
-                elements: start..out.len(),
-            });
+            edges[k].elements.end = out.len();
         }
         Ok(Mesh {
             edges,
@@ -186,10 +214,19 @@ impl Mesh {
         })
     }
 
-    /// One element per surface edge: the coarsest mesh (no limit on the count).
+    /// One element per section of a surface edge: the coarsest mesh (no limit on the count).
     pub fn coarsest(kernel: &Kernel) -> Result<Mesh, FitError> {
-        let edges = surface_runs(kernel.scene()).len();
-        Mesh::build(kernel, edges)
+        Mesh::build(kernel, Mesh::min_elements(kernel.scene()))
+    }
+
+    /// The fewest elements a mesh of `scene` can have: one per section, the parts of a surface
+    /// edge between its ends and the points where other edges touch or cross it.
+    #[must_use]
+    pub fn min_elements(scene: &Scene) -> usize {
+        surface_runs(scene)
+            .iter()
+            .map(|r| junctions(scene, r).len() - 1)
+            .sum()
     }
 
     /// The elements, in parameter order.
@@ -277,6 +314,34 @@ fn surface_runs(scene: &Scene) -> Vec<Range<usize>> {
     runs
 }
 
+/// `0`, the junctions of surface run `run` (see [`MeshEdge::junctions`]) and `1`, ascending.
+fn junctions(scene: &Scene, run: &Range<usize>) -> Vec<f64> {
+    let all = scene.edges();
+    let (a, b) = (all[run.start].a, all[run.end - 1].b);
+    let d = b - a;
+    // Parameters within this of an end are the end (the edge meets another at a corner).
+    let tol = 1e-9;
+    let mut cuts = vec![0.0, 1.0];
+    for (i, e) in all.iter().enumerate() {
+        if run.contains(&i) {
+            continue;
+        }
+        let q = e.b - e.a;
+        let den = d.perp_dot(q);
+        if den == 0.0 {
+            continue; // parallel: collinear neighbours meet at an end, overlaps have no point
+        }
+        let w = e.a - a;
+        let (u, v) = (w.perp_dot(q) / den, w.perp_dot(d) / den);
+        if u > tol && u < 1.0 - tol && (-tol..=1.0 + tol).contains(&v) {
+            cuts.push(u);
+        }
+    }
+    cuts.sort_by(f64::total_cmp);
+    cuts.dedup_by(|x, y| (*x - *y).abs() <= tol);
+    cuts
+}
+
 /// `total` elements over edges of `lengths`: at least one each, otherwise as close to equal
 /// element lengths as whole numbers allow (each step gives one more element to the edge whose
 /// elements are longest, or takes one from the edge whose elements are shortest).
@@ -316,7 +381,7 @@ mod tests {
         for name in ["fig3", "box", "maze", "corners"] {
             let kernel = Kernel::new(bundled(name));
             let scene = kernel.scene();
-            for n in [scene.surface_edges().len(), 100, 513] {
+            for n in [Mesh::min_elements(scene), 100, 513] {
                 let mesh = Mesh::new(&kernel, n).unwrap();
                 assert_eq!(mesh.len(), n, "{name}");
                 let els = mesh.elements();
@@ -355,9 +420,38 @@ mod tests {
         // Fewer elements than (whole) surface edges is an error naming the rule.
         let err = Mesh::new(&Kernel::new(scene), 5).unwrap_err().to_string();
         assert!(
-            err.contains("elements") && err.contains("at least one per surface edge"),
+            err.contains("elements") && err.contains("at least one per section"),
             "{err}"
         );
+    }
+
+    #[test]
+    fn elements_never_straddle_a_junction() {
+        // maze: a partition stands on the floor at x = 1.5 and hangs from the ceiling at x = 5.2;
+        // corners: a blocker stands on the right floor piece at x = 3.2.
+        let maze = Kernel::new(bundled("maze"));
+        let mesh = Mesh::new(&maze, 300).unwrap();
+        assert_eq!(mesh.edges()[0].junctions, vec![0.25]);
+        assert!((mesh.edges()[2].junctions[0] - 0.8 / 1.5).abs() < 1e-15);
+        assert_eq!(Mesh::min_elements(maze.scene()), 12 + 2);
+        let corners = Kernel::new(bundled("corners"));
+        let mesh = Mesh::new(&corners, 100).unwrap();
+        assert!((mesh.edges()[1].junctions[0] - 0.6).abs() < 1e-15);
+        for m in [&mesh, &Mesh::new(&maze, 77).unwrap()] {
+            for edge in m.edges() {
+                for &u in &edge.junctions {
+                    let x = edge.a + (edge.b - edge.a) * u;
+                    assert!(
+                        m.elements()[edge.elements.clone()]
+                            .iter()
+                            .any(|e| e.a.distance(x) < 1e-12),
+                        "no element starts at the junction {x}"
+                    );
+                }
+            }
+        }
+        assert!(Mesh::new(&maze, 13).is_err());
+        assert_eq!(Mesh::coarsest(&maze).unwrap().len(), 14);
     }
 
     #[test]

@@ -499,8 +499,7 @@ mod tests {
     #[test]
     fn exact_solve_converges_with_refinement() {
         // Against a 4096-element solve, at the midpoints of a common 64-element probe mesh
-        // (printed as the convergence table). Meshes of different sizes are not nested, so one
-        // doubling can land luckily; every quadrupling must gain, and the whole range 50×.
+        // (printed as the convergence table): every doubling must gain, the whole range 50×.
         for name in ["fig3", "maze", "corners"] {
             let kernel = Kernel::new(bundled(name));
             let params = SolveParams::default();
@@ -518,13 +517,13 @@ mod tests {
                 );
                 errors.push(e.rel_l2_reflected);
             }
-            for w in errors.windows(3) {
-                assert!(w[2] < w[0], "{name}: no convergence: {errors:?}");
+            for w in errors.windows(2) {
+                assert!(w[1] < w[0], "{name}: no convergence: {errors:?}");
             }
             assert!(errors[5] < errors[0] / 50.0, "{name}: too slow: {errors:?}");
             assert!(
-                errors[3] < 3e-3,
-                "{name}: 512 elements are not within 0.3 %: {errors:?}"
+                errors[3] < 1e-3,
+                "{name}: 512 elements are not within 0.1 %: {errors:?}"
             );
         }
     }
@@ -639,6 +638,27 @@ mod tests {
             let e = solve_errors(&mesh, &fast.radiosity, &slow.radiosity);
             assert!(e.rel_l2_reflected < 1e-3, "{e:?}");
         }
+    }
+
+    #[test]
+    fn the_default_quadrature_of_the_exact_zeta_approaches_the_exact_operator() {
+        // The generic path (ζ̃ / E' by Gauss–Legendre) fed the exact ζ: what it loses is only
+        // quadrature at shadow edges and next to corners, and it shrinks with more points.
+        let kernel = Kernel::new(bundled("fig3"));
+        let mesh = Mesh::new(&kernel, 256).unwrap();
+        let params = SolveParams::default();
+        let exact_b = solve(&kernel, &mesh, &params, &never).unwrap().radiosity;
+        let mut errors = Vec::new();
+        for points in [1, 2, 4, 8] {
+            let op = quadrature_operator(&kernel, &mesh, points, &never).unwrap();
+            let b = solve_operator(&op, &mesh, &params, &never)
+                .unwrap()
+                .radiosity;
+            let e = solve_errors(&mesh, &b, &exact_b);
+            println!("fig3, quadrature of exact ζ, {points} points: {e:?}");
+            errors.push(e.rel_l2_reflected);
+        }
+        assert!(errors[3] < errors[0] && errors[3] < 0.01, "{errors:?}");
     }
 
     #[test]
