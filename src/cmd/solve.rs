@@ -612,7 +612,7 @@ fn draw_curves(area: &Area<'_>, p: &Picture<'_>) -> DrawResult {
         let mean = range.clone().map(|i| p.b[i]).sum::<f64>() / range.len().max(1) as f64;
         if mean > y_max {
             chart.draw_series([Text::new(
-                format!("B ≈ {mean:.3} ↑"),
+                format!("B = {mean:.3} (off the axis)"),
                 (edge.s[0], y_max * 0.97),
                 ("sans-serif", 14).into_font(),
             )])?;
