@@ -1,6 +1,7 @@
 //! Solving `B = E + K B` on `fig3` at 1024 elements: the whole solve (operator and GMRES) with
 //! the exact kernel, the learned kernel (400 cells), HR and the uniform grid at 400 basis
-//! functions, and the linear solve alone. The representations are built once, outside the
+//! functions, the linear solve alone, and the geometric operator a visibility learner would
+//! use (with a constant Ṽ). The representations are built once, outside the
 //! timing: this measures what it costs to *use* a kernel.
 
 use std::ops::ControlFlow;
@@ -10,7 +11,8 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use flatland_geom::{Kernel, Scene};
 use kernel_fit::baselines::{HrParams, UniformParams, run_hr_at_budget, run_uniform};
 use kernel_fit::solve::{
-    KernelRepresentation, Mesh, SolveParams, exact_operator, never, solve, solve_operator,
+    KernelRepresentation, Mesh, SolveParams, exact_operator, geometric_operator, never, solve,
+    solve_operator,
 };
 use kernel_fit::{Fit, FitParams, Reference};
 use std::hint::black_box;
@@ -36,6 +38,17 @@ fn solves(c: &mut Criterion) {
     let op = exact_operator(&kernel, &mesh, &never).expect("operator");
     group.bench_function("exact_gmres_only", |b| {
         b.iter(|| solve_operator(black_box(&op), &mesh, &params, &never).expect("solve"))
+    });
+
+    // What a learner of the visibility alone pays besides its own evaluations: the closed
+    // form everywhere, the element-level shadow test, and a (here constant) Ṽ for the few
+    // partly shadowed pairs.
+    group.bench_function("geometric_constant_visibility", |b| {
+        b.iter(|| {
+            let op = geometric_operator(black_box(&kernel), &mesh, |_, _| 0.5, &never)
+                .expect("operator");
+            solve_operator(&op, &mesh, &params, &never).expect("solve")
+        })
     });
 
     let hr = run_hr_at_budget(&kernel, BASIS, 1, &HrParams::default())

@@ -72,7 +72,9 @@ pub use mesh::{DEFAULT_ELEMENTS, Element, MAX_ELEMENTS, MIN_PER_EDGE, Mesh, Mesh
 pub use operator::{DenseOperator, KernelRectangle, RectangleOperator, TransferOperator};
 pub use quadrature::gauss_legendre;
 pub use represent::{KernelRepresentation, inverse_source_weights, quadrature_operator};
-pub use transfer::{Receiver, Sender, point_to_segment, point_to_segment_visible};
+pub use transfer::{
+    Receiver, Sender, Shadowing, point_to_segment, point_to_segment_visible, shadowing,
+};
 
 /// The stop flag of every long loop here: polled between rows and iterations; when it returns
 /// `true` the work ends with [`FitError::Interrupted`].

@@ -94,6 +94,50 @@ pub fn point_to_segment_visible(
     total + subtended(y, x.a + d * visible_from, x.b)
 }
 
+/// How much of a sender the occluders hide from a receiver.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Shadowing {
+    /// No part is hidden.
+    None,
+    /// Every part is hidden (possibly by several occluders together).
+    Full,
+    /// Some part is hidden, some is not.
+    Partial,
+}
+
+/// Which parts of the sender `occluders` hide from `y` (the intervals of the module docs),
+/// without integrating anything.
+#[must_use]
+pub fn shadowing(
+    y: &Receiver,
+    x: &Sender,
+    occluders: &[[DVec2; 2]],
+    scratch: &mut Vec<[f64; 2]>,
+) -> Shadowing {
+    scratch.clear();
+    scratch.extend(
+        occluders
+            .iter()
+            .filter_map(|&[c0, c1]| shadow(y.position, x.a, x.b, c0, c1)),
+    );
+    if scratch.is_empty() {
+        return Shadowing::None;
+    }
+    scratch.sort_by(|p, q| p[0].total_cmp(&q[0]));
+    let mut covered = 0.0;
+    for &[lo, hi] in scratch.iter() {
+        if lo > covered {
+            return Shadowing::Partial;
+        }
+        covered = f64::max(covered, hi);
+    }
+    if covered >= 1.0 {
+        Shadowing::Full
+    } else {
+        Shadowing::Partial
+    }
+}
+
 /// Whether `y` is on the sending side of the sender's line (strictly).
 #[inline]
 fn faces(y: &Receiver, x: &Sender) -> bool {
@@ -355,6 +399,8 @@ mod tests {
         // A wide wall between them hides everything.
         let wall = [[v(-5.0, 1.0), v(5.0, 1.0)]];
         assert_eq!(point_to_segment_visible(&y, &x, &wall, &mut scratch), 0.0);
+        assert_eq!(shadowing(&y, &x, &wall, &mut scratch), Shadowing::Full);
+        assert_eq!(shadowing(&y, &x, &[], &mut scratch), Shadowing::None);
         // Two halves meeting in the middle also hide everything (no leak at the joint).
         let halves = [[v(-5.0, 1.0), v(0.0, 1.0)], [v(0.0, 1.0), v(5.0, 1.0)]];
         assert!(point_to_segment_visible(&y, &x, &halves, &mut scratch) < 1e-15);
@@ -378,5 +424,10 @@ mod tests {
         let seen = point_to_segment_visible(&y_left, &x, &post, &mut scratch);
         let total = point_to_segment(&y_left, &x);
         assert!(seen < total && seen > 0.5 * total, "{seen} of {total}");
+        assert_eq!(
+            shadowing(&y_left, &x, &post, &mut scratch),
+            Shadowing::Partial
+        );
+        assert_eq!(shadowing(&y, &x, &halves, &mut scratch), Shadowing::Full);
     }
 }
