@@ -155,6 +155,9 @@ pub fn run(args: &Args) -> Result<()> {
     // Check the reference size before the (maybe long) build of the representation.
     Mesh::new(&kernel, reference_elements).context("--reference-elements")?;
 
+    // Every long loop below polls `stop`; it becomes the CLI's shared Ctrl-C flag once that
+    // exists. Until then Ctrl-C ends the process, and nothing is half-written (writes are
+    // atomic and come last).
     let stop: &Stop = &never;
     let built = build(&choice, &kernel, args)?;
     let reference = ExactReference::new(&kernel, reference_elements, &params, stop)
