@@ -487,7 +487,7 @@ fn draw_scene(area: &Area<'_>, p: &Picture<'_>) -> DrawResult {
         )])?;
     }
     // The colour bar: 0 at the bottom, the brightest non-emitter at the top.
-    let (w, h) = bar.dim_in_pixel();
+    let (_, h) = bar.dim_in_pixel();
     let (x0, y0, bar_h) = (20_i32, (h as i32) / 5, (h as i32) * 3 / 5);
     for k in 0..bar_h {
         let v = 1.0 - f64::from(k) / f64::from(bar_h - 1);
@@ -525,7 +525,6 @@ fn draw_scene(area: &Area<'_>, p: &Picture<'_>) -> DrawResult {
         (x0 - 12, y0 + bar_h + 30),
         ("sans-serif", 13).into_font(),
     ))?;
-    let _ = w;
     Ok(())
 }
 

@@ -23,6 +23,12 @@
 //! - [`geometric_operator`]: for a representation that keeps G exact and learns only the
 //!   visibility.
 //!
+//! **Energy.** In a closed room of one-sided surfaces without blockers every sender's light
+//! lands on a surface (`∫ G V dl_y = 1`), so the power the surfaces absorb, `∫ (1 − ρ) H dl`
+//! with H the irradiance `(B − E) / ρ`, equals the power emitted, `∫ E dl` (tested to 0.2 % at
+//! 512 elements). Blockers absorb too. A two-sided surface sends its one B from both sides,
+//! so its emitted power counts twice.
+//!
 //! **Linear solve.** Restarted GMRES on `(I − K) B = E` to a relative residual
 //! [`SolveParams::tolerance`] (default 1e-10); it needs only `I − K` invertible, not `‖K‖ < 1`.
 //!
