@@ -32,6 +32,9 @@ enum Command {
     Figure(cmd::figure::Args),
     /// Run time against error: SGCS, hierarchical radiosity and a uniform grid at several budgets.
     Bench(cmd::bench::Args),
+    /// Light the scene: solve the radiosity equation with a kernel (exact, learned, HR, uniform)
+    /// and compare the solved B with the exact kernel's.
+    Solve(cmd::solve::Args),
     /// Run the adversarial stability suite (scaling, extreme scenes and parameters, soak).
     Stress(cmd::stress::Args),
 }
@@ -44,6 +47,7 @@ fn main() {
         Some(Command::Fit(args)) => cmd::fit::run(&args),
         Some(Command::Eval(args)) => cmd::eval::run(&args),
         Some(Command::Stress(args)) => cmd::stress::run(&args),
+        Some(Command::Solve(args)) => cmd::solve::run(&args),
         Some(Command::Bench(args)) => cmd::bench::run(&args),
         Some(Command::Figure(args)) => cmd::figure::run(&args),
         Some(Command::Results(args)) => cmd::results::run(&args),

@@ -264,3 +264,243 @@ fn regression_missing_file_error_is_printed_once() {
     let err = stderr(&out);
     assert_eq!(err.matches("os error").count(), 1, "{err}");
 }
+
+// ===== `flatland solve` (issue 11): the lit scene =====
+
+/// Runs `flatland solve` with `args` and parses its `--json` object.
+fn solve_json(args: &[&str]) -> serde_json::Value {
+    let mut all = vec!["solve"];
+    all.extend(args);
+    all.push("--json");
+    let out = flatland(&all);
+    assert!(out.status.success(), "{}", stderr(&out));
+    serde_json::from_str(&stdout(&out)).expect("one JSON object")
+}
+
+#[test]
+fn solve_json_reports_every_named_field() {
+    let json = solve_json(&[
+        "--scene",
+        as_str(&scene("box")),
+        "--elements",
+        "128",
+        "--reference-elements",
+        "512",
+    ]);
+    assert_eq!(json["elements"], 128);
+    assert_eq!(json["kernel"], "exact");
+    assert!(json["basis_functions"].is_null(), "{json}");
+    assert_eq!(json["reference_elements"], 512);
+    for field in ["rel_l2_b", "rel_l2_reflected", "wall_s", "residual"] {
+        let v = json[field].as_f64().unwrap_or(f64::NAN);
+        assert!(v.is_finite() && v >= 0.0, "{field}: {json}");
+    }
+    // The exact kernel at 128 elements against 512: the discretisation only.
+    assert!(json["rel_l2_reflected"].as_f64().unwrap() < 0.01, "{json}");
+    assert!(json["iterations"].as_u64().unwrap() >= 1, "{json}");
+}
+
+#[test]
+fn solve_writes_the_csv_one_row_per_element_in_order_of_s() {
+    let dir = temp_dir("solve-csv");
+    let path = dir.join("b.csv");
+    let out = flatland(&[
+        "solve",
+        "--scene",
+        as_str(&scene("fig3")),
+        "--elements",
+        "64",
+        "--reference-elements",
+        "256",
+        "--out",
+        as_str(&path),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("edge,s,x,y,b"));
+    let rows = parse_csv(&lines.collect::<Vec<_>>().join("\n"));
+    assert_eq!(rows.len(), 64);
+    let fig3 = Scene::load(scene("fig3")).unwrap();
+    let mut last_s = -1.0;
+    for row in &rows {
+        let [edge, s, x, y, b] = row[..] else {
+            panic!("five columns expected: {row:?}")
+        };
+        assert!(s > last_s, "rows not in order of s");
+        last_s = s;
+        // s is the kernel's parameter: it names the row's edge and point.
+        let p = fig3.point(s);
+        assert_eq!(p.edge as f64, edge);
+        assert!(p.position.distance(flatland_geom::DVec2::new(x, y)) < 1e-9);
+        // B includes emission, and the exact kernel only adds light.
+        let e = fig3.edges()[p.edge].emission;
+        assert!(b >= e && b.is_finite(), "b = {b} below E = {e}");
+    }
+}
+
+#[test]
+fn solve_gives_e_over_one_minus_rho_in_a_uniformly_glowing_room() {
+    let dir = temp_dir("solve-glow");
+    let room = dir.join("glow.ron");
+    std::fs::write(
+        &room,
+        "(edges: [
+            (a: (0, 0), b: (3, 0), reflectance: 0.6, emission: 2.0),
+            (a: (3, 0), b: (2, 2), reflectance: 0.6, emission: 2.0),
+            (a: (2, 2), b: (0, 1), reflectance: 0.6, emission: 2.0),
+            (a: (0, 1), b: (0, 0), reflectance: 0.6, emission: 2.0),
+        ])",
+    )
+    .unwrap();
+    let path = dir.join("b.csv");
+    let out = flatland(&[
+        "solve",
+        "--scene",
+        as_str(&room),
+        "--elements",
+        "40",
+        "--reference-elements",
+        "80",
+        "--out",
+        as_str(&path),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = std::fs::read_to_string(&path).unwrap();
+    for line in text.lines().skip(1) {
+        let b: f64 = line.rsplit(',').next().unwrap().parse().unwrap();
+        assert!((b - 5.0).abs() < 1e-8, "B = {b}, expected E / (1 − ρ) = 5");
+    }
+}
+
+#[test]
+fn solve_draws_the_lit_scene_beside_b_of_s() {
+    let dir = temp_dir("solve-png");
+    let path = dir.join("lit.png");
+    let out = flatland(&[
+        "solve",
+        "--scene",
+        as_str(&scene("corners")),
+        "--kernel",
+        "hr",
+        "--basis",
+        "100",
+        "--elements",
+        "128",
+        "--reference-elements",
+        "512",
+        "--out",
+        as_str(&path),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        stdout(&out).contains("with the hr kernel"),
+        "{}",
+        stdout(&out)
+    );
+    let png = image::open(&path).unwrap().to_rgb8();
+    assert_eq!(png.dimensions(), (1600, 760));
+    // The lit scene (left) has the colours of light: some pixel is bright orange-yellow.
+    let lit = png
+        .enumerate_pixels()
+        .filter(|(x, _, _)| *x < 700)
+        .any(|(_, _, p)| p[0] > 230 && p[1] > 150 && p[2] < 120);
+    assert!(lit, "no lit edge drawn");
+    let names: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
+    assert_eq!(names.len(), 1, "a temporary file was left behind");
+}
+
+#[test]
+fn solve_builds_every_baseline_and_reads_a_model() {
+    let box_scene = scene("box");
+    for (kernel, basis) in [("uniform", 100), ("uniform-exact", 100), ("hr", 100)] {
+        let json = solve_json(&[
+            "--scene",
+            as_str(&box_scene),
+            "--kernel",
+            kernel,
+            "--basis",
+            &basis.to_string(),
+            "--elements",
+            "64",
+            "--reference-elements",
+            "256",
+        ]);
+        assert_eq!(json["kernel"], kernel);
+        let b = json["basis_functions"].as_u64().unwrap();
+        assert!(b.abs_diff(100) <= 10, "{kernel}: {json}");
+        assert!(json["rel_l2_reflected"].as_f64().unwrap().is_finite());
+    }
+    // A model from `flatland fit --out`, solved on its own scene.
+    let dir = temp_dir("solve-model");
+    let model = dir.join("m.json");
+    // (fig3: the default learner has something to learn there; on the box it would have none.)
+    let out = flatland(&[
+        "fit",
+        "--scene",
+        as_str(&scene("fig3")),
+        "--cells",
+        "12",
+        "--out",
+        as_str(&model),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json = solve_json(&[
+        "--kernel",
+        as_str(&model),
+        "--elements",
+        "32",
+        "--reference-elements",
+        "128",
+    ]);
+    assert_eq!(json["basis_functions"], 12);
+    assert!(json["rel_l2_b"].as_f64().unwrap().is_finite());
+    // ... and refused on another scene.
+    let out = flatland(&[
+        "solve",
+        "--scene",
+        as_str(&box_scene),
+        "--kernel",
+        as_str(&model),
+    ]);
+    assert_one_line_error(&out, &["box.ron", "fingerprint"]);
+}
+
+#[test]
+fn solve_rejects_bad_arguments_with_one_line_and_writes_nothing() {
+    let dir = temp_dir("solve-bad");
+    let fig3 = scene("fig3");
+    let csv = dir.join("b.csv");
+    let run = |extra: &[&str]| {
+        let mut args = vec!["solve", "--scene", as_str(&fig3)];
+        args.extend(extra);
+        flatland(&args)
+    };
+    assert_one_line_error(
+        &run(&["--elements", "0", "--out", as_str(&csv)]),
+        &["elements", "at least one per section"],
+    );
+    assert_one_line_error(
+        &run(&["--elements", "100000"]),
+        &["elements", "at most 8192"],
+    );
+    assert_one_line_error(&run(&["--kernel", "sgsc"]), &["`sgsc`", "exact, sgcs, hr"]);
+    assert_one_line_error(
+        &run(&["--kernel", "no/such/model.json"]),
+        &["no/such/model.json"],
+    );
+    assert_one_line_error(&run(&["--kernel", "hr", "--basis", "0"]), &["--basis"]);
+    assert_one_line_error(
+        &run(&["--out", as_str(&dir.join("b.txt"))]),
+        &["b.txt", "unknown output format"],
+    );
+    assert_one_line_error(
+        &run(&["--out", as_str(&dir.join("no/such/b.csv"))]),
+        &["does not exist"],
+    );
+    assert_eq!(
+        std::fs::read_dir(&dir).unwrap().count(),
+        0,
+        "nothing may be written"
+    );
+}

@@ -1244,6 +1244,17 @@ mod tests {
                                 prop_assert_eq!(*v, visible, "same face, other V: {} {} {:?} {:?} pair {} {} events {:?}", s, t, u.x, u.y, a, b, e);
                             }
                             seen.push(((u.x, u.y), visible));
+                            // Seen from y, the sender's face changes only at its breaks.
+                            let (pa, pb) = kernel.surface_parent(a);
+                            let breaks = e.sender_breaks(u.y);
+                            let at = |w: f64| pa + (pb - pa) * w;
+                            for _ in 0..8 {
+                                let (w1, w2) = (r.random_range(0.0..1.0), r.random_range(0.0..1.0));
+                                let between = breaks.iter().any(|&k| (k - w1) * (k - w2) <= 0.0);
+                                if !between {
+                                    prop_assert!(e.same_face((at(w1), u.y), (at(w2), u.y)), "{} {} {:?}", w1, w2, breaks);
+                                }
+                            }
                         }
                     }
                 }

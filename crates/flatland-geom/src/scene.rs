@@ -317,6 +317,17 @@ impl Scene {
         self.total_length
     }
 
+    /// The edges cut from the same parent edge as `edge` by [`Scene::subdivide`], as a range of
+    /// consecutive indices (`edge..edge + 1` for an edge that was never subdivided); `None` for
+    /// a bad index. The parent runs from `edges()[range.start].a` to `edges()[range.end - 1].b`
+    /// and has the material of every piece: a solver that meshes or occludes with whole
+    /// edges uses this, so a subdivided scene costs what the original does.
+    #[must_use]
+    pub fn parent_pieces(&self, edge: usize) -> Option<std::ops::Range<usize>> {
+        let g = &self.groups[*self.group_of.get(edge)?];
+        Some(g.first..g.first + g.count)
+    }
+
     /// The parameter interval `[s0, s1)` of a surface edge, `None` for a blocker or a bad index.
     #[must_use]
     pub fn edge_param_range(&self, edge: usize) -> Option<(f64, f64)> {
@@ -832,6 +843,13 @@ mod tests {
             let back = fine.param_of(q.edge, q.position).unwrap();
             assert_close!(back, s, 1e-14);
         }
+        // Every piece knows its parent's run; an edge never subdivided is its own run.
+        let first = fine.surface_edges()[0];
+        assert_eq!(fine.parent_pieces(first), Some(first..first + 1000));
+        assert_eq!(fine.parent_pieces(first + 999), Some(first..first + 1000));
+        let blocker = fine.edges().len() - 1;
+        assert_eq!(fine.parent_pieces(blocker), Some(blocker..blocker + 1));
+        assert_eq!(fine.parent_pieces(fine.edges().len()), None);
         // Subdividing twice is the same as once with the product.
         let twice = scene.subdivide(10).unwrap().subdivide(100).unwrap();
         assert_eq!(twice.edges().len(), fine.edges().len());

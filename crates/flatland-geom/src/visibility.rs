@@ -335,6 +335,35 @@ impl PairEvents {
         orient(x, y, v) > 0.0
     }
 
+    /// For rays from `P` to a fixed point `y` of `Q`: the parameters `u ∈ (0, 1)` along `P`
+    /// (from its start) where the face of the ray `x(u) → y` can change — where `x(u)`, `y`
+    /// and an event point are collinear, and where `P` crosses the line of `Q`. Sorted, no
+    /// duplicates; between two of them (and the ends) every ray lies in one face.
+    #[must_use]
+    pub fn sender_breaks(&self, y: DVec2) -> Vec<f64> {
+        let [a, b] = self.p;
+        let d = b - a;
+        let mut breaks: Vec<f64> = Vec::new();
+        for &v in self.sub.iter().flat_map(|points| points.iter()) {
+            let w = v - y;
+            let denominator = w.perp_dot(d);
+            if denominator != 0.0 {
+                breaks.push(w.perp_dot(y - a) / denominator);
+            }
+        }
+        if self.split_p {
+            let (oa, ob) = (
+                orient(self.q[0], self.q[1], a),
+                orient(self.q[0], self.q[1], b),
+            );
+            breaks.push(oa / (oa - ob));
+        }
+        breaks.retain(|u| *u > 0.0 && *u < 1.0);
+        breaks.sort_by(f64::total_cmp);
+        breaks.dedup();
+        breaks
+    }
+
     /// The same events seen from `Q` to `P` (rays reversed).
     #[must_use]
     pub fn reversed(&self) -> PairEvents {

@@ -194,6 +194,18 @@ impl LearnedKernel {
         v.clamp(0.0, 1.0)
     }
 
+    /// The exact kernel a visibility model keeps; `None` for the paper's network.
+    pub(crate) fn geometry_kernel(&self) -> Option<&Kernel> {
+        self.geometry.as_ref().map(|g| g.kernel.as_ref())
+    }
+
+    /// A visibility model's `Ṽ(s, t)` on a pair where visibility varies; `None` elsewhere.
+    pub(crate) fn learned_visibility(&self, s: f64, t: f64) -> Option<f64> {
+        let g = self.geometry.as_ref()?;
+        let key = FaceKey::at(&g.kernel, &g.kernel.unoccluded(s, t))?;
+        Some(self.visibility(&self.input(s, t), &key))
+    }
+
     /// The cells of the face of the visibility structure at `(s, t)` (visibility models, on a
     /// pair where visibility varies): the cells that decide `Ṽ` there.
     pub fn face_cells(&self, s: f64, t: f64) -> Option<Vec<usize>> {

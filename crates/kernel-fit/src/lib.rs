@@ -26,6 +26,10 @@
 //! - **Errors** are measured only against a [`Reference`] the fit never trains on: the exact ζ on
 //!   a midpoint grid and at held-out random points ([`relative_l2`]).
 //! - **Rays** counted are exact kernel evaluations made for training; evaluation is not counted.
+//! - **Solving.** A kernel is learned to be used: [`solve`] solves the radiosity equation
+//!   `B = E + K B` with any representation through one trait,
+//!   [`solve::KernelRepresentation`] (the exact kernel, the learned model, HR, the uniform grid),
+//!   and measures the solved B against the exact kernel's on a fine mesh.
 //!
 //! ```
 //! use std::sync::Arc;
@@ -62,6 +66,7 @@ mod fit;
 mod model;
 mod params;
 mod sampling;
+pub mod solve;
 mod visibility;
 
 pub use error::FitError;

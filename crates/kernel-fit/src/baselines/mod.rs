@@ -38,7 +38,7 @@ pub use hr::{
     HierarchicalRadiosity, HrLink, HrParams, HrStats, LinkEstimate, Oracle, count_initial_links,
     f_eps_for_budget, hr_params_for_budget, run_hr, run_hr_at_budget,
 };
-pub use uniform::{UniformGrid, UniformParams, run_uniform};
+pub use uniform::{BlockValue, UniformGrid, UniformParams, run_uniform};
 
 use crate::Approximation;
 use std::time::Duration;

@@ -17,14 +17,37 @@ use std::time::Instant;
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct UniformParams {
     /// Rays (random ζ evaluations) averaged per block, `m ≥ 1`. Default 20, the per-link count
-    /// the paper uses for hierarchical radiosity.
+    /// the paper uses for hierarchical radiosity. Unused by the exact block values.
     pub rays_per_block: usize,
+    /// What each block holds (default: the mean of `rays_per_block` random rays of ζ).
+    #[serde(default)]
+    pub block_value: BlockValue,
 }
 
 impl Default for UniformParams {
     fn default() -> Self {
-        UniformParams { rays_per_block: 20 }
+        UniformParams {
+            rays_per_block: 20,
+            block_value: BlockValue::Rays,
+        }
     }
+}
+
+/// What a block of the uniform grid holds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum BlockValue {
+    /// The mean of ζ at `rays_per_block` random points of the block (the baseline of the
+    /// paper's comparison).
+    #[default]
+    Rays,
+    /// The exact mean of ζ over the block: the best any g × g piecewise-constant ζ can do in
+    /// L2. No rays (integrated with the closed-form transfer and exact visibility).
+    ExactZetaMean,
+    /// The exact mean of k over the block; ζ̃ = E'(sender edge) · mean k. The best g × g
+    /// piecewise-constant *kernel*: unlike a block of ζ, one that straddles an emitter's edge
+    /// does not mix E' = 1 rows with 1 % rows, so `ζ̃ / E'` stays a block mean of k. No rays.
+    ExactKernelMean,
 }
 
 impl UniformParams {
@@ -48,6 +71,10 @@ pub struct UniformGrid {
     /// Row-major, row ↔ s.
     values: Vec<f64>,
     rays: u64,
+    block_value: BlockValue,
+    /// For [`BlockValue::ExactKernelMean`]: (end of a surface edge's s-interval, its E'), in
+    /// order, so ζ̃ = E'(s) · value; empty otherwise.
+    sender_weights: Vec<(f64, f64)>,
 }
 
 impl UniformGrid {
@@ -66,6 +93,9 @@ impl UniformGrid {
                 valid: "at least 1",
             });
         }
+        if params.block_value != BlockValue::Rays {
+            return Ok(exact_grid(kernel, g, params.block_value));
+        }
         let points = sample_points(g, params.rays_per_block, seed);
         let zeta = kernel.zeta_batch(&points);
         let m = params.rays_per_block;
@@ -77,7 +107,18 @@ impl UniformGrid {
             .iter()
             .filter(|&&[s, t]| kernel.casts_ray(s, t))
             .count() as u64;
-        Ok(UniformGrid { g, values, rays })
+        Ok(UniformGrid {
+            g,
+            values,
+            rays,
+            block_value: BlockValue::Rays,
+            sender_weights: Vec::new(),
+        })
+    }
+
+    /// What the blocks hold.
+    pub fn block_value(&self) -> BlockValue {
+        self.block_value
     }
 
     /// Blocks per axis.
@@ -99,6 +140,30 @@ impl UniformGrid {
     fn block(&self, x: f64) -> usize {
         // `as usize` saturates negatives and NaN to 0; the min clamps s = 1.
         ((x * self.g as f64) as usize).min(self.g - 1)
+    }
+}
+
+/// A grid of exact block means (no rays).
+fn exact_grid(kernel: &Kernel, g: usize, block_value: BlockValue) -> UniformGrid {
+    let weighted = block_value == BlockValue::ExactZetaMean;
+    let values = crate::solve::exact_block_means(kernel, g, weighted, &crate::solve::never)
+        .expect("never interrupted; the scene's own mesh");
+    let scene = kernel.scene();
+    let sender_weights = if weighted {
+        Vec::new()
+    } else {
+        scene
+            .surface_edges()
+            .iter()
+            .filter_map(|&e| Some((scene.edge_param_range(e)?.1, kernel.source_weight(e))))
+            .collect()
+    };
+    UniformGrid {
+        g,
+        values,
+        rays: 0,
+        block_value,
+        sender_weights,
     }
 }
 
@@ -127,7 +192,15 @@ fn next_below(x: f64) -> f64 {
 
 impl Approximation for UniformGrid {
     fn zeta(&self, s: f64, t: f64) -> f64 {
-        self.values[self.block(s) * self.g + self.block(t)]
+        let value = self.values[self.block(s) * self.g + self.block(t)];
+        if self.sender_weights.is_empty() {
+            return value;
+        }
+        let k = self
+            .sender_weights
+            .partition_point(|&(end, _)| end <= s)
+            .min(self.sender_weights.len() - 1);
+        value * self.sender_weights[k].1
     }
 
     fn basis_functions(&self) -> usize {
@@ -172,7 +245,10 @@ mod tests {
     fn error_falls_with_g() {
         let kernel = blocker_kernel();
         let reference = Reference::new(&kernel, 96, 4000, 3);
-        let params = UniformParams { rays_per_block: 16 };
+        let params = UniformParams {
+            rays_per_block: 16,
+            ..UniformParams::default()
+        };
         let errors: Vec<f64> = [4, 8, 16, 32]
             .iter()
             .map(|&g| {
@@ -189,7 +265,10 @@ mod tests {
     #[test]
     fn values_and_errors_match_an_independent_recomputation() {
         let kernel = blocker_kernel();
-        let params = UniformParams { rays_per_block: 5 };
+        let params = UniformParams {
+            rays_per_block: 5,
+            ..UniformParams::default()
+        };
         let (g, seed) = (7, 42);
         let grid = UniformGrid::build(&kernel, g, &params, seed).unwrap();
 
@@ -233,13 +312,17 @@ mod tests {
     #[test]
     fn rays_and_counts_are_reported() {
         // In a closed box without occluders geometry decides every visibility: no ray at all.
-        let run = run_uniform(&box_kernel(), 400, 1, &UniformParams { rays_per_block: 3 }).unwrap();
+        let three = UniformParams {
+            rays_per_block: 3,
+            ..UniformParams::default()
+        };
+        let run = run_uniform(&box_kernel(), 400, 1, &three).unwrap();
         assert_eq!(run.basis_functions, 400);
         assert_eq!(run.rays, 0);
         assert_eq!(run.memory_bytes, 400 * 8);
         // With a blocker, the evaluations on the pairs it shadows cost one ray each.
         let kernel = blocker_kernel();
-        let run = run_uniform(&kernel, 400, 1, &UniformParams { rays_per_block: 3 }).unwrap();
+        let run = run_uniform(&kernel, 400, 1, &three).unwrap();
         let points = sample_points(20, 3, 1);
         let expected = points
             .iter()
@@ -266,9 +349,49 @@ mod tests {
             UniformGrid::build(&kernel, 5, &p, 3).unwrap(),
             UniformGrid::build(&kernel, 5, &p, 3).unwrap()
         );
-        let err =
-            UniformGrid::build(&kernel, 5, &UniformParams { rays_per_block: 0 }, 3).unwrap_err();
+        let err = UniformGrid::build(
+            &kernel,
+            5,
+            &UniformParams {
+                rays_per_block: 0,
+                ..UniformParams::default()
+            },
+            3,
+        )
+        .unwrap_err();
         assert!(err.to_string().contains("rays_per_block"), "{err}");
         assert!(run_uniform(&kernel, 0, 1, &p).is_err());
+    }
+
+    #[test]
+    fn exact_block_values_cast_no_rays_and_beat_random_ones() {
+        let kernel = blocker_kernel();
+        let reference = Reference::new(&kernel, 96, 2000, 3);
+        let of = |block_value| {
+            let params = UniformParams {
+                block_value,
+                ..UniformParams::default()
+            };
+            UniformGrid::build(&kernel, 8, &params, 11).unwrap()
+        };
+        let (rays, zeta, k) = (
+            of(BlockValue::Rays),
+            of(BlockValue::ExactZetaMean),
+            of(BlockValue::ExactKernelMean),
+        );
+        assert_eq!((zeta.rays(), k.rays()), (0, 0));
+        // The exact block means are the L2 projection of ζ: no 8 × 8 grid of ζ does better.
+        let (e_rays, e_zeta) = (reference.errors(&rays).grid, reference.errors(&zeta).grid);
+        assert!(e_zeta < e_rays, "exact {e_zeta} vs rays {e_rays}");
+        // Means of k times E' of the sender edge: ζ̃ = E'·mean k, so where a block holds a
+        // single sender edge it is that edge's E' times the block's mean k.
+        assert_eq!(k.block_value(), BlockValue::ExactKernelMean);
+        let (s, t) = (0.1, 0.6); // the emitting floor is s ∈ [0, 0.25)
+        let block = (s * 8.0) as usize * 8 + (t * 8.0) as usize;
+        assert_eq!(k.zeta(s, t), k.values()[block] * kernel.source_weight(0));
+        assert_eq!(
+            k.zeta(0.4, t),
+            k.values()[3 * 8 + 4] * kernel.source_weight(1)
+        );
     }
 }
