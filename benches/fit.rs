@@ -1,49 +1,106 @@
-//! A whole SGCS fit of `fig3`: S₀, θ-resampling, growth to the target cells, refit — what
-//! `flatland fit` does, minus the reference grid (built once, outside the timing).
+//! Whole fits and single fit steps, as `flatland fit` runs them (the reference grid is built
+//! once, outside the timing):
+//!
+//! - `fit/default_maze_400`: the default learner (visibility only) on `maze` to 400 cells;
+//! - `fit/paper_fig3_400`: the paper's network on `fig3` to 400 cells, without its refit;
+//! - `fit/paper_fig3_400_refit`: that network's least-squares refit alone (ridge chosen on
+//!   held-back samples, then the final solve);
+//! - `fit_step/*`: one `Fit::step` of each learner at 400 cells, growth done (the network is
+//!   full, no new sample sets): the network step plus what the driver does around it.
+//!
+//! `cargo bench --bench fit`.
 
 use std::ops::ControlFlow;
 use std::sync::Arc;
 
-use criterion::{Criterion, criterion_group, criterion_main};
+use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
 use flatland_geom::{Kernel, Scene};
 use kernel_fit::{Fit, FitParams, Reference};
 
-fn fig3() -> Arc<Kernel> {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/fig3.ron");
-    Arc::new(Kernel::new(
-        Scene::load(path).expect("scenes/fig3.ron loads"),
-    ))
+fn kernel(name: &str) -> Arc<Kernel> {
+    let path = format!("{}/scenes/{name}.ron", env!("CARGO_MANIFEST_DIR"));
+    Arc::new(Kernel::new(Scene::load(path).expect("bundled scene loads")))
+}
+
+fn new_fit(kernel: &Arc<Kernel>, params: FitParams) -> Fit {
+    let reference = Arc::new(Reference::new(kernel, 64, 1024, 0));
+    Fit::new(Arc::clone(kernel), reference, params).expect("valid parameters")
+}
+
+fn params(paper: bool, cells: usize) -> FitParams {
+    let base = if paper {
+        FitParams::paper()
+    } else {
+        FitParams::default()
+    };
+    FitParams {
+        target_cells: cells,
+        eval_every: 0,
+        ..base
+    }
+}
+
+fn train(fit: &mut Fit) {
+    fit.train(u64::MAX, |_| ControlFlow::Continue(()));
 }
 
 fn whole_fit(c: &mut Criterion) {
-    let kernel = fig3();
-    let reference = Arc::new(Reference::new(&kernel, 64, 1024, 0));
-    let mut group = c.benchmark_group("fit_fig3");
+    let (maze, fig3) = (kernel("maze"), kernel("fig3"));
+    let mut group = c.benchmark_group("fit");
     group.sample_size(10);
-    for cells in [100, 400] {
-        for refit in [false, true] {
-            let params = FitParams {
-                target_cells: cells,
-                refit,
-                eval_every: 0,
-                ..FitParams::default()
-            };
-            let name = format!("{cells}_cells{}", if refit { "_refit" } else { "" });
-            group.bench_function(name, |b| {
-                b.iter(|| {
-                    let mut fit = Fit::new(Arc::clone(&kernel), Arc::clone(&reference), params)
-                        .expect("valid parameters");
-                    fit.train(u64::MAX, |_| ControlFlow::Continue(()));
-                    if refit {
-                        fit.refit().expect("refit");
-                    }
-                    fit.network().len()
-                })
-            });
-        }
+    group.bench_function("default_maze_400", |b| {
+        b.iter(|| {
+            let mut fit = new_fit(&maze, params(false, 400));
+            train(&mut fit);
+            fit.network().len()
+        })
+    });
+    group.bench_function("paper_fig3_400", |b| {
+        b.iter(|| {
+            let mut fit = new_fit(&fig3, params(true, 400));
+            train(&mut fit);
+            fit.network().len()
+        })
+    });
+    let mut trained = new_fit(&fig3, params(true, 400));
+    train(&mut trained);
+    group.bench_function("paper_fig3_400_refit", |b| {
+        b.iter_batched(
+            || trained.clone(),
+            |mut fit| fit.refit().expect("refit"),
+            BatchSize::LargeInput,
+        )
+    });
+    group.finish();
+}
+
+/// A fit at `cells` cells that keeps stepping without growing or resampling.
+fn full(kernel: &Arc<Kernel>, paper: bool, cells: usize) -> Fit {
+    let mut fit = new_fit(kernel, params(paper, cells));
+    train(&mut fit);
+    assert_eq!(fit.network().len(), cells, "grown to the target");
+    let mut p = *fit.params();
+    p.polish_steps = u64::MAX / 2;
+    fit.set_params(p).expect("valid parameters");
+    fit
+}
+
+fn fit_step(c: &mut Criterion) {
+    let mut group = c.benchmark_group("fit_step");
+    group.throughput(Throughput::Elements(1));
+    for (name, scene, paper) in [
+        ("default_maze", "maze", false),
+        ("paper_fig3", "fig3", true),
+    ] {
+        let mut fit = full(&kernel(scene), paper, 400);
+        group.bench_function(format!("{name}_400"), |b| {
+            b.iter(|| {
+                fit.step();
+            })
+        });
     }
     group.finish();
 }
 
-criterion_group!(benches, whole_fit);
+criterion_group!(benches, whole_fit, fit_step);
 criterion_main!(benches);

@@ -1,6 +1,8 @@
 //! Kernel samples per second: `fig3` and `fig3` subdivided ×1000, naive (every ray against every
 //! edge of the scene, no culling: 7 edges, then 6001) vs accelerated (shaft cache per parent
-//! edge pair + BVH), single thread vs the rayon batch API.
+//! edge pair + BVH), single thread vs the rayon batch API (on every core, and in a pool of one
+//! thread: the batch path's cost per sample against the single path's). `scaling/*`: a box room
+//! with 10 to 10 000 random blockers, single and batch.
 //!
 //! Run: `cargo bench --bench kernel`. Throughput is reported in samples (elements) per second.
 
@@ -48,6 +50,10 @@ fn kernel_samples(c: &mut Criterion) {
         group.bench_function(format!("{name}/accelerated/batch"), |b| {
             b.iter(|| kernel.k_batch(black_box(&st)))
         });
+        let one = one_thread();
+        group.bench_function(format!("{name}/accelerated/batch_1_thread"), |b| {
+            b.iter(|| one.install(|| kernel.k_batch(black_box(&st))))
+        });
     }
     group.finish();
 }
@@ -94,8 +100,18 @@ fn blocker_scaling(c: &mut Criterion) {
         group.bench_function(format!("box_blockers_{n}/accelerated/single"), |b| {
             b.iter(|| st.iter().map(|&[s, t]| kernel.k(s, t)).sum::<f64>())
         });
+        group.bench_function(format!("box_blockers_{n}/accelerated/batch"), |b| {
+            b.iter(|| kernel.k_batch(black_box(&st)))
+        });
     }
     group.finish();
+}
+
+fn one_thread() -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("a pool of one thread")
 }
 
 fn quick() -> Criterion {

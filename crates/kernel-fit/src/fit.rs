@@ -11,7 +11,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use sgcs::Network;
 
-use crate::visibility::{FaceGate, FaceKey, Faces, Labeller, Sampler};
+use crate::visibility::{FaceGate, FaceId, FaceKey, Faces, Labeller, Sampler};
 use crate::{
     Approximation, Errors, FitError, FitParams, Gating, InputFrame, Reference, Resampling, Target,
 };
@@ -164,6 +164,40 @@ impl LearnedKernel {
     /// The network input for `(s, t)`.
     pub fn input(&self, s: f64, t: f64) -> [f64; 4] {
         self.frame.gamma(&self.scene, s, t)
+    }
+
+    /// Refreshes the faces of the cells the last network step moved or inserted (a cell's
+    /// face depends on its position alone).
+    fn relabel_moved(&mut self) {
+        let LearnedKernel {
+            network, geometry, ..
+        } = self;
+        let Some(geometry) = geometry else {
+            return;
+        };
+        for &c in network.moved_cells() {
+            let face = geometry
+                .labeller
+                .face(&geometry.kernel, network.position(c));
+            geometry.faces.place(c, face);
+        }
+    }
+
+    /// Numbers the face of every sample's ray (visibility models; all `None` otherwise), in
+    /// parallel, so a training step gates on it without recomputing it.
+    fn intern_faces(&mut self, samples: &[Sample]) -> Vec<Option<FaceId>> {
+        let Some(geometry) = &mut self.geometry else {
+            return vec![None; samples.len()];
+        };
+        let kernel = &geometry.kernel;
+        let keys: Vec<Option<FaceKey>> = samples
+            .par_iter()
+            .with_min_len(256)
+            .map(|s| FaceKey::at(kernel, &kernel.unoccluded(s.st[0], s.st[1])))
+            .collect();
+        keys.into_iter()
+            .map(|key| key.map(|key| geometry.faces.intern(key)))
+            .collect()
     }
 
     /// Refreshes the faces of `cells` (after they moved or were inserted).
@@ -408,11 +442,15 @@ pub struct RefitChoice {
 /// Held-out points used for the learning curve (the final errors use all of them).
 const HISTORY_HELDOUT: usize = 1024;
 
-/// A running fit of one scene's kernel. See the crate docs for the algorithm.
+/// A running fit of one scene's kernel. See the crate docs for the algorithm. A clone shares
+/// the kernel and the reference and continues exactly as the original would.
+#[derive(Clone)]
 pub struct Fit {
     kernel: Arc<Kernel>,
     reference: Arc<Reference>,
     state: FitState,
+    /// The face of each sample's ray (visibility models; derived from the samples, not saved).
+    sample_faces: Vec<Option<FaceId>>,
 }
 
 /// Everything of a fit that a checkpoint saves; the kernel and the reference are rebuilt from
@@ -515,9 +553,10 @@ impl Fit {
         } else {
             vec![0]
         };
-        Ok(Fit {
+        let mut fit = Fit {
             kernel,
             reference,
+            sample_faces: Vec::new(),
             state: FitState {
                 cell_stats: vec![CellStats::default(); model.network.len()],
                 model,
@@ -534,7 +573,16 @@ impl Fit {
                 wall_s: 0.0,
                 params,
             },
-        })
+        };
+        fit.index_sample_faces();
+        Ok(fit)
+    }
+
+    /// Numbers the faces of the samples not yet numbered (see [`LearnedKernel::intern_faces`]).
+    fn index_sample_faces(&mut self) {
+        let from = self.sample_faces.len();
+        let faces = self.state.model.intern_faces(&self.state.samples[from..]);
+        self.sample_faces.extend(faces);
     }
 
     /// The parameters.
@@ -625,8 +673,9 @@ impl Fit {
             .get(set + 1)
             .copied()
             .unwrap_or(self.state.samples.len());
-        let sample = self.state.samples[self.state.train_rng.random_range(start..end)];
-        let outcome = self.train_on(&sample);
+        let index = self.state.train_rng.random_range(start..end);
+        let sample = self.state.samples[index];
+        let outcome = self.train_on(&sample, self.sample_faces[index]);
         if let Some(new) = outcome.inserted {
             debug_assert_eq!(new, self.state.cell_stats.len());
             self.state.cell_stats.push(CellStats::default());
@@ -645,21 +694,17 @@ impl Fit {
         self.state.stop
     }
 
-    /// One network step on `sample`: gated by the sample's face for a visibility model (whose
-    /// cell faces then follow the cells that moved), plain otherwise.
-    fn train_on(&mut self, sample: &Sample) -> sgcs::StepOutcome {
+    /// One network step on `sample` (whose ray is in `face`): gated by that face for a
+    /// visibility model (whose cell faces then follow the cells that moved), plain otherwise.
+    fn train_on(&mut self, sample: &Sample, face: Option<FaceId>) -> sgcs::StepOutcome {
         let LearnedKernel {
             network,
             geometry,
             gating,
             ..
         } = &mut self.state.model;
-        let key = geometry.as_ref().and_then(|g| {
-            let [s, t] = sample.st;
-            FaceKey::at(&g.kernel, &g.kernel.unoccluded(s, t))
-        });
-        let gate = match (geometry.as_ref(), &key) {
-            (Some(g), Some(key)) if *gating != Gating::Off => Some(g.faces.gate(key, *gating)),
+        let gate = match (geometry.as_ref(), face) {
+            (Some(g), Some(face)) if *gating != Gating::Off => Some(g.faces.gate_of(face, *gating)),
             _ => None,
         };
         let (xi, target, weight) = (&sample.xi, [sample.target], sample.weight);
@@ -668,10 +713,7 @@ impl Fit {
             None => network.try_step_gated(xi, &target, weight, &sgcs::Open),
         }
         .expect("training samples are finite and bounded");
-        if geometry.is_some() {
-            let changed = self.state.model.network.changed_cells().to_vec();
-            self.state.model.relabel(&changed);
-        }
+        self.state.model.relabel_moved();
         outcome
     }
 
@@ -902,6 +944,7 @@ impl Fit {
         self.state.rays += rays_of(&self.kernel, &new);
         self.state.set_starts.push(self.state.samples.len());
         self.state.samples.extend(new);
+        self.index_sample_faces();
     }
 
     /// `n` θ candidates: uniform `(s, t)`, or a visibility model's sampler draws.
@@ -1050,6 +1093,8 @@ impl Fit {
         self.kernel = kernel;
         self.reference = reference;
         self.state.steps_at_last_growth = self.steps();
+        self.sample_faces.clear();
+        self.index_sample_faces();
     }
 
     /// Changes the parameters of a running fit (the viewer's controls). What the network
@@ -1193,11 +1238,14 @@ impl Fit {
         }
         // An interrupted fit resumes; a finished one stays finished.
         state.stop = state.stop.filter(|&r| r != StopReason::Interrupted);
-        Ok(Fit {
+        let mut fit = Fit {
             kernel,
             reference,
             state,
-        })
+            sample_faces: Vec::new(),
+        };
+        fit.index_sample_faces();
+        Ok(fit)
     }
 }
 

@@ -55,67 +55,108 @@ impl FaceKey {
     }
 }
 
+/// A face of the visibility structure as [`Faces`] numbers it: the face and its pair.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct FaceId {
+    face: u32,
+    pair: u32,
+}
+
 /// Which face and pair every cell is in, and the cells of each face and each pair (ascending).
-/// Derived from the cells' positions: rebuilt, never saved.
+/// Faces and pairs are numbered as they are first met ([`Faces::intern`]), so a caller can
+/// look a ray's face up once and gate every later step on it without hashing. Derived from the
+/// cells' positions: rebuilt, never saved.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Faces {
-    ids: HashMap<FaceKey, u32>,
+    ids: HashMap<FaceKey, FaceId>,
+    pair_ids: HashMap<(u32, u32), u32>,
     face_cells: Vec<Vec<CellId>>,
-    pair_cells: HashMap<(u32, u32), Vec<CellId>>,
-    /// Per cell: its face id and pair, `None` when its centre ray is on no varying pair.
-    of_cell: Vec<Option<(u32, (u32, u32))>>,
+    pair_cells: Vec<Vec<CellId>>,
+    /// Per cell: its face, `None` when its centre ray is on no varying pair.
+    of_cell: Vec<Option<FaceId>>,
 }
 
 impl Faces {
+    /// The number of `key`, numbering it (and its pair) if it is new.
+    pub(crate) fn intern(&mut self, key: FaceKey) -> FaceId {
+        if let Some(&id) = self.ids.get(&key) {
+            return id;
+        }
+        let next_pair = self.pair_cells.len() as u32;
+        let pair = *self.pair_ids.entry(key.pair).or_insert(next_pair);
+        if pair == next_pair {
+            self.pair_cells.push(Vec::new());
+        }
+        let id = FaceId {
+            face: self.face_cells.len() as u32,
+            pair,
+        };
+        self.face_cells.push(Vec::new());
+        self.ids.insert(key, id);
+        id
+    }
+
+    /// The number of `key`, if it has one.
+    fn find(&self, key: &FaceKey) -> Option<FaceId> {
+        self.ids.get(key).copied()
+    }
+
     /// Puts `cell` in the face `key` (moving it out of its old face and pair).
     pub(crate) fn place(&mut self, cell: CellId, key: Option<FaceKey>) {
         if self.of_cell.len() <= cell {
             self.of_cell.resize(cell + 1, None);
         }
-        let new = key.map(|key| {
-            let pair = key.pair;
-            let next = self.ids.len() as u32;
-            let id = *self.ids.entry(key).or_insert(next);
-            if id as usize == self.face_cells.len() {
-                self.face_cells.push(Vec::new());
-            }
-            (id, pair)
-        });
+        let new = key.map(|key| self.intern(key));
         let old = self.of_cell[cell];
         if old == new {
             return;
         }
-        if let Some((face, pair)) = old {
+        if let Some(FaceId { face, pair }) = old {
             remove_sorted(&mut self.face_cells[face as usize], cell);
-            if let Some(list) = self.pair_cells.get_mut(&pair) {
-                remove_sorted(list, cell);
-            }
+            remove_sorted(&mut self.pair_cells[pair as usize], cell);
         }
-        if let Some((face, pair)) = new {
+        if let Some(FaceId { face, pair }) = new {
             insert_sorted(&mut self.face_cells[face as usize], cell);
-            insert_sorted(self.pair_cells.entry(pair).or_default(), cell);
+            insert_sorted(&mut self.pair_cells[pair as usize], cell);
         }
         self.of_cell[cell] = new;
     }
 
     /// The gate of a query ray in face `key` (see [`Gating`]).
     pub(crate) fn gate<'a>(&'a self, key: &FaceKey, gating: Gating) -> FaceGate<'a> {
-        let face = self.ids.get(key).copied();
-        let pair = self
-            .pair_cells
-            .get(&key.pair)
-            .map_or(&[][..], Vec::as_slice);
+        match self.find(key) {
+            Some(id) => self.gate_of(id, gating),
+            // A face no cell has been in: its region is empty; its pair may have cells.
+            None => {
+                let pair = self.pair_ids.get(&key.pair).copied();
+                let pair_cells = pair.map_or(&[][..], |p| self.pair_cells[p as usize].as_slice());
+                let (region, fallback) = match gating {
+                    Gating::Faces => (&[][..], Some(pair_cells)),
+                    _ => (pair_cells, None),
+                };
+                FaceGate {
+                    of_cell: &self.of_cell,
+                    face: None,
+                    pair,
+                    gating,
+                    region,
+                    fallback,
+                }
+            }
+        }
+    }
+
+    /// The gate of a query ray in the face numbered `id` (see [`Gating`]).
+    pub(crate) fn gate_of(&self, id: FaceId, gating: Gating) -> FaceGate<'_> {
+        let pair = self.pair_cells[id.pair as usize].as_slice();
         let (region, fallback) = match gating {
-            Gating::Faces => (
-                face.map_or(&[][..], |f| self.face_cells[f as usize].as_slice()),
-                Some(pair),
-            ),
+            Gating::Faces => (self.face_cells[id.face as usize].as_slice(), Some(pair)),
             _ => (pair, None),
         };
         FaceGate {
             of_cell: &self.of_cell,
-            face,
-            pair: key.pair,
+            face: Some(id.face),
+            pair: Some(id.pair),
             gating,
             region,
             fallback,
@@ -141,8 +182,9 @@ impl Faces {
             ));
         }
         for c in 0..cells {
-            let want = expected(c).map(|key| (self.ids.get(&key).copied(), key.pair));
-            let have = self.of_cell[c].map(|(face, pair)| (Some(face), pair));
+            let want =
+                expected(c).map(|key| (self.find(&key), self.pair_ids.get(&key.pair).copied()));
+            let have = self.of_cell[c].map(|id| (Some(id), Some(id.pair)));
             if want != have {
                 return Err(format!(
                     "cell {c} is filed under {have:?}, its centre is in {want:?}"
@@ -154,19 +196,19 @@ impl Faces {
             if !sorted
                 || list
                     .iter()
-                    .any(|&c| self.of_cell[c].map(|f| f.0) != Some(face as u32))
+                    .any(|&c| self.of_cell[c].map(|f| f.face) != Some(face as u32))
             {
                 return Err(format!("face {face} lists {list:?}"));
             }
         }
-        for (pair, list) in &self.pair_cells {
+        for (pair, list) in self.pair_cells.iter().enumerate() {
             let sorted = list.windows(2).all(|w| w[0] < w[1]);
             if !sorted
                 || list
                     .iter()
-                    .any(|&c| self.of_cell[c].map(|f| f.1) != Some(*pair))
+                    .any(|&c| self.of_cell[c].map(|f| f.pair) != Some(pair as u32))
             {
-                return Err(format!("pair {pair:?} lists {list:?}"));
+                return Err(format!("pair {pair} lists {list:?}"));
             }
         }
         let filed: usize = self.face_cells.iter().map(Vec::len).sum();
@@ -192,9 +234,9 @@ fn remove_sorted(list: &mut Vec<CellId>, cell: CellId) {
 /// Admits the cells of the query's face ([`Gating::Faces`]) or pair ([`Gating::Pairs`]), and
 /// names them, so every one of them responds however far it is (see [`sgcs::Gate::region`]).
 pub(crate) struct FaceGate<'a> {
-    of_cell: &'a [Option<(u32, (u32, u32))>],
+    of_cell: &'a [Option<FaceId>],
     face: Option<u32>,
-    pair: (u32, u32),
+    pair: Option<u32>,
     gating: Gating,
     region: &'a [CellId],
     fallback: Option<&'a [CellId]>,
@@ -204,9 +246,9 @@ impl Gate for FaceGate<'_> {
     #[inline]
     fn admits(&self, cell: CellId) -> bool {
         match self.of_cell.get(cell).copied().flatten() {
-            Some((face, pair)) => match self.gating {
-                Gating::Faces => Some(face) == self.face,
-                _ => pair == self.pair,
+            Some(id) => match self.gating {
+                Gating::Faces => Some(id.face) == self.face,
+                _ => Some(id.pair) == self.pair,
             },
             None => false,
         }

@@ -126,6 +126,8 @@ pub struct Network {
     steps: u64,
     /// Cells whose position or width changed in the last step.
     changed: Vec<CellId>,
+    /// Cells whose position changed in the last step (a subset of `changed`).
+    moved: Vec<CellId>,
     index: Index,
     scratch: Scratch,
 }
@@ -296,6 +298,7 @@ impl Network {
             worst_out: worst.targets,
             steps,
             changed: Vec::new(),
+            moved: Vec::new(),
             index: Index::default(),
             scratch: Scratch::default(),
         };
@@ -357,6 +360,13 @@ impl Network {
     /// positions and widths must refresh.
     pub fn changed_cells(&self) -> &[CellId] {
         &self.changed
+    }
+
+    /// The cells whose position changed in the last step (ascending; an inserted cell
+    /// included): a subset of [`Network::changed_cells`], and all that a caller keeping per-cell
+    /// data derived from positions alone must refresh.
+    pub fn moved_cells(&self) -> &[CellId] {
+        &self.moved
     }
 
     /// One learning step on the sample `(xi, zeta)`, including an insertion every `λ` steps.
@@ -477,8 +487,10 @@ impl Network {
         // Move the BMU and its (admitted) neighbours; widths change for them and their
         // neighbours.
         sc.touched.clear();
+        self.moved.clear();
         if covered {
             self.move_cell(s, xi, self.params.eps_b);
+            self.moved.push(s);
             sc.touched.push(s);
             // Every neighbour's width depends on s; a neighbour that moves also changes its own
             // neighbours' widths.
@@ -489,8 +501,12 @@ impl Network {
                     continue;
                 }
                 self.move_cell(b, xi, self.params.eps_n);
+                if self.params.eps_n > 0.0 {
+                    self.moved.push(b);
+                }
                 sc.touched.extend_from_slice(&self.nbrs[b]);
             }
+            self.moved.sort_unstable();
             sc.touched.sort_unstable();
             sc.touched.dedup();
             for &c in &sc.touched {
@@ -1036,6 +1052,7 @@ impl Network {
         self.changed.push(r);
         self.changed.sort_unstable();
         self.changed.dedup();
+        self.moved.push(r); // r is the largest id: the list stays sorted
 
         // Counters: a neighbour's τ = mean·|F| follows its new volume by itself, which is
         // exactly Δτ_c = (|F|new − |F|old)/|F|old · τ_c; r receives what they lose.
@@ -2292,6 +2309,46 @@ mod tests {
         assert_eq!(net.position(3), &spike);
         assert_eq!(net.output(3), &[10.0]);
         assert!(net.changed_cells().contains(&3));
+    }
+
+    /// `moved_cells` lists exactly the cells whose position changed (the inserted one included),
+    /// a subset of `changed_cells`, gated or not.
+    #[test]
+    fn moved_cells_are_exactly_the_cells_that_moved() {
+        for params in [gated_params(), Params::default()] {
+            let params = Params {
+                lambda: 7,
+                ..params
+            };
+            let mut net = Network::new(params, 2, 1, &unit_triangle()).unwrap();
+            let mut halves = Halves::default();
+            halves.update(&net);
+            let mut r = rng(21);
+            for i in 0..2_000 {
+                let (x, y) = (r.random::<f64>(), r.random::<f64>());
+                let before = net.pos.clone();
+                let z = if x > 0.5 { 1.0 } else { 0.0 };
+                if i % 2 == 0 {
+                    net.try_step_gated(&[x, y], &[z], 1.0, &halves.gate(x))
+                        .unwrap();
+                } else {
+                    net.step(&[x, y], &[z]);
+                }
+                let moved: Vec<CellId> = (0..net.len())
+                    .filter(|&c| {
+                        c * 2 >= before.len() || net.position(c) != &before[c * 2..c * 2 + 2]
+                    })
+                    .collect();
+                let listed = net.moved_cells();
+                assert!(listed.windows(2).all(|w| w[0] < w[1]), "{listed:?}");
+                assert!(
+                    moved.iter().all(|c| listed.contains(c)),
+                    "{moved:?} {listed:?}"
+                );
+                assert!(listed.iter().all(|c| net.changed_cells().contains(c)));
+                halves.update(&net);
+            }
+        }
     }
 
     /// Worst samples are saved: a reloaded network trains on exactly like the original.
