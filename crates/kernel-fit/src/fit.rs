@@ -410,8 +410,23 @@ pub struct FitSummary {
     pub errors: Errors,
     /// Errors before the least-squares refit, when it ran.
     pub errors_before_refit: Option<Errors>,
-    /// Wall time of the training (reference construction excluded), seconds.
+    /// Wall time of the training and the refit (reference construction excluded), seconds.
     pub wall_s: f64,
+    /// Of `wall_s`: the network's training steps and the driver around them, seconds.
+    #[serde(default)]
+    pub train_s: f64,
+    /// Of `wall_s`: θ-resampling (drawing and scanning candidates, casting the rays), seconds.
+    #[serde(default)]
+    pub resample_s: f64,
+    /// Of `wall_s`: the least-squares refit (0 without one), seconds.
+    #[serde(default)]
+    pub refit_s: f64,
+    /// Building the reference the errors are measured against (not in `wall_s`), seconds.
+    #[serde(default)]
+    pub reference_s: f64,
+    /// Measuring the final errors against the reference (not in `wall_s`), seconds.
+    #[serde(default)]
+    pub errors_s: f64,
     /// Why it stopped.
     pub stop: StopReason,
 }
@@ -475,6 +490,11 @@ struct FitState {
     history: Vec<HistoryPoint>,
     stop: Option<StopReason>,
     wall_s: f64,
+    /// Of `wall_s`: time spent resampling and refitting.
+    #[serde(default)]
+    resample_s: f64,
+    #[serde(default)]
+    refit_s: f64,
 }
 
 impl Fit {
@@ -571,6 +591,8 @@ impl Fit {
                 history: Vec::new(),
                 stop,
                 wall_s: 0.0,
+                resample_s: 0.0,
+                refit_s: 0.0,
                 params,
             },
         };
@@ -780,23 +802,42 @@ impl Fit {
 
     /// Refits (if enabled) and measures the final errors. Idempotent apart from the refit.
     pub fn finish(&mut self) -> Result<FitSummary, FitError> {
-        let started = Instant::now();
+        self.finish_with(|_| ControlFlow::Continue(()))
+    }
+
+    /// [`finish`](Fit::finish), telling `progress` how the refit goes; the callback can stop
+    /// the refit ([`FitError::Interrupted`], the learned weights stay as they were).
+    pub fn finish_with(
+        &mut self,
+        progress: impl FnMut(sgcs::RefitProgress) -> ControlFlow<()>,
+    ) -> Result<FitSummary, FitError> {
         let mut errors_before_refit = None;
+        let mut errors_s = 0.0;
         if self.state.params.refit && self.state.params.target != Target::Visibility {
+            let started = Instant::now();
             errors_before_refit = Some(self.reference.errors(&self.state.model));
-            self.refit()?;
+            errors_s += started.elapsed().as_secs_f64();
+            self.refit_with_progress(progress)?;
         }
-        self.state.wall_s += started.elapsed().as_secs_f64();
+        let started = Instant::now();
+        let errors = self.reference.errors(&self.state.model);
+        errors_s += started.elapsed().as_secs_f64();
+        let s = &self.state;
         Ok(FitSummary {
-            cells: self.state.model.network.len(),
-            samples: self.state.samples.len(),
-            sets: self.state.set_starts.len(),
-            rays: self.state.rays,
+            cells: s.model.network.len(),
+            samples: s.samples.len(),
+            sets: s.set_starts.len(),
+            rays: s.rays,
             steps: self.steps(),
-            errors: self.reference.errors(&self.state.model),
+            errors,
             errors_before_refit,
-            wall_s: self.state.wall_s,
-            stop: self.state.stop.unwrap_or(StopReason::Interrupted),
+            wall_s: s.wall_s,
+            train_s: (s.wall_s - s.resample_s - s.refit_s).max(0.0),
+            resample_s: s.resample_s,
+            refit_s: s.refit_s,
+            reference_s: self.reference.build_s(),
+            errors_s,
+            stop: s.stop.unwrap_or(StopReason::Interrupted),
         })
     }
 
@@ -804,59 +845,93 @@ impl Fit {
     /// centres and widths (an improvement beyond the paper; see `sgcs::Network::refit_outputs`).
     ///
     /// The ridge weight is chosen on the training samples alone: every
-    /// [`VALIDATION_STRIDE`]-th sample of the uniform set S₀ is held back, each candidate `params.ridge × 10^k` is
-    /// fitted on the rest and scored on it, and the learned (delta-rule) weights compete too.
-    /// The winner is refitted on all samples; if the learned weights win, nothing changes. So
-    /// the refit never trusts a solve that merely interpolates its samples.
+    /// [`VALIDATION_STRIDE`]-th sample of the uniform set S₀ is held back, each candidate
+    /// `params.ridge × 10^k` is fitted on the rest and scored on it, and the learned
+    /// (delta-rule) weights compete too. The winner is refitted on all samples; if the learned
+    /// weights win, nothing changes. So the refit never trusts a solve that merely interpolates
+    /// its samples. The normal equations are assembled once (in bounded memory, in parallel)
+    /// and every candidate is one sparse Cholesky factorisation; scoring needs no sample again
+    /// (see `sgcs::RefitSystem`).
     pub fn refit(&mut self) -> Result<RefitChoice, FitError> {
+        self.refit_with_progress(|_| ControlFlow::Continue(()))
+    }
+
+    /// [`refit`](Fit::refit), telling `progress` how far it is; the callback can stop it
+    /// ([`FitError::Interrupted`]; the weights are then unchanged).
+    pub fn refit_with_progress(
+        &mut self,
+        mut progress: impl FnMut(sgcs::RefitProgress) -> ControlFlow<()>,
+    ) -> Result<RefitChoice, FitError> {
+        let started = Instant::now();
+        let result = self.refit_inner(&mut progress);
+        self.state.refit_s += started.elapsed().as_secs_f64();
+        self.state.wall_s += started.elapsed().as_secs_f64();
+        result.map_err(|e| match e {
+            FitError::Network(sgcs::SgcsError::Interrupted) => FitError::Interrupted,
+            other => other,
+        })
+    }
+
+    fn refit_inner(
+        &mut self,
+        progress: &mut dyn FnMut(sgcs::RefitProgress) -> ControlFlow<()>,
+    ) -> Result<RefitChoice, FitError> {
         // Validate on uniform samples only: every VALIDATION_STRIDE-th sample of S₀. The θ sets
         // over-represent critical zones, so scoring on them rewards a fit that is good there and
         // poor elsewhere.
+        let samples = &self.state.samples;
         let s0_end = self
             .state
             .set_starts
             .get(1)
             .copied()
-            .unwrap_or(self.state.samples.len());
-        let (mut fit_part, mut check_part) = (Vec::new(), Vec::new());
-        for (i, sample) in self.state.samples.iter().enumerate() {
-            if i < s0_end && i % VALIDATION_STRIDE == VALIDATION_STRIDE - 1 {
-                check_part.push(sample);
-            } else {
-                fit_part.push(sample);
+            .unwrap_or(samples.len());
+        let held_back: Vec<bool> = (0..samples.len())
+            .map(|i| i < s0_end && i % VALIDATION_STRIDE == VALIDATION_STRIDE - 1)
+            .collect();
+        let inputs: Vec<f64> = samples.iter().flat_map(|s| s.xi).collect();
+        let targets: Vec<f64> = samples.iter().map(|s| s.target).collect();
+        let network = &self.state.model.network;
+        let system = network.refit_system_split(&inputs, &targets, &held_back, progress)?;
+        drop((inputs, targets, held_back));
+        let Some(learned) = system.validation_error(network.outputs()) else {
+            // Nothing held back (a tiny S₀): no honest way to choose; keep the learned weights.
+            return Ok(RefitChoice {
+                ridge: None,
+                validation_error: f64::NAN,
+            });
+        };
+        let mut best = (learned, None);
+        let solves = RIDGE_DECADES as usize + 1;
+        let mut stage = |done: usize| -> Result<(), FitError> {
+            let report = sgcs::RefitProgress {
+                stage: sgcs::RefitStage::Solving,
+                done,
+                total: solves,
+            };
+            match progress(report) {
+                ControlFlow::Continue(()) => Ok(()),
+                ControlFlow::Break(()) => Err(FitError::Interrupted),
             }
-        }
-        let flatten = |part: &[&Sample]| -> (Vec<f64>, Vec<f64>) {
-            (
-                part.iter().flat_map(|s| s.xi).collect(),
-                part.iter().map(|s| s.target).collect(),
-            )
         };
-        let (fit_x, fit_y) = flatten(&fit_part);
-        let (check_x, check_y) = flatten(&check_part);
-        let score = |net: &Network| -> f64 {
-            let predicted: Vec<f64> = check_x.chunks(INPUT_DIM).map(|x| net.predict1(x)).collect();
-            crate::relative_l2(&predicted, &check_y)
-        };
-        let mut best = (score(&self.state.model.network), None);
-        // Φ and ΦᵀΦ are assembled once per sample set; each ridge is then one CG solve.
-        let system = self.state.model.network.refit_system(&fit_x, &fit_y)?;
         for k in 0..RIDGE_DECADES {
+            stage(k as usize)?;
             let ridge = self.state.params.ridge * 10f64.powi(k);
-            let mut trial = self.state.model.network.clone();
-            trial.refit_with(&system, ridge)?;
-            let error = score(&trial);
+            let (weights, _) = system.solve(ridge, sgcs::RefitPart::Fitting)?;
+            let error = system.validation_error(&weights).unwrap_or(f64::INFINITY);
             if error < best.0 {
                 best = (error, Some(ridge));
             }
         }
+        stage(solves - 1)?;
         if let Some(ridge) = best.1 {
-            let (all_x, all_y) = flatten(&self.state.samples.iter().collect::<Vec<_>>());
-            self.state
-                .model
-                .network
-                .refit_outputs(&all_x, &all_y, ridge)?;
+            self.state.model.network.refit_with(&system, ridge)?;
         }
+        let _ = progress(sgcs::RefitProgress {
+            stage: sgcs::RefitStage::Solving,
+            done: solves,
+            total: solves,
+        });
         Ok(RefitChoice {
             ridge: best.1,
             validation_error: best.0,
@@ -869,6 +944,12 @@ impl Fit {
     /// its candidates where visibility varies and measures θ with its gated activations, so a
     /// face no cell covers counts as outside the network.
     fn resample(&mut self) {
+        let started = Instant::now();
+        self.resample_inner();
+        self.state.resample_s += started.elapsed().as_secs_f64();
+    }
+
+    fn resample_inner(&mut self) {
         let p = self.state.params;
         let cells = self.state.model.network.len() as f64;
         let wanted = ((cells / p.psi).ceil() as usize)

@@ -49,7 +49,10 @@ pub enum SgcsError {
     /// Saved data is well-formed but describes an inconsistent network.
     #[error("saved network is inconsistent: {0}")]
     Corrupt(String),
-    /// Bad input to [`crate::Network::refit_outputs`].
+    /// Bad input to [`crate::Network::refit_outputs`], or a system it cannot solve.
     #[error("refit: {0}")]
     Refit(String),
+    /// The caller's progress callback stopped the work.
+    #[error("interrupted")]
+    Interrupted,
 }

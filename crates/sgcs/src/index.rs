@@ -310,18 +310,6 @@ impl Index {
         }
     }
 
-    /// Every cell once, leaf by leaf in depth-first order: cells close in space are close in
-    /// this order (used to give the refit's sparse assembly cache locality).
-    pub(crate) fn leaf_order(&self) -> Vec<u32> {
-        let mut order = Vec::with_capacity(self.leaf_of.len());
-        for nd in &self.nodes {
-            if let Kind::Leaf { cells } = &nd.kind {
-                order.extend_from_slice(cells);
-            }
-        }
-        order
-    }
-
     /// Checks that every cell is in exactly one leaf and that boxes and widths are conservative.
     pub(crate) fn check(&self, pos: &[f64], width: &[f64]) -> Result<(), String> {
         let n = self.n;

@@ -67,8 +67,10 @@
 //! - Cells are never removed, so a [`CellId`] is stable; callers keep per-cell statistics keyed by
 //!   [`StepOutcome::bmu`] and push a slot when [`StepOutcome::inserted`] is `Some`.
 //! - **Refit** (beyond the paper): [`Network::refit_outputs`] solves ridge least squares for all
-//!   output weights at fixed centres and widths (sparse normal equations, conjugate gradients);
-//!   [`Network::refit_system`] + [`Network::refit_with`] reuse one assembly for several ridges.
+//!   output weights at fixed centres and widths (sparse normal equations assembled in bounded
+//!   memory, sparse Cholesky); [`Network::refit_system_split`] + [`RefitSystem::solve`] try
+//!   several ridges on one assembly and score them on held-back samples without revisiting
+//!   any sample.
 //!   A relative ridge near `1e-3` generalises best in our tests; see the `refit` module notes on
 //!   [`RefitReport`].
 //!
@@ -113,4 +115,4 @@ mod test_support;
 pub use error::SgcsError;
 pub use network::{CellId, FORMAT_VERSION, Gate, Network, Open, SIMPLEX_DIM, StepOutcome};
 pub use params::{InsertRule, Insertion, OutputMode, OutputRule, Params, Resource};
-pub use refit::{RefitReport, RefitSystem};
+pub use refit::{RefitPart, RefitProgress, RefitReport, RefitStage, RefitSystem};

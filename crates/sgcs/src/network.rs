@@ -878,6 +878,11 @@ impl Network {
         &self.out[c * self.m..(c + 1) * self.m]
     }
 
+    /// Every output weight, cell-major: `v_c` is `outputs()[c · m..(c + 1) · m]`.
+    pub fn outputs(&self) -> &[f64] {
+        &self.out
+    }
+
     /// Sets `v_c` (e.g. the initial cells' weights to their samples' targets).
     pub fn set_output(&mut self, c: CellId, v: &[f64]) -> Result<(), SgcsError> {
         if c >= self.len() {
@@ -1252,11 +1257,6 @@ impl Network {
             None => return Err(SgcsError::Format("missing \"version\"".into())),
         }
         serde_json::from_value(value).map_err(|e| SgcsError::Corrupt(e.to_string()))
-    }
-
-    /// The cells in a spatially coherent order (used by the refit).
-    pub(crate) fn spatial_order(&self) -> Vec<u32> {
-        self.index.leaf_order()
     }
 
     /// `collect_active` with caller-owned buffers (used by the refit).
