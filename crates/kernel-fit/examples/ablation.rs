@@ -130,7 +130,6 @@ fn variant(name: &str, cells: usize) -> FitParams {
             s if s.starts_with("imp") => p.importance = s[3..].parse().unwrap(),
             s if s.starts_with("phi") => p.phi = s[3..].parse().unwrap(),
             s if s.starts_with("lam") => p.network.lambda = s[3..].parse().unwrap(),
-            s if s.starts_with("pol") => p.polish_steps = s[3..].parse().unwrap(),
             s if s.starts_with("psi") => p.psi = s[3..].parse().unwrap(),
             s if s.starts_with("cut") => p.network.activation_cutoff = s[3..].parse().unwrap(),
             s if s.starts_with("eta") => p.network.eta = s[3..].parse().unwrap(),

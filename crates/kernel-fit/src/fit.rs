@@ -678,7 +678,7 @@ impl Fit {
     fn stop_reason(&self) -> Option<StopReason> {
         let p = &self.state.params;
         let steps = self.steps();
-        let lambda = u64::from(p.network.lambda).max(p.polish_steps);
+        let lambda = u64::from(p.network.lambda);
         if self.state.model.network.len() >= p.target_cells
             && steps - self.state.steps_at_last_growth >= lambda
         {
