@@ -58,6 +58,7 @@
 
 #![deny(missing_docs)]
 
+pub mod ablation;
 pub mod baselines;
 pub mod bench;
 mod error;
@@ -65,6 +66,7 @@ mod eval;
 mod fit;
 mod model;
 mod params;
+pub mod rooms;
 mod sampling;
 pub mod solve;
 mod visibility;
