@@ -15,6 +15,8 @@ use crate::{
     Approximation, Errors, FitError, FitParams, InputFrame, Reference, Resampling, Target,
 };
 
+pub(crate) mod checks;
+
 /// Input dimension of the kernel's network: `γ(s, t) = (x₁, y₁, x₂, y₂)`.
 pub const INPUT_DIM: usize = 4;
 
@@ -755,7 +757,8 @@ impl Fit {
     }
 
     /// Continues a fit from a checkpoint. The kernel is rebuilt from the embedded scene with
-    /// `kernel_params`; the reference from it with the checkpoint's resolution and seed.
+    /// `kernel_params`; the reference from it with the checkpoint's resolution and
+    /// [`REFERENCE_SEED`](crate::REFERENCE_SEED).
     /// A file of another kind or version is refused with a message, never misread.
     pub fn resume(
         path: &std::path::Path,
@@ -799,6 +802,7 @@ impl Fit {
                 e.column()
             ))
         })?;
+        checks::checkpoint(&c).map_err(bad)?;
         let mut state = c.state;
         if crate::fingerprint_hex(&state.model.scene) != c.scene_fingerprint {
             return Err(bad(
@@ -814,7 +818,7 @@ impl Fit {
             &kernel,
             c.reference_res,
             c.reference_heldout,
-            state.params.seed,
+            crate::REFERENCE_SEED,
         ));
         if state.cell_stats.len() != state.model.network.len()
             || state.set_starts.first() != Some(&0)
@@ -937,7 +941,7 @@ mod tests {
     }
 
     fn fit_with(kernel: &Arc<Kernel>, params: FitParams) -> Fit {
-        let reference = Arc::new(Reference::new(kernel, 64, 2048, params.seed));
+        let reference = Arc::new(Reference::new(kernel, 64, 2048, crate::REFERENCE_SEED));
         Fit::new(Arc::clone(kernel), reference, params).unwrap()
     }
 

@@ -44,6 +44,7 @@ pub mod bench;
 mod error;
 mod eval;
 mod fit;
+pub mod limits;
 mod model;
 mod params;
 mod sampling;
@@ -56,6 +57,7 @@ pub use fit::{
     CellSnapshot, Fit, FitSummary, HistoryPoint, INPUT_DIM, LearnedKernel, RefitChoice, Snapshot,
     StopReason,
 };
+pub use limits::REFERENCE_SEED;
 pub use model::{MODEL_FORMAT, MODEL_VERSION, ModelFile, fingerprint_hex};
 pub use params::{FitParams, Resampling, Target};
 pub use sampling::InputFrame;
