@@ -317,7 +317,7 @@ impl Learner {
                 &kernel,
                 REFERENCE_RES,
                 params.heldout,
-                params.seed,
+                kernel_fit::REFERENCE_SEED,
             ));
             let exact_small = kernel.grid(APPROX_RES, true);
             let id = self.next_world;
