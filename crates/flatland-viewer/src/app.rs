@@ -77,13 +77,13 @@ impl Default for Settings {
     }
 }
 
-/// How [`crate::run_with`] starts the viewer.
+/// How [`crate::run_with`] starts the viewer. The default starts learning at once.
 #[derive(Clone, Debug, Default)]
 pub struct Options {
     /// Open this scene file instead of the remembered scene.
     pub scene: Option<PathBuf>,
-    /// Start training at once.
-    pub autoplay: bool,
+    /// Start paused instead of learning at once.
+    pub paused: bool,
     /// Override the target cell count.
     pub target_cells: Option<usize>,
     /// Ignore (but still save) the remembered settings.
@@ -181,28 +181,39 @@ impl ViewerApp {
     /// The app inside eframe: settings from eframe's storage (unless `options.fresh_settings`),
     /// the scene from `options.scene`, else the remembered one, else `fig3`.
     pub fn new(cc: &eframe::CreationContext<'_>, options: &Options) -> ViewerApp {
-        let mut settings: Settings = if options.fresh_settings {
+        let settings: Settings = if options.fresh_settings {
             Settings::default()
         } else {
             cc.storage
                 .and_then(|s| eframe::get_value(s, SETTINGS_KEY))
                 .unwrap_or_default()
         };
+        ViewerApp::with_options(cc.egui_ctx.clone(), settings, options)
+    }
+
+    /// The app as [`ViewerApp::new`] starts it, from given settings: the options applied, and
+    /// learning at once unless `options.paused`.
+    pub fn with_options(
+        ctx: egui::Context,
+        mut settings: Settings,
+        options: &Options,
+    ) -> ViewerApp {
         if let Some(cells) = options.target_cells {
             settings.params.target_cells = cells;
         }
         if let Some(path) = &options.scene {
             settings.scene = SceneChoice::File(path.clone());
         }
-        let mut app = ViewerApp::headless(cc.egui_ctx.clone(), settings);
+        let mut app = ViewerApp::headless(ctx, settings);
         app.fps_log = options.fps_log;
-        if options.autoplay {
+        if !options.paused {
             app.play();
         }
         app
     }
 
-    /// The app without eframe (for tests): starts the learner and a fresh fit of the chosen scene.
+    /// The app without eframe (for tests): starts the learner and a fresh fit of the chosen
+    /// scene, paused.
     pub fn headless(ctx: egui::Context, mut settings: Settings) -> ViewerApp {
         let mut message = None;
         let (scene, label) = match load_choice(&settings.scene) {
@@ -304,6 +315,25 @@ impl ViewerApp {
     pub fn fps(&self) -> f64 {
         self.fps_now
     }
+    /// Final errors of the finished fit (after the refit), once the learner has them.
+    pub fn final_errors(&self) -> Option<kernel_fit::Errors> {
+        self.status
+            .as_ref()
+            .and_then(|s| s.summary.as_ref())
+            .map(|s| s.errors)
+    }
+    /// Whether the newest status was made after the learner handled every command sent so far
+    /// (what a test waits for before it asserts on the learner's state).
+    pub fn caught_up(&self) -> bool {
+        self.status
+            .as_ref()
+            .is_some_and(|s| s.handled == self.worker.sent())
+    }
+    /// Blocks until the learner publishes something this app has not taken yet, or `timeout`
+    /// passes (for tests: wait on the learner instead of sleeping). The UI never calls it.
+    pub fn wait_for_learner(&self, timeout: Duration) -> bool {
+        self.worker.wait(timeout)
+    }
 
     // ----- actions -----
 
@@ -314,6 +344,10 @@ impl ViewerApp {
     /// Pauses training.
     pub fn pause(&mut self) {
         self.worker.send(Command::Pause);
+    }
+    /// Asks the learner for a status made after every command sent so far ([`Self::caught_up`]).
+    pub fn sync(&mut self) {
+        self.worker.send(Command::Sync);
     }
     /// Trains `settings.step_size` steps.
     pub fn step(&mut self) {
