@@ -19,7 +19,8 @@ use crate::BUNDLED_SCENES;
 use crate::colormap::{Scale, grid_image, samples_image};
 use crate::views::{self, Hover, PlotFrame, SceneDrag};
 use crate::worker::{
-    APPROX_RES, Approx, Command, REFERENCE_RES, Status, WorkerHandle, World, format_errors,
+    APPROX_RES, Approx, Command, REFERENCE_RES, Status, WorkerHandle, World, error_text,
+    format_errors,
 };
 
 /// Key of the settings in eframe's storage.
@@ -533,6 +534,7 @@ impl ViewerApp {
     }
 
     fn top_bar(&mut self, ui: &mut egui::Ui) {
+        let defined = self.world.as_ref().map_or([true; 2], |w| w.defined);
         ui.horizontal(|ui| {
             if self.running() {
                 if ui.button("Pause").clicked() {
@@ -555,7 +557,7 @@ impl ViewerApp {
             let mut stats = String::new();
             if let Some(st) = &self.status {
                 let snap = &st.snapshot;
-                let err = snap.history.last().map_or("–".into(), |h| format!("{:.3}", h.rel_l2_heldout));
+                let err = snap.history.last().map_or("–".into(), |h| error_text(h.rel_l2_heldout, defined[1]));
                 let per_cell = snap.samples.len() as f64 / snap.cells.len().max(1) as f64;
                 stats = format!(
                     "steps {}   rays {}   cells {}/{}   samples {} ({:.1}/cell)   sets {}   held-out rel. L2 {}   {:.0} steps/s",
@@ -584,7 +586,7 @@ impl ViewerApp {
                 let errs = st
                     .summary
                     .as_ref()
-                    .map(|s| format!(": final rel. L2 {}", format_errors(&s.errors)))
+                    .map(|s| format!(": final rel. L2 {}", format_errors(&s.errors, defined)))
                     .unwrap_or_default();
                 let hint = if r == kernel_fit::StopReason::TargetCells {
                     "; raise the target cells and press Play to go on"

@@ -76,6 +76,9 @@ pub struct World {
     pub reference: Arc<Reference>,
     /// The exact ζ on the `APPROX_RES` display grid, for the error panel.
     pub exact_small: Vec<f64>,
+    /// Whether relative errors are defined on the grid and at the held-out points: against a ζ
+    /// that is 0 everywhere (nothing emits) they are 0/0 and shown as "undefined".
+    pub defined: [bool; 2],
 }
 
 /// The learned ζ̃ on the display grid.
@@ -370,6 +373,10 @@ impl Learner {
                 kernel_fit::REFERENCE_SEED,
             ));
             let exact_small = kernel.grid(APPROX_RES, true);
+            let defined = [
+                reference.grid().iter().any(|v| *v != 0.0),
+                reference.heldout().1.iter().any(|v| *v != 0.0),
+            ];
             let id = self.next_world;
             self.next_world += 1;
             Arc::new(World {
@@ -378,6 +385,7 @@ impl Learner {
                 kernel,
                 reference,
                 exact_small,
+                defined,
             })
         });
         self.set_busy(None);
@@ -566,8 +574,22 @@ pub fn approx_grid(model: &LearnedKernel, res: usize) -> Vec<f64> {
         .collect()
 }
 
-/// Both final errors, formatted.
+/// Both final errors, formatted; "undefined" where [`World::defined`] says so.
 #[must_use]
-pub fn format_errors(e: &Errors) -> String {
-    format!("grid {:.3}, held out {:.3}", e.grid, e.heldout)
+pub fn format_errors(e: &Errors, defined: [bool; 2]) -> String {
+    format!(
+        "grid {}, held out {}",
+        error_text(e.grid, defined[0]),
+        error_text(e.heldout, defined[1])
+    )
+}
+
+/// A relative error with three decimals, or "undefined".
+#[must_use]
+pub fn error_text(value: f64, defined: bool) -> String {
+    if defined {
+        format!("{value:.3}")
+    } else {
+        "undefined".to_owned()
+    }
 }

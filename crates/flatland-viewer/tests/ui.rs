@@ -149,6 +149,31 @@ fn a_parameter_changed_in_the_panel_reaches_the_learner() {
     assert_eq!(h.state().settings().params.psi, 1.0);
 }
 
+/// A scene where nothing emits: its relative errors are 0/0, shown as "undefined", not 0.
+#[test]
+fn errors_against_a_dark_scene_read_undefined() {
+    let mut settings = quick_settings();
+    settings.params.target_cells = 8;
+    let mut h = harness(settings);
+    wait_for(&mut h, "the reference", ready);
+    let path =
+        std::env::temp_dir().join(format!("flatland-viewer-dark-{}.ron", std::process::id()));
+    std::fs::write(
+        &path,
+        "(edges: [(a: (0, 0), b: (1, 0), reflectance: 0.5), (a: (1, 0), b: (1, 1), reflectance: \
+         0.5), (a: (1, 1), b: (0, 1), reflectance: 0.5), (a: (0, 1), b: (0, 0), reflectance: 0.5)])",
+    )
+    .unwrap();
+    h.state_mut().open_file(&path);
+    let _ = std::fs::remove_file(&path);
+    wait_for(&mut h, "the dark scene's reference", ready);
+    h.get_by_label("Play").click();
+    wait_until(&mut h, "the final errors", |h| {
+        h.query_by_label_contains("final rel. L2 grid undefined, held out undefined")
+            .is_some()
+    });
+}
+
 #[test]
 fn picking_another_scene_starts_a_fresh_fit_on_it() {
     let mut h = harness(quick_settings());
