@@ -479,7 +479,7 @@ impl Fit {
     /// centres and widths (an improvement beyond the paper; see `sgcs::Network::refit_outputs`).
     ///
     /// The ridge weight is chosen on the training samples alone: every
-    /// [`VALIDATION_STRIDE`]-th sample of the uniform set S₀ is held back, each candidate `params.ridge × 10^k` is
+    /// `VALIDATION_STRIDE`-th sample of the uniform set S₀ is held back, each candidate `params.ridge × 10^k` is
     /// fitted on the rest and scored on it, and the learned (delta-rule) weights compete too.
     /// The winner is refitted on all samples; if the learned weights win, nothing changes. So
     /// the refit never trusts a solve that merely interpolates its samples.
