@@ -334,6 +334,31 @@ fn regression_res_has_one_range_refused_before_any_work() {
     );
 }
 
+/// `bench --budgets 1000000000000 --methods uniform` aborted on allocation; `--cells` and
+/// `--budgets` count the same thing and share one range.
+#[test]
+fn regression_cells_and_budgets_share_one_range() {
+    for args in [
+        &["fit", "--cells", "1000000000000"][..],
+        &["figure", "--cells", "2", "--out", "never"],
+    ] {
+        assert_one_line_error(&flatland(args), &["--cells must be in [3, 10000000]"]);
+    }
+    let out = flatland(&[
+        "bench",
+        "--budgets",
+        "1000000000000",
+        "--methods",
+        "uniform",
+        "--out",
+        "never",
+    ]);
+    assert_one_line_error(&out, &["--budgets must be in [3, 10000000]"]);
+    let out = flatland(&["bench", "--seeds", "1000000000000", "--out", "never"]);
+    assert_one_line_error(&out, &["--seeds must be in [1, 1000]"]);
+    assert!(!root().join("never").exists());
+}
+
 /// `fit --subdivide 100000000000` aborted on allocation.
 #[test]
 fn regression_subdivide_is_refused_before_allocating() {

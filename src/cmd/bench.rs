@@ -25,10 +25,10 @@ pub struct Args {
         default_value = "sgcs,sgcs-norefit,hr,uniform"
     )]
     pub methods: Vec<String>,
-    /// Budgets (numbers of basis functions), comma-separated.
+    /// Budgets (numbers of basis functions, each in [3, 10 000 000]), comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "50,100,200,400,800")]
     pub budgets: Vec<usize>,
-    /// Seeds per random method and budget.
+    /// Seeds per random method and budget, in [1, 1000].
     #[arg(long, default_value_t = 3)]
     pub seeds: u64,
     /// Reference grid resolution R in [16, 4096].
@@ -38,6 +38,9 @@ pub struct Args {
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
 }
+
+/// Most seeds per method and budget (each is a whole run).
+const MAX_SEEDS: u64 = 1000;
 
 /// Files `flatland bench` writes into its folder.
 pub const OUTPUTS: [&str; 4] = [
@@ -56,6 +59,14 @@ pub fn run(args: &Args) -> Result<()> {
         .collect::<Result<Vec<_>, _>>()?;
     let plan = BenchPlan::new(methods, args.budgets.clone(), args.seeds);
     plan.validate()?;
+    for &budget in &plan.budgets {
+        super::check_cells("--budgets", budget)?;
+    }
+    anyhow::ensure!(
+        (1..=MAX_SEEDS).contains(&args.seeds),
+        "--seeds must be in [1, {MAX_SEEDS}], but is {}",
+        args.seeds
+    );
     super::check_res(args.res)?;
     let (kernel, label) = args.scene.kernel()?;
     output::folder(

@@ -54,6 +54,7 @@ pub const PANELS: [&str; 5] = [
 /// Runs `flatland figure`.
 pub fn run(args: &Args) -> Result<()> {
     super::check_res(args.res)?;
+    super::check_cells("--cells", args.cells)?;
     let (kernel, label) = args.scene.kernel()?;
     let kernel = Arc::new(kernel);
     let params = FitParams {

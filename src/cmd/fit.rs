@@ -25,7 +25,7 @@ pub enum ResamplingArg {
 pub struct Args {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// Stop at this many cells.
+    /// Stop at this many cells, in [3, 10 000 000].
     #[arg(long, default_value_t = FitParams::default().target_cells)]
     pub cells: usize,
     /// Seed of every random choice (same seed, same fit).
@@ -114,6 +114,7 @@ const PROGRESS_EVERY: u64 = 1000;
 pub fn run(args: &Args) -> Result<()> {
     // Everything that can be refused is refused before any work: ranges, then outputs.
     super::check_res(args.res)?;
+    super::check_cells("--cells", args.cells)?;
     anyhow::ensure!(args.every >= 1, "--every must be at least 1, but is 0");
     let scene_input: Vec<&Path> = args.scene.path().into_iter().collect();
     if let Some(out) = &args.out {

@@ -131,6 +131,17 @@ pub fn check_res(res: usize) -> Result<()> {
     Ok(())
 }
 
+/// Refuses a cell count or budget (`--cells`, `--budgets`: basis functions) outside the range
+/// every command and file shares, before anything is allocated.
+pub fn check_cells(flag: &str, n: usize) -> Result<()> {
+    let max = limits::MAX_CELLS;
+    anyhow::ensure!(
+        (3..=max).contains(&n),
+        "{flag} must be in [3, {max}], but is {n}"
+    );
+    Ok(())
+}
+
 /// Largest scene `--subdivide` may produce, in edges.
 pub const MAX_EDGES: usize = 1_000_000;
 
