@@ -237,3 +237,67 @@ fn draw_labels(root: &Area<'_>, map: &Heatmap<'_>, side: u32) -> DrawResult {
     ))?;
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The heatmaps of `kernel`, `eval` and `figure` were bare R×R pictures: no axes, labels,
+    /// colour bar or title. Checks the layout: s upwards, t to the right, the bar's colours,
+    /// and text in the margins.
+    #[test]
+    fn heatmaps_have_axes_a_colour_bar_and_a_title() {
+        let scene = Scene::from_ron_str(crate::cmd::BUNDLED_FIG3).unwrap();
+        // 16 × 16, 1 in row 0 (s smallest) and column 15 (t largest) only.
+        let res = 16;
+        let grid: Vec<f64> = (0..res * res)
+            .map(|k| {
+                if k / res == 0 && k % res == res - 1 {
+                    1.0
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let map = Heatmap {
+            title: "a title".into(),
+            quantity: "k",
+            scene: &scene,
+            log: false,
+            top: 1.0,
+            overlay: None,
+        };
+        let png = heatmap_png(&grid, res, &map).unwrap();
+        let image = image::load_from_memory(&png).unwrap().to_rgb8();
+        let side = (MIN_SIDE.div_ceil(res) * res) as u32;
+        assert_eq!(
+            image.dimensions(),
+            (LEFT + side + RIGHT, TOP + side + BOTTOM)
+        );
+        let at = |x: u32, y: u32| image.get_pixel(x, y).0;
+        let cell = side / res as u32;
+        // The bright cell is at the bottom right: s = 0 at the bottom, t = 1 at the right.
+        let (right, bottom) = (LEFT + side - cell / 2, TOP + side - cell / 2);
+        assert_eq!(at(right, bottom), viridis(1.0));
+        assert_eq!(at(LEFT + cell / 2, TOP + cell / 2), viridis(0.0));
+        // The colour bar runs from the bottom colour to the top colour.
+        let bar_x = LEFT + side + BAR_GAP + BAR_WIDTH / 2;
+        assert_eq!(at(bar_x, TOP), viridis(1.0));
+        assert_eq!(at(bar_x, TOP + side - 1), viridis(0.0));
+        // Text: dark pixels in the title band, left of the plot (s labels), under it (t labels)
+        // and right of the bar (values).
+        let dark = |x0: u32, x1: u32, y0: u32, y1: u32| {
+            (x0..x1).any(|x| (y0..y1).any(|y| at(x, y).iter().all(|&c| c < 100)))
+        };
+        assert!(dark(LEFT, LEFT + side, 0, TOP - 10), "title");
+        assert!(dark(0, LEFT - 8, TOP, TOP + side), "s axis");
+        assert!(
+            dark(LEFT, LEFT + side, TOP + side + 8, TOP + side + BOTTOM),
+            "t axis"
+        );
+        assert!(
+            dark(bar_x + BAR_WIDTH, LEFT + side + RIGHT, TOP, TOP + side),
+            "bar values"
+        );
+    }
+}
