@@ -5,38 +5,51 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use kernel_fit::Reference;
 use kernel_fit::bench::{BenchPlan, BenchRow, Method, run_bench};
 
 use super::SceneArgs;
 use crate::plot::{Series, log_log};
+use crate::{interrupt, output};
 
 /// Arguments of `flatland bench`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// Methods, comma-separated: sgcs, sgcs-norefit, hr, uniform.
+    /// Methods, comma-separated: sgcs (the default learner), sgcs-paper (the paper's network
+    /// with the refit), sgcs-paper-norefit, hr, uniform.
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "sgcs,sgcs-norefit,hr,uniform"
+        default_value = "sgcs,sgcs-paper,sgcs-paper-norefit,hr,uniform"
     )]
     pub methods: Vec<String>,
-    /// Budgets (numbers of basis functions), comma-separated.
+    /// Budgets (numbers of basis functions, each in [3, 10 000 000]), comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "50,100,200,400,800")]
     pub budgets: Vec<usize>,
-    /// Seeds per random method and budget.
+    /// Seeds per random method and budget, in [1, 1000].
     #[arg(long, default_value_t = 3)]
     pub seeds: u64,
-    /// Reference grid resolution R.
+    /// Reference grid resolution R in [16, 4096].
     #[arg(long, default_value_t = 256)]
     pub res: usize,
     /// Output folder for results.csv and the plots.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
 }
+
+/// Most seeds per method and budget (each is a whole run).
+const MAX_SEEDS: u64 = 1000;
+
+/// Files `flatland bench` writes into its folder.
+pub const OUTPUTS: [&str; 4] = [
+    "results.csv",
+    "error_vs_basis.png",
+    "error_vs_time.png",
+    "error_vs_rays.png",
+];
 
 /// Runs `flatland bench`.
 pub fn run(args: &Args) -> Result<()> {
@@ -47,32 +60,85 @@ pub fn run(args: &Args) -> Result<()> {
         .collect::<Result<Vec<_>, _>>()?;
     let plan = BenchPlan::new(methods, args.budgets.clone(), args.seeds);
     plan.validate()?;
-    anyhow::ensure!(args.res >= 1, "--res must be at least 1, got {}", args.res);
+    for &budget in &plan.budgets {
+        super::check_cells("--budgets", budget)?;
+    }
+    anyhow::ensure!(
+        (1..=MAX_SEEDS).contains(&args.seeds),
+        "--seeds must be in [1, {MAX_SEEDS}], but is {}",
+        args.seeds
+    );
+    super::check_res(args.res)?;
     let (kernel, label) = args.scene.kernel()?;
+    output::folder(
+        &args.out,
+        &OUTPUTS,
+        &args.scene.path().into_iter().collect::<Vec<_>>(),
+    )?;
     let kernel = Arc::new(kernel);
-    let reference = Arc::new(Reference::new(&kernel, args.res, plan.fit.heldout, 0));
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating the output folder {}", args.out.display()))?;
+    let reference = Arc::new(super::reference(&kernel, args.res, &plan.fit));
+    let defined = super::Defined::of(&reference);
     let total = plan.methods.len() * plan.budgets.len() * plan.seeds as usize;
+    eprintln!(
+        "bench of {label}: {total} runs (Ctrl-C stops; the rows so far are kept in {})",
+        args.out.join("results.csv").display()
+    );
     let bar = super::progress_bar(total as u64, "runs");
-    let rows = run_bench(&kernel, &reference, &plan, |done, _| {
-        bar.set_position(done as u64)
+    let rows = run_kept(&kernel, &reference, &plan, |rows| {
+        bar.set_position(rows.len() as u64);
+        write_outputs(&args.out, &label, rows, defined)?;
+        let kept = format!(
+            "{} of {total} runs kept in {} (and its plots)",
+            rows.len(),
+            args.out.join("results.csv").display()
+        );
+        let budget = rows.last().map_or(0, |r| r.budget);
+        bar.suspend(|| eprintln!("bench: budget {budget} done; {kept}"));
+        interrupt::keep(kept);
+        Ok(())
     })?;
     bar.finish_and_clear();
-    write_outputs(&args.out, &label, &rows)?;
-    print!("{}", table(&rows));
+    print!("{}", table(&rows, defined));
     println!("wrote {}/results.csv and plots", args.out.display());
     Ok(())
+}
+
+/// [`run_bench`] one budget at a time (the same rows in the same order), calling `kept` with
+/// the rows so far after each budget and checking for Ctrl-C in between.
+pub fn run_kept(
+    kernel: &Arc<flatland_geom::Kernel>,
+    reference: &Arc<Reference>,
+    plan: &BenchPlan,
+    mut kept: impl FnMut(&[BenchRow]) -> Result<()>,
+) -> Result<Vec<BenchRow>> {
+    let mut rows = Vec::new();
+    for &budget in &plan.budgets {
+        interrupt::check()?;
+        let one = BenchPlan {
+            budgets: vec![budget],
+            ..plan.clone()
+        };
+        rows.extend(run_bench(kernel, reference, &one, |_, _| {})?);
+        kept(&rows)?;
+    }
+    Ok(rows)
 }
 
 /// What a plot puts on its x axis.
 type XAxis = fn(&BenchRow) -> f64;
 
-/// `results.csv` and the three log–log plots of one scene's rows.
-pub fn write_outputs(dir: &Path, scene: &str, rows: &[BenchRow]) -> Result<()> {
+/// `results.csv` and the three log–log plots of one scene's rows. An undefined error (see
+/// [`super::Defined`]) is an empty CSV field and is left out of the plots.
+pub fn write_outputs(
+    dir: &Path,
+    scene: &str,
+    rows: &[BenchRow],
+    defined: super::Defined,
+) -> Result<()> {
     let mut csv = String::from(
         "scene,method,budget,seed,basis_functions,rel_l2_grid,rel_l2_heldout,rays,wall_s,memory_bytes\n",
     );
+    let field = |ok: bool, v: f64| if ok { v.to_string() } else { String::new() };
     for r in rows {
         writeln!(
             csv,
@@ -81,14 +147,17 @@ pub fn write_outputs(dir: &Path, scene: &str, rows: &[BenchRow]) -> Result<()> {
             r.budget,
             r.seed,
             r.basis_functions,
-            r.errors.grid,
-            r.errors.heldout,
+            field(defined.grid, r.errors.grid),
+            field(defined.heldout, r.errors.heldout),
             r.rays,
             r.wall_s,
             r.memory_bytes
         )?;
     }
-    flatland_geom::write_atomic(&dir.join("results.csv"), csv.as_bytes())?;
+    interrupt::writing(|| flatland_geom::write_atomic(&dir.join("results.csv"), csv.as_bytes()))?;
+    if !defined.heldout {
+        return Ok(());
+    }
     let axes: [(&str, &str, XAxis); 3] = [
         ("error_vs_basis.png", "basis functions", |r| {
             r.basis_functions as f64
@@ -142,7 +211,7 @@ fn series(rows: &[BenchRow], x: fn(&BenchRow) -> f64) -> Vec<Series> {
 }
 
 /// A Markdown table of the rows, averaged over seeds.
-pub fn table(rows: &[BenchRow]) -> String {
+pub fn table(rows: &[BenchRow], defined: super::Defined) -> String {
     let mut groups: BTreeMap<(usize, Method), Vec<&BenchRow>> = BTreeMap::new();
     for r in rows {
         groups.entry((r.budget, r.method)).or_default().push(r);
@@ -159,13 +228,17 @@ pub fn table(rows: &[BenchRow]) -> String {
             .map(|r| r.errors.heldout)
             .fold(f64::INFINITY, f64::min);
         let hi = g.iter().map(|r| r.errors.heldout).fold(0.0, f64::max);
+        let heldout = if defined.heldout {
+            format!("{:.3} ({lo:.3}–{hi:.3})", mean(&|r| r.errors.heldout))
+        } else {
+            "undefined".to_owned()
+        };
         let _ = writeln!(
             out,
-            "| {budget} | {} | {:.0} | {:.3} | {:.3} ({lo:.3}–{hi:.3}) | {:.0} | {:.3} | {:.0} |",
+            "| {budget} | {} | {:.0} | {} | {heldout} | {:.0} | {:.3} | {:.0} |",
             method.name(),
             mean(&|r| r.basis_functions as f64),
-            mean(&|r| r.errors.grid),
-            mean(&|r| r.errors.heldout),
+            super::error_text(mean(&|r| r.errors.grid), defined.grid, 3),
             mean(&|r| r.rays as f64),
             mean(&|r| r.wall_s),
             mean(&|r| r.memory_bytes as f64),

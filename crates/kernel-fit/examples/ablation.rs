@@ -6,10 +6,10 @@
 use std::sync::Arc;
 
 use flatland_geom::{Kernel, Scene};
+use kernel_fit::Reference;
 use kernel_fit::ablation::{leave_one_out, path, run_variants};
 use kernel_fit::baselines::{HrParams, run_hr_at_budget};
 use kernel_fit::rooms::random_room;
-use kernel_fit::Reference;
 
 fn scene(name: &str) -> Scene {
     match name.strip_prefix("room") {
@@ -28,14 +28,24 @@ fn main() {
         let reference = Arc::new(Reference::new(&kernel, 256, 4096, 1));
         let hr = run_hr_at_budget(&kernel, cells, 1, &HrParams::default()).expect("HR");
         let hr = reference.errors(&hr.approx);
-        println!("\n{name}: HR at {cells} links: grid {:.4}, held out {:.4}", hr.grid, hr.heldout);
+        println!(
+            "\n{name}: HR at {cells} links: grid {:.4}, held out {:.4}",
+            hr.grid, hr.heldout
+        );
         for variants in [path(), leave_one_out()] {
             let rows = run_variants(&kernel, &reference, &variants, cells, seeds, &|| false)
                 .expect("fits");
             for r in rows {
                 println!(
                     "  {:<44} grid {:.4} ({:.2}× HR)  held {:.4}  L1 {:.4}  cells {:>5.0}  rays {:>6.0}  {:.2} s",
-                    r.variant, r.grid, r.grid / hr.grid, r.heldout, r.l1_grid, r.cells, r.rays, r.wall_s
+                    r.variant,
+                    r.grid,
+                    r.grid / hr.grid,
+                    r.heldout,
+                    r.l1_grid,
+                    r.cells,
+                    r.rays,
+                    r.wall_s
                 );
             }
             println!();

@@ -77,7 +77,9 @@ pub fn leave_one_out() -> Vec<Variant> {
             name: "default",
             params: d,
         },
-        without("− gating by face (by pair only)", &|p| p.gating = Gating::Pairs),
+        without("− gating by face (by pair only)", &|p| {
+            p.gating = Gating::Pairs
+        }),
         without("− gating", &|p| p.gating = Gating::Off),
         without("− importance sampling", &|p| p.importance = 0.0),
         without("− error weights", &|p| p.weighted = false),

@@ -16,6 +16,8 @@ use crate::{
     Approximation, Errors, FitError, FitParams, Gating, InputFrame, Reference, Resampling, Target,
 };
 
+pub(crate) mod checks;
+
 /// Input dimension of the kernel's network: `γ(s, t) = (x₁, y₁, x₂, y₂)`.
 pub const INPUT_DIM: usize = 4;
 
@@ -762,7 +764,7 @@ impl Fit {
     /// centres and widths (an improvement beyond the paper; see `sgcs::Network::refit_outputs`).
     ///
     /// The ridge weight is chosen on the training samples alone: every
-    /// [`VALIDATION_STRIDE`]-th sample of the uniform set S₀ is held back, each candidate `params.ridge × 10^k` is
+    /// `VALIDATION_STRIDE`-th sample of the uniform set S₀ is held back, each candidate `params.ridge × 10^k` is
     /// fitted on the rest and scored on it, and the learned (delta-rule) weights compete too.
     /// The winner is refitted on all samples; if the learned weights win, nothing changes. So
     /// the refit never trusts a solve that merely interpolates its samples.
@@ -1110,7 +1112,8 @@ impl Fit {
     }
 
     /// Continues a fit from a checkpoint. The kernel is rebuilt from the embedded scene with
-    /// `kernel_params`; the reference from it with the checkpoint's resolution and seed.
+    /// `kernel_params`; the reference from it with the checkpoint's resolution and
+    /// [`REFERENCE_SEED`](crate::REFERENCE_SEED).
     /// A file of another kind or version is refused with a message, never misread.
     pub fn resume(
         path: &std::path::Path,
@@ -1154,6 +1157,7 @@ impl Fit {
                 e.column()
             ))
         })?;
+        checks::checkpoint(&c).map_err(bad)?;
         let mut state = c.state;
         if crate::fingerprint_hex(&state.model.scene) != c.scene_fingerprint {
             return Err(bad(
@@ -1169,7 +1173,7 @@ impl Fit {
             &kernel,
             c.reference_res,
             c.reference_heldout,
-            state.params.seed,
+            crate::REFERENCE_SEED,
         ));
         if let Some(geometry) = &mut state.model.geometry {
             geometry.kernel = Arc::clone(&kernel);
@@ -1363,7 +1367,7 @@ mod tests {
     }
 
     fn fit_with(kernel: &Arc<Kernel>, params: FitParams) -> Fit {
-        let reference = Arc::new(Reference::new(kernel, 64, 2048, params.seed));
+        let reference = Arc::new(Reference::new(kernel, 64, 2048, crate::REFERENCE_SEED));
         Fit::new(Arc::clone(kernel), reference, params).unwrap()
     }
 

@@ -64,6 +64,7 @@ pub mod bench;
 mod error;
 mod eval;
 mod fit;
+pub mod limits;
 mod model;
 mod params;
 pub mod rooms;
@@ -80,6 +81,7 @@ pub use fit::{
     CellSnapshot, Fit, FitSummary, HistoryPoint, INPUT_DIM, LearnedKernel, RefitChoice, Snapshot,
     StopReason,
 };
+pub use limits::REFERENCE_SEED;
 pub use model::{MODEL_FORMAT, MODEL_VERSION, ModelFile, fingerprint_hex};
 pub use params::{FitParams, Gating, Preset, Resampling, Target};
 pub use sampling::InputFrame;

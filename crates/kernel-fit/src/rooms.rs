@@ -38,8 +38,8 @@ pub fn random_room(seed: u64) -> Result<Scene, GeomError> {
             let n = r.random_range(5..9);
             (0..n)
                 .map(|i| {
-                    let a = std::f64::consts::TAU * (i as f64 + r.random_range(-0.3..0.3))
-                        / n as f64;
+                    let a =
+                        std::f64::consts::TAU * (i as f64 + r.random_range(-0.3..0.3)) / n as f64;
                     v(w / 2.0 * (1.0 + a.cos()), h / 2.0 * (1.0 + a.sin()))
                 })
                 .collect()
@@ -109,7 +109,10 @@ mod tests {
             let room = random_room(seed).unwrap();
             assert!(room.max_emission() > 0.0, "seed {seed}: no light");
             assert_eq!(room.fingerprint(), random_room(seed).unwrap().fingerprint());
-            assert_ne!(room.fingerprint(), random_room(seed + 1).unwrap().fingerprint());
+            assert_ne!(
+                room.fingerprint(),
+                random_room(seed + 1).unwrap().fingerprint()
+            );
             // Closed: every surface end point is shared with another surface.
             let surfaces: Vec<&Edge> = room
                 .edges()
@@ -117,7 +120,11 @@ mod tests {
                 .filter(|e| e.role == flatland_geom::Role::Surface && !e.two_sided)
                 .collect();
             for e in &surfaces {
-                assert!(surfaces.iter().any(|f| f.a == e.b), "seed {seed}: open at {:?}", e.b);
+                assert!(
+                    surfaces.iter().any(|f| f.a == e.b),
+                    "seed {seed}: open at {:?}",
+                    e.b
+                );
             }
         }
     }
