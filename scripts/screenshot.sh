@@ -29,7 +29,7 @@ RUNTIME_DIR="$(mktemp -d)"
 # settings so the picture is the same on every machine.
 env -u WAYLAND_DISPLAY XDG_RUNTIME_DIR="$RUNTIME_DIR" \
     xvfb-run -a -s "-screen 0 1280x800x24" bash -c '
-        "$1" --fresh --play --cells "$2" --fps-log 2>"$3" &
+        "$1" --fresh --cells "$2" --fps-log 2>"$3" &
         pid=$!
         sleep "$4"
         import -window root "$5"

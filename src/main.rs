@@ -4,6 +4,8 @@ use anyhow::Result;
 use clap::{Parser, Subcommand};
 
 mod cmd;
+mod interrupt;
+mod output;
 mod plot;
 
 /// Learn the Flatland radiosity kernel with supervised growing cell structures (Bohn 1996).
@@ -41,6 +43,7 @@ enum Command {
 
 fn main() {
     let cli = Cli::parse();
+    interrupt::install();
     let result: Result<()> = match cli.command {
         Some(Command::Check(args)) => cmd::check::run(&args),
         Some(Command::Kernel(args)) => cmd::kernel::run(&args),
@@ -55,6 +58,14 @@ fn main() {
         None => cmd::default_job(),
     };
     if let Err(err) = result {
+        // Ctrl-C: what was kept, and the shell's code for an interrupted command.
+        if let Some(stopped) = err
+            .chain()
+            .find_map(|e| e.downcast_ref::<interrupt::Interrupted>())
+        {
+            eprintln!("{stopped}");
+            std::process::exit(interrupt::EXIT_CODE);
+        }
         // One line, the whole cause chain, no backtrace.
         let chain: Vec<String> = err.chain().map(|c| c.to_string()).collect();
         eprintln!("error: {}", chain.join(": "));

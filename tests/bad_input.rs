@@ -3,6 +3,11 @@
 //! errors) or the edge (validation errors), through the library and through the CLI; a file
 //! that is accepted gives a finite, non-negative kernel. The same property as the cargo-fuzz
 //! target `fuzz/fuzz_targets/scene.rs`, run with proptest inside the normal test suite.
+//!
+//! Model and checkpoint files the tools wrote and a user edited (issue 13): any field replaced,
+//! removed, emptied or duplicated loads with a one-line error naming the file, or loads and
+//! then evaluates (a model) or trains and finishes (a checkpoint) to finite errors — never a
+//! panic or an allocation abort.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -483,7 +488,7 @@ fn cli_reports_bad_files_in_one_line_without_panicking() {
         let csv = csv.to_str().unwrap();
         let subcommands: [&[&str]; 3] = [
             &["check", "--scene"],
-            &["kernel", "--res", "4", "--out", csv, "--scene"],
+            &["kernel", "--res", "16", "--out", csv, "--scene"],
             &["fit", "--cells", "3", "--scene"],
         ];
         for sub in subcommands {
@@ -499,4 +504,225 @@ fn cli_reports_bad_files_in_one_line_without_panicking() {
         }
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+// ----- model and checkpoint files, edited -----
+
+/// A model (ζ target), a model (factored emission) and a checkpoint of small fig3 fits, as JSON.
+fn tool_written_files() -> &'static [(&'static str, serde_json::Value)] {
+    use std::ops::ControlFlow;
+    use std::sync::{Arc, OnceLock};
+
+    use kernel_fit::{Fit, FitParams, ModelFile, REFERENCE_SEED, Reference, Target};
+
+    static FILES: OnceLock<Vec<(&'static str, serde_json::Value)>> = OnceLock::new();
+    FILES.get_or_init(|| {
+        let dir = temp_dir("tool-written");
+        let kernel = Arc::new(Kernel::new(
+            Scene::load(root().join("scenes/fig3.ron")).unwrap(),
+        ));
+        let reference = Arc::new(Reference::new(&kernel, 16, 64, REFERENCE_SEED));
+        let mut files = Vec::new();
+        for (name, target) in [
+            ("zeta.json", Target::Zeta),
+            ("factored.json", Target::FactoredEmission),
+        ] {
+            let params = FitParams {
+                target_cells: 10,
+                initial_samples: 40,
+                heldout: 64,
+                target,
+                ..FitParams::default()
+            };
+            let mut fit = Fit::new(Arc::clone(&kernel), Arc::clone(&reference), params).unwrap();
+            let summary = fit.run(1000, |_| ControlFlow::Continue(())).unwrap();
+            let path = dir.join(name);
+            ModelFile::new(fit.model().clone(), params, Some(summary))
+                .save(&path)
+                .unwrap();
+            files.push((
+                name,
+                serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap(),
+            ));
+            if target == Target::Zeta {
+                let path = dir.join("fit.ckpt");
+                fit.save_checkpoint(&path).unwrap();
+                files.push((
+                    "fit.ckpt",
+                    serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap(),
+                ));
+            }
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+        files
+    })
+}
+
+/// Every place in a JSON document: a path of keys and indices.
+fn places(value: &serde_json::Value, at: &mut Vec<Step>, out: &mut Vec<Vec<Step>>) {
+    out.push(at.clone());
+    match value {
+        serde_json::Value::Object(map) => {
+            for (k, v) in map {
+                at.push(Step::Key(k.clone()));
+                places(v, at, out);
+                at.pop();
+            }
+        }
+        serde_json::Value::Array(items) => {
+            // A few elements of long arrays are enough: they are all alike.
+            for (i, v) in items.iter().enumerate().take(3) {
+                at.push(Step::Index(i));
+                places(v, at, out);
+                at.pop();
+            }
+        }
+        _ => {}
+    }
+}
+
+#[derive(Clone, Debug)]
+enum Step {
+    Key(String),
+    Index(usize),
+}
+
+fn get_mut<'a>(value: &'a mut serde_json::Value, path: &[Step]) -> &'a mut serde_json::Value {
+    path.iter().fold(value, |v, step| match step {
+        Step::Key(k) => &mut v[k.as_str()],
+        Step::Index(i) => &mut v[*i],
+    })
+}
+
+/// Values a hand edit might leave: extremes of every JSON number type, wrong types, empties.
+fn replacement(pick: usize) -> serde_json::Value {
+    use serde_json::json;
+    let pool = [
+        json!(0),
+        json!(-1),
+        json!(1),
+        json!(0.5),
+        json!(-0.5),
+        json!(2),
+        json!(1e308),
+        json!(-1e308),
+        json!(1e-308),
+        json!(5e-324),
+        json!(1e20),
+        json!(u64::MAX),
+        json!(i64::MIN),
+        json!(9_007_199_254_740_993u64),
+        json!(100_000),
+        json!("x"),
+        json!(true),
+        json!(null),
+        json!([]),
+        json!({}),
+    ];
+    pool[pick % pool.len()].clone()
+}
+
+/// One hand edit: replace, remove, empty, shorten or duplicate what is at a place.
+fn edit(value: &mut serde_json::Value, path: &[Step], op: u8, pick: usize) {
+    if path.is_empty() {
+        *value = replacement(pick);
+        return;
+    }
+    let (last, parent_path) = path.split_last().unwrap();
+    let parent = get_mut(value, parent_path);
+    match (op % 4, last, parent) {
+        (0, Step::Key(k), serde_json::Value::Object(map)) => {
+            map.remove(k);
+        }
+        (1, Step::Index(i), serde_json::Value::Array(items)) => {
+            items.remove(*i);
+        }
+        (2, Step::Index(i), serde_json::Value::Array(items)) => {
+            let copy = items[*i].clone();
+            items.insert(*i, copy);
+        }
+        (3, _, parent) => {
+            let target = match last {
+                Step::Key(k) => &mut parent[k.as_str()],
+                Step::Index(i) => &mut parent[*i],
+            };
+            if let serde_json::Value::Array(items) = target {
+                items.truncate(pick % 2);
+            } else {
+                *target = replacement(pick);
+            }
+        }
+        (_, last, parent) => {
+            let target = match last {
+                Step::Key(k) => &mut parent[k.as_str()],
+                Step::Index(i) => &mut parent[*i],
+            };
+            *target = replacement(pick);
+        }
+    }
+}
+
+/// Loads the edited file as the tools do and checks the property.
+fn check_edited(name: &str, value: &serde_json::Value) {
+    use kernel_fit::{Approximation, Fit, ModelFile, REFERENCE_SEED, Reference};
+
+    let dir = temp_dir("edited");
+    let path = dir.join(name);
+    std::fs::write(&path, serde_json::to_vec(value).unwrap()).unwrap();
+    let one_line = |message: String| {
+        assert!(!message.contains('\n'), "multi-line error: {message}");
+        assert!(message.contains(name), "`{message}` does not name the file");
+    };
+    if name.ends_with(".ckpt") {
+        match Fit::resume(&path, flatland_geom::KernelParams::default()) {
+            Ok(mut fit) => {
+                fit.train(100, |f| {
+                    if f.steps() % 100 == 0 && f.steps() > 0 {
+                        std::ops::ControlFlow::Break(())
+                    } else {
+                        std::ops::ControlFlow::Continue(())
+                    }
+                });
+                let summary = fit.finish().unwrap();
+                assert!(summary.errors.grid.is_finite() && summary.errors.heldout.is_finite());
+            }
+            Err(e) => one_line(e.to_string()),
+        }
+    } else {
+        match ModelFile::load(&path) {
+            Ok(file) => {
+                let kernel = Kernel::new(file.model.scene().clone());
+                let reference = Reference::new(&kernel, 16, 64, REFERENCE_SEED);
+                let errors = reference.errors(&file.model);
+                // Finite: an edited weight may make the model bad, never the numbers undefined.
+                assert!(
+                    errors.grid.is_finite() && errors.heldout.is_finite(),
+                    "{errors:?}"
+                );
+                assert!(file.model.zeta(0.3, 0.7).is_finite());
+            }
+            Err(e) => one_line(e.to_string()),
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 1000, ..ProptestConfig::default() })]
+
+    #[test]
+    fn edited_models_and_checkpoints_never_panic(
+        file in 0usize..3,
+        edits in prop::collection::vec((any::<prop::sample::Index>(), 0u8..5, any::<usize>()), 1..4),
+    ) {
+        let (name, original) = &tool_written_files()[file];
+        let mut value = original.clone();
+        for (at, op, pick) in edits {
+            let mut all = Vec::new();
+            places(&value, &mut Vec::new(), &mut all);
+            let path = all[at.index(all.len())].clone();
+            edit(&mut value, &path, op, pick);
+        }
+        check_edited(name, &value);
+    }
 }

@@ -1,7 +1,10 @@
 //! Integration tests of the `flatland` command line (one test binary for all subcommands).
 
+use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::{Command, Output, Stdio};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
 
 use flatland_geom::{Kernel, Scene};
 
@@ -200,7 +203,9 @@ fn kernel_writes_a_png_heatmap_linear_or_log() {
     }
     let a = image::open(&lin).unwrap().to_rgb8();
     let b = image::open(&log).unwrap().to_rgb8();
-    assert_eq!(a.dimensions(), (48, 48));
+    // Scaled up so the axes, the title and the colour bar fit: wider than high (the bar).
+    let (w, h) = a.dimensions();
+    assert!(h >= 480 && w > h, "{w}×{h}");
     assert_ne!(a, b, "log scale must change the picture");
     // No temporary file is left next to the output.
     let names: Vec<_> = std::fs::read_dir(&dir)
@@ -224,7 +229,7 @@ fn kernel_rejects_bad_arguments_without_writing() {
         "--out",
         as_str(&out_path),
     ]);
-    assert_one_line_error(&out, &["--res must be in [1, 8192]", "0"]);
+    assert_one_line_error(&out, &["--res must be in [16, 4096]", "0"]);
     let bad = dir.join("k.txt");
     let out = flatland(&["kernel", "--scene", as_str(&fig3), "--out", as_str(&bad)]);
     assert_one_line_error(&out, &["unknown output format"]);
@@ -236,17 +241,18 @@ fn kernel_rejects_bad_arguments_without_writing() {
         as_str(&out_path),
     ]);
     assert_one_line_error(&out, &["missing.ron"]);
-    let nowhere = dir.join("no/such/dir/k.csv");
+    // A folder cannot be made inside a file.
+    let nowhere = root().join("Cargo.toml/k.csv");
     let out = flatland(&[
         "kernel",
         "--scene",
         as_str(&fig3),
         "--res",
-        "4",
+        "16",
         "--out",
         as_str(&nowhere),
     ]);
-    assert_one_line_error(&out, &["no/such/dir/k.csv"]);
+    assert_one_line_error(&out, &["Cargo.toml", "cannot create the output folder"]);
     assert_eq!(
         std::fs::read_dir(&dir).unwrap().count(),
         0,
@@ -494,13 +500,583 @@ fn solve_rejects_bad_arguments_with_one_line_and_writes_nothing() {
         &run(&["--out", as_str(&dir.join("b.txt"))]),
         &["b.txt", "unknown output format"],
     );
-    assert_one_line_error(
-        &run(&["--out", as_str(&dir.join("no/such/b.csv"))]),
-        &["does not exist"],
-    );
     assert_eq!(
         std::fs::read_dir(&dir).unwrap().count(),
         0,
         "nothing may be written"
     );
+    // An output that names a folder is refused before any work (the one output rule).
+    let taken = temp_dir("solve-taken").join("taken.csv");
+    std::fs::create_dir_all(&taken).unwrap();
+    assert_one_line_error(&run(&["--out", as_str(&taken)]), &["is a folder"]);
+}
+/// `flatland` run in `dir`.
+fn flatland_in(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_flatland"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("run flatland")
+}
+
+/// A scene file with `edges` as `(a, b, emission)`, ρ = 0.5, one-sided surfaces.
+fn write_scene(path: &Path, edges: &[([f64; 2], [f64; 2], f64)]) {
+    let items: Vec<String> = edges
+        .iter()
+        .map(|(a, b, e)| {
+            format!(
+                r#"{{"a":[{},{}],"b":[{},{}],"reflectance":0.5,"emission":{e}}}"#,
+                a[0], a[1], b[0], b[1]
+            )
+        })
+        .collect();
+    std::fs::write(path, format!(r#"{{"edges":[{}]}}"#, items.join(","))).unwrap();
+}
+
+/// The unit room, counter-clockwise, its floor emitting `e`.
+fn room(e: f64) -> Vec<([f64; 2], [f64; 2], f64)> {
+    vec![
+        ([0., 0.], [1., 0.], e),
+        ([1., 0.], [1., 1.], 0.),
+        ([1., 1.], [0., 1.], 0.),
+        ([0., 1.], [0., 0.], 0.),
+    ]
+}
+
+/// `--res` outside its range was an allocation abort (exit 134) for `fit --res 50000` and
+/// `eval --res 20000`, and `fit --res 0` printed a perfect-looking 0.0000. One range for every
+/// command, refused before any work.
+#[test]
+fn regression_res_has_one_range_refused_before_any_work() {
+    let dir = temp_dir("res");
+    let out = |name: &str| dir.join(name).to_str().unwrap().to_owned();
+    let (csv, png, model) = (out("k.csv"), out("figure"), out("m.json"));
+    let commands: [Vec<&str>; 5] = [
+        vec!["kernel", "--out", &csv],
+        vec!["fit"],
+        vec!["eval", "--model", &model, "--out", &csv],
+        vec!["figure", "--out", &png],
+        vec!["bench", "--out", &png],
+    ];
+    for command in &commands {
+        for res in ["0", "15", "4097", "50000", "20000"] {
+            let mut args = command.clone();
+            args.extend(["--res", res]);
+            let run = flatland(&args);
+            assert_one_line_error(&run, &["--res must be in [16, 4096]", res]);
+        }
+    }
+    assert_eq!(
+        std::fs::read_dir(&dir).unwrap().count(),
+        0,
+        "nothing written"
+    );
+}
+
+/// `bench --budgets 1000000000000 --methods uniform` aborted on allocation; `--cells` and
+/// `--budgets` count the same thing and share one range.
+#[test]
+fn regression_cells_and_budgets_share_one_range() {
+    for args in [
+        &["fit", "--cells", "1000000000000"][..],
+        &["figure", "--cells", "2", "--out", "never"],
+    ] {
+        assert_one_line_error(&flatland(args), &["--cells must be in [3, 10000000]"]);
+    }
+    let out = flatland(&[
+        "bench",
+        "--budgets",
+        "1000000000000",
+        "--methods",
+        "uniform",
+        "--out",
+        "never",
+    ]);
+    assert_one_line_error(&out, &["--budgets must be in [3, 10000000]"]);
+    let out = flatland(&["bench", "--seeds", "1000000000000", "--out", "never"]);
+    assert_one_line_error(&out, &["--seeds must be in [1, 1000]"]);
+    assert!(!root().join("never").exists());
+}
+
+/// `fit --subdivide 100000000000` aborted on allocation.
+#[test]
+fn regression_subdivide_is_refused_before_allocating() {
+    let out = flatland(&["fit", "--subdivide", "100000000000"]);
+    assert_one_line_error(
+        &out,
+        &["--subdivide must be in [1, 166666]", "100000000000"],
+    );
+    let out = flatland(&["kernel", "--subdivide", "0", "--out", "x.csv"]);
+    assert_one_line_error(&out, &["--subdivide must be in [1, "]);
+}
+
+/// A scene where nothing emits printed "rel. L2 grid 0.0000 held out 0.0000", a perfect fit.
+#[test]
+fn regression_undefined_errors_are_printed_as_undefined() {
+    let dir = temp_dir("dark");
+    let scene = dir.join("dark.json");
+    write_scene(&scene, &room(0.0));
+    let out = flatland(&["fit", "--scene", as_str(&scene), "--cells", "10"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = stdout(&out);
+    assert!(
+        text.contains("grid undefined   held out undefined") && !text.contains("0.0000"),
+        "{text}"
+    );
+    let out = flatland(&["fit", "--scene", as_str(&scene), "--cells", "10", "--json"]);
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(
+        json["rel_l2_grid"].is_null() && json["rel_l2_heldout"].is_null(),
+        "{json}"
+    );
+    // With light, the same command prints numbers: 0 for the default learner, exact in a room
+    // without occluders, and the paper's network's error.
+    write_scene(&scene, &room(1.0));
+    let out = flatland(&["fit", "--scene", as_str(&scene), "--cells", "10", "--json"]);
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(json["rel_l2_grid"].as_f64(), Some(0.0), "{json}");
+    let out = flatland(&[
+        "fit",
+        "--scene",
+        as_str(&scene),
+        "--cells",
+        "10",
+        "--json",
+        "--preset",
+        "paper",
+    ]);
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(json["rel_l2_grid"].as_f64().unwrap() > 0.0, "{json}");
+}
+
+/// A bad `--out` was found only after the whole fit; `fit --scene s.json --out s.json`
+/// overwrote the scene; `figure` and `bench` created missing folders where `kernel`, `fit` and
+/// `eval` refused. Now: checked first, never over an input, missing folders created by all.
+#[test]
+fn regression_outputs_are_checked_before_work_and_never_overwrite_inputs() {
+    let dir = temp_dir("outputs");
+    let scene = dir.join("s.json");
+    write_scene(&scene, &room(1.0));
+    let original = std::fs::read(&scene).unwrap();
+    let fit = |out: &Path| {
+        flatland(&[
+            "fit",
+            "--scene",
+            as_str(&scene),
+            "--cells",
+            "200",
+            "--out",
+            as_str(out),
+        ])
+    };
+    let run = fit(&scene);
+    assert_one_line_error(&run, &["s.json", "also an input"]);
+    // The same file by another name.
+    let run = fit(&dir.join("sub/../s.json"));
+    assert_one_line_error(&run, &["also an input"]);
+    assert_eq!(
+        std::fs::read(&scene).unwrap(),
+        original,
+        "the scene was overwritten"
+    );
+    // Refused before the fit: nothing about training was printed.
+    let run = fit(&root().join("Cargo.toml/model.json"));
+    assert_one_line_error(&run, &["cannot create the output folder"]);
+    let run = flatland(&[
+        "fit",
+        "--resume",
+        as_str(&dir.join("r.ckpt")),
+        "--out",
+        as_str(&dir.join("r.ckpt")),
+    ]);
+    assert_one_line_error(&run, &["also an input"]);
+
+    // One rule: every command creates the folders its output needs.
+    let nested = |name: &str| dir.join("new").join(name).join("deeper");
+    let model = nested("fit").join("m.json");
+    let run = flatland(&[
+        "fit",
+        "--scene",
+        as_str(&scene),
+        "--cells",
+        "8",
+        "--out",
+        as_str(&model),
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let runs: [Vec<String>; 4] = [
+        vec![
+            "kernel".into(),
+            "--res".into(),
+            "16".into(),
+            "--out".into(),
+            as_str(&nested("kernel").join("k.png")).into(),
+        ],
+        vec![
+            "eval".into(),
+            "--model".into(),
+            as_str(&model).into(),
+            "--res".into(),
+            "16".into(),
+            "--out".into(),
+            as_str(&nested("eval").join("e.csv")).into(),
+        ],
+        vec![
+            "figure".into(),
+            "--scene".into(),
+            as_str(&scene).into(),
+            "--cells".into(),
+            "8".into(),
+            "--res".into(),
+            "16".into(),
+            "--out".into(),
+            as_str(&nested("figure")).into(),
+        ],
+        vec![
+            "bench".into(),
+            "--scene".into(),
+            as_str(&scene).into(),
+            "--methods".into(),
+            "uniform".into(),
+            "--budgets".into(),
+            "4".into(),
+            "--seeds".into(),
+            "1".into(),
+            "--res".into(),
+            "16".into(),
+            "--out".into(),
+            as_str(&nested("bench")).into(),
+        ],
+    ];
+    for args in &runs {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let run = flatland(&args);
+        assert!(run.status.success(), "{args:?}: {}", stderr(&run));
+    }
+    for (name, file) in [
+        ("kernel", "k.png"),
+        ("eval", "e.csv"),
+        ("figure", "c_cells.png"),
+        ("bench", "results.csv"),
+    ] {
+        assert!(nested(name).join(file).is_file(), "{name}: {file} missing");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Coincident duplicate edges were accepted silently and doubled the light they carry.
+#[test]
+fn regression_check_warns_about_overlapping_surface_edges() {
+    let dir = temp_dir("overlap");
+    let scene = dir.join("dup.json");
+    let mut edges = room(1.0);
+    edges.push(([0.25, 0.], [0.75, 0.], 1.0));
+    write_scene(&scene, &edges);
+    let out = flatland(&["check", "--scene", as_str(&scene)]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        stdout(&out).contains("warning: surface edges 0 and 4 overlap"),
+        "{}",
+        stdout(&out)
+    );
+    let out = flatland(&["fit", "--scene", as_str(&scene), "--cells", "5"]);
+    assert!(stderr(&out).contains("warning:") && stderr(&out).contains("overlap"));
+    // The bundled scenes have none.
+    for name in ["fig3", "box", "maze", "corners"] {
+        let out = flatland(&["check", "--scene", as_str(&scene_path(name))]);
+        assert!(
+            !stdout(&out).contains("warning"),
+            "{name}: {}",
+            stdout(&out)
+        );
+    }
+}
+
+fn scene_path(name: &str) -> PathBuf {
+    scene(name)
+}
+
+/// `check` and `kernel` read `scenes/fig3.ron` relative to the working folder and failed
+/// outside the repository, where the other commands use the bundled fig3.
+#[test]
+fn regression_check_and_kernel_work_outside_the_repository() {
+    let dir = temp_dir("elsewhere");
+    let out = flatland_in(&dir, &["check"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        stdout(&out).contains("fig3 (bundled): valid"),
+        "{}",
+        stdout(&out)
+    );
+    let out = flatland_in(&dir, &["kernel", "--res", "16", "--out", "k.csv"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(
+        parse_csv(&std::fs::read_to_string(dir.join("k.csv")).unwrap()).len(),
+        16
+    );
+}
+
+/// A model whose `emission_factor` had the wrong length panicked in every rayon worker
+/// (about 10 600 panic messages); one with outputs of 1e308 printed meaningless errors.
+#[test]
+fn regression_an_edited_model_is_one_line_error() {
+    let dir = temp_dir("edited-model");
+    let model = dir.join("m.json");
+    let run = flatland(&[
+        "fit",
+        "--preset",
+        "paper",
+        "--cells",
+        "10",
+        "--factor-emission",
+        "--out",
+        as_str(&model),
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let text = std::fs::read_to_string(&model).unwrap();
+    let mut value: serde_json::Value = serde_json::from_str(&text).unwrap();
+    value["model"]["emission_factor"] = serde_json::json!([1.0, 1.0]);
+    let edited = dir.join("edited.json");
+    std::fs::write(&edited, value.to_string()).unwrap();
+    let csv = dir.join("e.csv");
+    let run = flatland(&["eval", "--model", as_str(&edited), "--out", as_str(&csv)]);
+    assert_one_line_error(&run, &["edited.json", "emission_factor", "one per edge"]);
+
+    let mut value: serde_json::Value = serde_json::from_str(&text).unwrap();
+    value["model"]["network"]["outputs"][2] = serde_json::json!(1e308);
+    std::fs::write(&edited, value.to_string()).unwrap();
+    let run = flatland(&["eval", "--model", as_str(&edited), "--out", as_str(&csv)]);
+    assert_one_line_error(&run, &["edited.json", "outputs", "overflow"]);
+}
+
+// ----- Ctrl-C -----
+
+/// What an interrupted run printed, and how long it took to exit after the signal.
+struct Stopped {
+    code: Option<i32>,
+    stderr: String,
+    after_signal: Duration,
+}
+
+/// Starts `flatland args` in `dir`, waits for a line of its stderr containing `ready` (the
+/// command says when its long part starts), sends SIGINT, and waits for it to exit. Fails if
+/// the line does not come or the process does not end within generous deadlines.
+fn interrupt_when(dir: &Path, args: &[&str], ready: &str) -> Stopped {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_flatland"))
+        .args(args)
+        .current_dir(dir)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start flatland");
+    let (tx, rx) = mpsc::channel();
+    let stderr = child.stderr.take().unwrap();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stderr).lines() {
+            let Ok(line) = line else { break };
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    let mut lines = Vec::new();
+    let deadline = Instant::now() + Duration::from_secs(300);
+    loop {
+        let left = deadline.saturating_duration_since(Instant::now());
+        match rx.recv_timeout(left) {
+            Ok(line) => {
+                let seen = line.contains(ready);
+                lines.push(line);
+                if seen {
+                    break;
+                }
+            }
+            Err(_) => {
+                let _ = child.kill();
+                panic!("`{ready}` never came: {lines:?}");
+            }
+        }
+    }
+    let status = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("run kill");
+    assert!(status.success());
+    let signalled = Instant::now();
+    // The reader ends when the process closes its stderr, i.e. exits.
+    let deadline = signalled + Duration::from_secs(60);
+    loop {
+        match rx.recv_timeout(deadline.saturating_duration_since(Instant::now())) {
+            Ok(line) => lines.push(line),
+            Err(mpsc::RecvTimeoutError::Disconnected) => break,
+            Err(mpsc::RecvTimeoutError::Timeout) => {
+                let _ = child.kill();
+                panic!("still running 60 s after Ctrl-C: {lines:?}");
+            }
+        }
+    }
+    let code = child.wait().unwrap().code();
+    let after_signal = signalled.elapsed();
+    eprintln!("{args:?}: exited {after_signal:?} after Ctrl-C");
+    Stopped {
+        code,
+        stderr: lines.join("\n"),
+        after_signal,
+    }
+}
+
+fn assert_interrupted(s: &Stopped, kept: &str) {
+    assert_eq!(s.code, Some(130), "{}", s.stderr);
+    let last = s.stderr.lines().last().unwrap_or_default();
+    assert!(
+        last.starts_with("interrupted: ") && last.contains(kept),
+        "`{kept}` not in the last line: {}",
+        s.stderr
+    );
+    assert!(!s.stderr.contains("panicked"), "{}", s.stderr);
+    // Within a second on an idle machine; allow for a loaded one.
+    assert!(
+        s.after_signal < Duration::from_secs(30),
+        "{:?}",
+        s.after_signal
+    );
+}
+
+/// Ctrl-C was ignored by plain `fit` and by `fit --resume` without `--checkpoint` (they ran to
+/// the end and exited 0); with `--checkpoint` it must keep the state.
+#[test]
+fn regression_ctrl_c_stops_a_fit_and_says_what_was_kept() {
+    let dir = temp_dir("ctrl-c-fit");
+    // The paper's network: 3000 cells take long (the default learner is exact on fig3 within
+    // a tenth of a second and would finish before the signal).
+    let plain = interrupt_when(
+        &dir,
+        &["fit", "--preset", "paper", "--cells", "3000"],
+        "training to",
+    );
+    assert_interrupted(&plain, "nothing was saved");
+
+    let stopped = interrupt_when(
+        &dir,
+        &[
+            "fit",
+            "--preset",
+            "paper",
+            "--cells",
+            "3000",
+            "--checkpoint",
+            "run.ckpt",
+        ],
+        "training to",
+    );
+    assert_interrupted(&stopped, "checkpoint saved to run.ckpt");
+    let saved = std::fs::read(dir.join("run.ckpt")).unwrap();
+
+    let resumed = interrupt_when(&dir, &["fit", "--resume", "run.ckpt"], "training to");
+    assert_interrupted(&resumed, "run.ckpt still holds the state");
+    assert_eq!(std::fs::read(dir.join("run.ckpt")).unwrap(), saved);
+    let names: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names, ["run.ckpt"], "temporary files left behind");
+}
+
+/// Ctrl-C during the final least-squares refit was ignored.
+#[test]
+fn regression_ctrl_c_stops_the_final_refit() {
+    let dir = temp_dir("ctrl-c-refit");
+    // At 600 cells the paper's refit takes several seconds (the default learner has none).
+    let stopped = interrupt_when(
+        &dir,
+        &[
+            "fit",
+            "--preset",
+            "paper",
+            "--cells",
+            "600",
+            "--checkpoint",
+            "c.ckpt",
+            "--out",
+            "m.json",
+        ],
+        "least-squares refit",
+    );
+    assert_interrupted(&stopped, "checkpoint saved to c.ckpt");
+    assert!(!dir.join("m.json").exists(), "a model of an unfinished fit");
+}
+
+/// Ctrl-C was ignored by `kernel`, `bench`, `figure` and `results` (and `eval` builds large
+/// grids too).
+#[test]
+fn regression_ctrl_c_stops_every_long_command() {
+    let dir = temp_dir("ctrl-c-all");
+    let kernel = interrupt_when(
+        &dir,
+        &["kernel", "--res", "4096", "--out", "big.csv"],
+        "computing",
+    );
+    assert_interrupted(&kernel, "nothing was saved");
+    assert!(!dir.join("big.csv").exists());
+
+    let bench = interrupt_when(
+        &dir,
+        &[
+            "bench",
+            "--methods",
+            "sgcs-paper,uniform",
+            "--budgets",
+            "20,1500",
+            "--seeds",
+            "1",
+            "--out",
+            "bench",
+        ],
+        "budget 20 done",
+    );
+    assert_interrupted(&bench, "2 of 4 runs kept in bench/results.csv");
+    let rows = std::fs::read_to_string(dir.join("bench/results.csv")).unwrap();
+    assert_eq!(
+        rows.lines().count(),
+        3,
+        "header and the two rows done: {rows}"
+    );
+
+    let figure = interrupt_when(
+        &dir,
+        &[
+            "figure", "--preset", "paper", "--cells", "3000", "--out", "fig",
+        ],
+        "fitting",
+    );
+    assert_interrupted(&figure, "nothing was saved");
+    assert_eq!(std::fs::read_dir(dir.join("fig")).unwrap().count(), 0);
+
+    let scenes = root().join("scenes");
+    let results = interrupt_when(
+        &dir,
+        &[
+            "results",
+            "--quick",
+            "--scenes",
+            as_str(&scenes),
+            "--out",
+            "RESULTS.md",
+        ],
+        "results [1/",
+    );
+    assert_interrupted(&results, "RESULTS.md was not written");
+    assert!(!dir.join("RESULTS.md").exists());
+
+    let run = flatland_in(&dir, &["fit", "--cells", "10", "--out", "m.json"]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let eval = interrupt_when(
+        &dir,
+        &[
+            "eval", "--model", "m.json", "--res", "4096", "--out", "e.csv",
+        ],
+        "evaluating",
+    );
+    assert_interrupted(&eval, "nothing was saved");
+    assert!(!dir.join("e.csv").exists());
 }

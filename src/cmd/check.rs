@@ -12,15 +12,21 @@ const MAX_CLASSIFIED: usize = 512;
 /// Arguments of `flatland check`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Scene file (.ron or .json).
-    #[arg(long, default_value = "scenes/fig3.ron")]
-    pub scene: PathBuf,
+    /// Scene file (.ron or .json). Default: the bundled `fig3` scene.
+    #[arg(long, value_name = "FILE")]
+    pub scene: Option<PathBuf>,
 }
 
 /// Loads and validates the scene, then prints the summary to stdout.
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    let scene = Scene::load(&args.scene)?;
-    print!("{}", summary(&args.scene.display().to_string(), &scene));
+    let (scene, label) = match &args.scene {
+        Some(path) => (Scene::load(path)?, path.display().to_string()),
+        None => (
+            Scene::from_ron_str(super::BUNDLED_FIG3)?,
+            "fig3 (bundled)".to_owned(),
+        ),
+    };
+    print!("{}", summary(&label, &scene));
     Ok(())
 }
 
@@ -59,7 +65,25 @@ pub fn summary(name: &str, scene: &Scene) -> String {
         }
     );
     if emitters.is_empty() {
-        let _ = writeln!(w, "warning: nothing emits, so zeta = 0 everywhere");
+        let _ = writeln!(
+            w,
+            "warning: nothing emits, so zeta = 0 everywhere (relative errors are undefined)"
+        );
+    }
+    let overlaps = scene.overlapping_surface_edges();
+    for (a, b) in overlaps.iter().take(MAX_LISTED) {
+        let _ = writeln!(
+            w,
+            "warning: surface edges {a} and {b} overlap: each carries its own light, so the \
+             shared stretch counts twice (delete one, or make it a blocker)"
+        );
+    }
+    if overlaps.len() > MAX_LISTED {
+        let _ = writeln!(
+            w,
+            "warning: ... and {} more overlapping pairs",
+            overlaps.len() - MAX_LISTED
+        );
     }
     let _ = writeln!(w, "total length L: {}", scene.total_length());
     let _ = writeln!(w, "bounds: ({}, {}) .. ({}, {})", lo.x, lo.y, hi.x, hi.y);

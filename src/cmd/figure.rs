@@ -5,27 +5,33 @@ use std::ops::ControlFlow;
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use anyhow::{Context, Result, anyhow};
+use anyhow::{Result, anyhow};
 use flatland_geom::{Role, Scene};
 use kernel_fit::{Approximation, Fit, FitParams};
 use plotters::prelude::*;
 
 use super::SceneArgs;
-use super::kernel::{normalise, top_value, viridis};
-use crate::plot::{register_font, write_rgb_png};
+use super::kernel::top_value;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+use crate::plot::{Heatmap, Overlay, encode_png, heatmap_png, register_font, short_number};
+use crate::{interrupt, output};
 
 /// Arguments of `flatland figure`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
     pub scene: SceneArgs,
+    /// Which learner: `default` (the project's) or `paper` (the paper's network).
+    #[arg(long, value_enum, default_value_t = super::fit::PresetArg::Default)]
+    pub preset: super::fit::PresetArg,
     /// Cells of the fit shown.
     #[arg(long, default_value_t = FitParams::default().target_cells)]
     pub cells: usize,
     /// Seed of the fit.
     #[arg(long, default_value_t = FitParams::default().seed)]
     pub seed: u64,
-    /// Resolution of the (s, t) panels in pixels.
+    /// Resolution R of the (s, t) panels' grid, in [16, 4096].
     #[arg(long, default_value_t = 512)]
     pub res: usize,
     /// Colour the kernel panels by log10 over four decades.
@@ -36,26 +42,51 @@ pub struct Args {
     pub out: PathBuf,
 }
 
+/// Surface edges are labelled in the geometry panel up to this count.
+const MAX_EDGE_LABELS: usize = 60;
+
+/// The panels, in order.
+pub const PANELS: [&str; 5] = [
+    "a_geometry.png",
+    "b_kernel.png",
+    "c_cells.png",
+    "d_approximation.png",
+    "e_error.png",
+];
+
 /// Runs `flatland figure`.
 pub fn run(args: &Args) -> Result<()> {
-    anyhow::ensure!(
-        (16..=4096).contains(&args.res),
-        "--res must be in [16, 4096], got {}",
-        args.res
-    );
+    super::check_res(args.res)?;
+    super::check_cells("--cells", args.cells)?;
     let (kernel, label) = args.scene.kernel()?;
     let kernel = Arc::new(kernel);
     let params = FitParams {
         target_cells: args.cells,
         seed: args.seed,
-        ..FitParams::default()
+        ..args.preset.preset().params()
     };
     params.validate()?;
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating the output folder {}", args.out.display()))?;
+    output::folder(
+        &args.out,
+        &PANELS,
+        &args.scene.path().into_iter().collect::<Vec<_>>(),
+    )?;
     let reference = Arc::new(super::reference(&kernel, args.res, &params));
     let mut fit = Fit::new(Arc::clone(&kernel), Arc::clone(&reference), params)?;
-    let summary = fit.run(10_000, |_| ControlFlow::Continue(()))?;
+    eprintln!(
+        "figure of {label}: fitting {} cells (Ctrl-C stops; nothing is written before the fit ends)",
+        args.cells
+    );
+    fit.train(1000, |_| {
+        if interrupt::requested() {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    });
+    interrupt::check()?;
+    let summary = fit.finish()?;
+    interrupt::check()?;
 
     let res = args.res;
     let exact = reference.grid();
@@ -67,106 +98,73 @@ pub fn run(args: &Args) -> Result<()> {
         .collect();
     let top = top_value(exact);
     let scene = kernel.scene();
-    let out = |name: &str| args.out.join(name);
-
-    geometry(&out("a_geometry.png"), scene, &label)?;
-    heatmap(&out("b_kernel.png"), exact, res, args.log, top, scene, None)?;
     let cells: Vec<Option<[f64; 2]>> = fit.cell_st();
     let edges = fit.network().edges();
-    heatmap(
-        &out("c_cells.png"),
-        exact,
-        res,
-        args.log,
-        top,
+    let panel = |title: &str, quantity: &'static str, overlay| Heatmap {
+        title: format!("{label}: {title}"),
+        quantity,
         scene,
-        Some(Overlay {
-            cells: &cells,
-            edges: &edges,
-        }),
-    )?;
-    heatmap(
-        &out("d_approximation.png"),
-        &approx,
-        res,
-        args.log,
+        log: args.log,
         top,
-        scene,
-        None,
-    )?;
-    heatmap(&out("e_error.png"), &error, res, args.log, top, scene, None)?;
+        overlay,
+    };
+    let cells_title = format!(
+        "{} cells at the mean (s, t) of the samples they won",
+        cells.len()
+    );
+    let pictures: Vec<(&str, Vec<u8>)> = vec![
+        (PANELS[0], geometry(scene, &label)?),
+        (
+            PANELS[1],
+            heatmap_png(exact, res, &panel("exact ζ", "ζ", None))?,
+        ),
+        (
+            PANELS[2],
+            heatmap_png(
+                exact,
+                res,
+                &panel(
+                    &cells_title,
+                    "ζ",
+                    Some(Overlay {
+                        cells: &cells,
+                        edges: &edges,
+                    }),
+                ),
+            )?,
+        ),
+        (
+            PANELS[3],
+            heatmap_png(&approx, res, &panel("learned ζ", "learned ζ", None))?,
+        ),
+        (
+            PANELS[4],
+            heatmap_png(&error, res, &panel("|learned - exact|", "|error|", None))?,
+        ),
+    ];
+    for (i, (name, png)) in pictures.iter().enumerate() {
+        interrupt::check()?;
+        interrupt::writing(|| flatland_geom::write_atomic(&args.out.join(name), png))?;
+        interrupt::keep(format!(
+            "{} of the {} panels written to {}",
+            i + 1,
+            PANELS.len(),
+            args.out.display()
+        ));
+    }
+    let defined = super::Defined::of(&reference);
     println!(
-        "{label}: {} cells, relative L2 grid {:.4} held out {:.4}; wrote a_geometry, b_kernel, \
-         c_cells, d_approximation, e_error (.png) to {}",
+        "{label}: {} cells, relative L2 {}; wrote a_geometry, b_kernel, c_cells, \
+         d_approximation, e_error (.png) to {}",
         fit.basis_functions(),
-        summary.errors.grid,
-        summary.errors.heldout,
+        defined.format(&summary.errors),
         args.out.display()
     );
     Ok(())
 }
 
-/// The network drawn over a kernel panel: cells at their re-projected (s, t), and its edges.
-#[derive(Clone, Copy)]
-struct Overlay<'a> {
-    cells: &'a [Option<[f64; 2]>],
-    edges: &'a [(usize, usize)],
-}
-
-/// A heat map of an R × R grid (row ↔ s, top to bottom; column ↔ t), surface-edge boundaries
-/// marked on both axes, optionally the cells (re-projected to their mean (s, t)) and the
-/// network's edges on top.
-fn heatmap(
-    path: &std::path::Path,
-    grid: &[f64],
-    res: usize,
-    log: bool,
-    top: f64,
-    scene: &Scene,
-    overlay: Option<Overlay<'_>>,
-) -> Result<()> {
-    let side = res as u32;
-    let dim = if overlay.is_some() { 0.55 } else { 1.0 };
-    let mut rgb: Vec<u8> = normalise(grid, log, top)
-        .into_iter()
-        .flat_map(|v| viridis(v).map(|c| (f64::from(c) * dim) as u8))
-        .collect();
-    {
-        let root = BitMapBackend::with_buffer(&mut rgb, (side, side)).into_drawing_area();
-        let err = |e: String| anyhow!("drawing {}: {e}", path.display());
-        let px = |u: f64| (u * res as f64).round() as i32;
-        let boundary = RGBColor(255, 255, 255).mix(0.35);
-        for &e in scene.surface_edges() {
-            if let Some((s0, _)) = scene.edge_param_range(e) {
-                let p = px(s0);
-                root.draw(&PathElement::new([(0, p), (res as i32, p)], boundary))
-                    .map_err(|e| err(e.to_string()))?;
-                root.draw(&PathElement::new([(p, 0), (p, res as i32)], boundary))
-                    .map_err(|e| err(e.to_string()))?;
-            }
-        }
-        if let Some(Overlay { cells, edges }) = overlay {
-            let at = |c: usize| cells.get(c).copied().flatten().map(|[s, t]| (px(t), px(s)));
-            for &(a, b) in edges {
-                if let (Some(p), Some(q)) = (at(a), at(b)) {
-                    root.draw(&PathElement::new([p, q], RGBColor(230, 230, 230).mix(0.8)))
-                        .map_err(|e| err(e.to_string()))?;
-                }
-            }
-            for c in 0..cells.len() {
-                if let Some(p) = at(c) {
-                    root.draw(&Circle::new(p, 3, RGBColor(255, 80, 60).filled()))
-                        .map_err(|e| err(e.to_string()))?;
-                }
-            }
-        }
-        root.present().map_err(|e| err(e.to_string()))?;
-    }
-    write_rgb_png(path, &rgb, side, side)
-}
-
 /// The scene: emitters yellow, surfaces grey, blockers red; a tick on each edge's front side.
-fn geometry(path: &std::path::Path, scene: &Scene, label: &str) -> Result<()> {
+fn geometry(scene: &Scene, label: &str) -> Result<Vec<u8>> {
     register_font();
     let (lo, hi) = scene.bounds();
     let pad = 0.05 * (hi - lo).max_element();
@@ -176,14 +174,29 @@ fn geometry(path: &std::path::Path, scene: &Scene, label: &str) -> Result<()> {
     let mut rgb = vec![255u8; (w * h * 3) as usize];
     {
         let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
-        let err = |e: String| anyhow!("drawing {}: {e}", path.display());
+        let err = |e: String| anyhow!("drawing the geometry: {e}");
         let mut chart = ChartBuilder::on(&root)
-            .caption(format!("{label}: geometry"), ("sans-serif", 22))
-            .margin(10)
+            .caption(
+                format!("{label}: emitters yellow, surfaces grey, blockers red; ticks: front"),
+                ("sans-serif", 18),
+            )
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
             .build_cartesian_2d(
                 (centre.x - span / 2.0)..(centre.x + span / 2.0),
                 (centre.y - span / 2.0)..(centre.y + span / 2.0),
             )
+            .map_err(|e| err(e.to_string()))?;
+        chart
+            .configure_mesh()
+            .light_line_style(WHITE)
+            .x_labels(6)
+            .y_labels(6)
+            .x_label_formatter(&|v| short_number(*v))
+            .y_label_formatter(&|v| short_number(*v))
+            .label_style(("sans-serif", 14))
+            .draw()
             .map_err(|e| err(e.to_string()))?;
         for edge in scene.edges() {
             let color = match (edge.role, edge.emission > 0.0) {
@@ -206,7 +219,21 @@ fn geometry(path: &std::path::Path, scene: &Scene, label: &str) -> Result<()> {
                 ))
                 .map_err(|e| err(e.to_string()))?;
         }
+        // Surface edge indices, as on the heatmaps' axes, on the front side.
+        let surfaces = scene.surface_edges();
+        if surfaces.len() <= MAX_EDGE_LABELS {
+            let style = TextStyle::from(("sans-serif", 15).into_font())
+                .color(&BLUE)
+                .pos(Pos::new(HPos::Center, VPos::Center));
+            for &e in surfaces {
+                let edge = scene.edges()[e];
+                let at = (edge.a + edge.b) * 0.5 + edge.normal() * 0.06 * span;
+                chart
+                    .draw_series([Text::new(e.to_string(), (at.x, at.y), style.clone())])
+                    .map_err(|e| err(e.to_string()))?;
+            }
+        }
         root.present().map_err(|e| err(e.to_string()))?;
     }
-    write_rgb_png(path, &rgb, w, h)
+    encode_png(&rgb, w, h)
 }

@@ -1,16 +1,15 @@
 //! `flatland fit`: learn a scene's kernel and report the figures.
 
 use std::ops::ControlFlow;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
-
-use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::{Context, Result};
 use flatland_geom::KernelParams;
 use kernel_fit::{Fit, FitParams, FitSummary, ModelFile, Preset, Resampling, StopReason, Target};
 
 use super::SceneArgs;
+use crate::{interrupt, output};
 
 /// `--resampling` values.
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
@@ -50,7 +49,7 @@ pub struct Args {
     /// Which learner: `default` (the project's) or `paper` (the paper's network).
     #[arg(long, value_enum, default_value_t = PresetArg::Default)]
     pub preset: PresetArg,
-    /// Stop at this many cells.
+    /// Stop at this many cells, in [3, 10 000 000].
     #[arg(long, default_value_t = FitParams::default().target_cells)]
     pub cells: usize,
     /// Seed of every random choice (same seed, same fit).
@@ -75,7 +74,7 @@ pub struct Args {
     /// Skip the final least-squares refit of the output weights.
     #[arg(long)]
     pub no_refit: bool,
-    /// Reference grid resolution R for the error on the grid.
+    /// Reference grid resolution R for the error on the grid, in [16, 4096].
     #[arg(long, default_value_t = 256)]
     pub res: usize,
     /// Write the model (scene fingerprint, parameters, network) to this JSON file.
@@ -142,9 +141,31 @@ const PROGRESS_EVERY: u64 = 1000;
 
 /// Runs `flatland fit`.
 pub fn run(args: &Args) -> Result<()> {
+    // Everything that can be refused is refused before any work: ranges, then outputs.
+    super::check_res(args.res)?;
+    super::check_cells("--cells", args.cells)?;
+    anyhow::ensure!(args.every >= 1, "--every must be at least 1, but is 0");
+    let scene_input: Vec<&Path> = args.scene.path().into_iter().collect();
+    if let Some(out) = &args.out {
+        let mut inputs = scene_input.clone();
+        inputs.extend(args.resume.as_deref());
+        output::file(out, &inputs)?;
+    }
+    if let Some(checkpoint) = &args.checkpoint {
+        // The checkpoint may be the one resumed from: it is the fit's state, kept up to date.
+        output::file(checkpoint, &scene_input)?;
+        if let Some(out) = &args.out {
+            output::distinct(out, checkpoint, "is both --out and --checkpoint")?;
+        }
+    }
     let (mut fit, label) = match &args.resume {
         Some(path) => {
             let fit = Fit::resume(path, KernelParams::default())?;
+            interrupt::keep(format!(
+                "nothing new was saved; {} still holds the state at step {}",
+                path.display(),
+                fit.steps()
+            ));
             (fit, format!("{} (resumed)", path.display()))
         }
         None => {
@@ -152,17 +173,20 @@ pub fn run(args: &Args) -> Result<()> {
             let params = args.params()?;
             params.validate()?;
             let reference = Arc::new(super::reference(&kernel, args.res, &params));
+            interrupt::check()?;
             (Fit::new(Arc::new(kernel), reference, params)?, label)
         }
     };
     let params = *fit.params();
-    anyhow::ensure!(args.every >= 1, "--every must be at least 1, got 0");
-    let interrupted = Arc::new(AtomicBool::new(false));
-    if args.checkpoint.is_some() {
-        let flag = Arc::clone(&interrupted);
-        ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst))
-            .context("installing the Ctrl-C handler")?;
-    }
+    eprintln!(
+        "fit of {label}: training to {} cells (Ctrl-C stops{})",
+        params.target_cells,
+        if args.checkpoint.is_some() {
+            " and saves the checkpoint"
+        } else {
+            ""
+        }
+    );
     let bar = super::progress_bar(params.target_cells as u64, "cells");
     let mut save_error = None;
     let reason = fit.train(PROGRESS_EVERY, |f| {
@@ -170,12 +194,16 @@ pub fn run(args: &Args) -> Result<()> {
         bar.set_message(format!("{} rays", f.rays()));
         if let Some(path) = &args.checkpoint
             && f.steps() % args.every < PROGRESS_EVERY
-            && let Err(e) = f.save_checkpoint(path)
         {
-            save_error = Some(e);
-            return ControlFlow::Break(());
+            match save_checkpoint(f, path) {
+                Ok(()) => {}
+                Err(e) => {
+                    save_error = Some(e);
+                    return ControlFlow::Break(());
+                }
+            }
         }
-        if interrupted.load(Ordering::SeqCst) {
+        if interrupt::requested() {
             ControlFlow::Break(())
         } else {
             ControlFlow::Continue(())
@@ -186,26 +214,47 @@ pub fn run(args: &Args) -> Result<()> {
         return Err(e).context("saving the checkpoint");
     }
     if let Some(path) = &args.checkpoint {
-        fit.save_checkpoint(path).context("saving the checkpoint")?;
-        if reason == StopReason::Interrupted {
-            eprintln!(
-                "interrupted after {} steps; checkpoint saved to {path} (continue with --resume {path})",
-                fit.steps(),
-                path = path.display()
-            );
-            std::process::exit(130);
-        }
+        save_checkpoint(&fit, path).context("saving the checkpoint")?;
     }
-    let summary = fit.finish()?;
+    if reason == StopReason::Interrupted {
+        return Err(interrupt::stopped().into());
+    }
+    if fit.params().refit {
+        eprintln!("least-squares refit and final errors (Ctrl-C stops)");
+    } else {
+        eprintln!("final errors");
+    }
+    let refit_bar = super::progress_bar(0, "");
+    let summary = match fit.finish_with(|p| {
+        let unit = match p.stage {
+            sgcs::RefitStage::Assembling => "samples assembled",
+            sgcs::RefitStage::Solving => "ridges solved",
+        };
+        refit_bar.set_length(p.total as u64);
+        refit_bar.set_position(p.done as u64);
+        refit_bar.set_message(unit);
+        if interrupt::requested() {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    }) {
+        Err(kernel_fit::FitError::Interrupted) => return Err(interrupt::stopped().into()),
+        other => other?,
+    };
+    refit_bar.finish_and_clear();
+    interrupt::check()?;
+    let defined = super::Defined::of(fit.reference());
     if let Some(out) = &args.out {
-        ModelFile::new(fit.model().clone(), params, Some(summary.clone()))
-            .save(out)
-            .with_context(|| format!("writing the model to {}", out.display()))?;
+        interrupt::writing(|| {
+            ModelFile::new(fit.model().clone(), params, Some(summary.clone())).save(out)
+        })
+        .with_context(|| format!("writing the model to {}", out.display()))?;
     }
     if args.json {
-        println!("{}", summary_json(&summary, &label));
+        println!("{}", summary_json(&summary, &label, defined));
     } else {
-        print_summary(&summary, &label);
+        print_summary(&summary, &label, defined);
         if let Some(out) = &args.out {
             println!("model written to {}", out.display());
         }
@@ -213,8 +262,23 @@ pub fn run(args: &Args) -> Result<()> {
     Ok(())
 }
 
-/// The `--json` object: flat figures first, then the details.
-pub fn summary_json(s: &FitSummary, scene: &str) -> serde_json::Value {
+/// Saves the checkpoint (Ctrl-C waits for the write) and records it as what an interruption
+/// keeps.
+fn save_checkpoint(fit: &Fit, path: &Path) -> Result<(), kernel_fit::FitError> {
+    interrupt::writing(|| fit.save_checkpoint(path))?;
+    interrupt::keep(format!(
+        "checkpoint saved to {path} after {} steps (continue with `flatland fit --resume {path}`)",
+        fit.steps(),
+        path = path.display()
+    ));
+    Ok(())
+}
+
+/// The `--json` object: flat figures first, then the details. An undefined error (the exact ζ
+/// is 0 everywhere it was measured) is `null`.
+pub fn summary_json(s: &FitSummary, scene: &str, defined: super::Defined) -> serde_json::Value {
+    let (grid, heldout) = (defined.grid, defined.heldout);
+    let or_null = |ok: bool, v: f64| ok.then_some(v);
     serde_json::json!({
         "scene": scene,
         "cells": s.cells,
@@ -223,17 +287,26 @@ pub fn summary_json(s: &FitSummary, scene: &str) -> serde_json::Value {
         "rays": s.rays,
         "steps": s.steps,
         "samples_per_cell": s.samples as f64 / s.cells as f64,
-        "rel_l2_grid": s.errors.grid,
-        "rel_l2_heldout": s.errors.heldout,
-        "rel_l2_grid_before_refit": s.errors_before_refit.map(|e| e.grid),
-        "rel_l2_heldout_before_refit": s.errors_before_refit.map(|e| e.heldout),
+        "rel_l2_grid": or_null(grid, s.errors.grid),
+        "rel_l2_heldout": or_null(heldout, s.errors.heldout),
+        "rel_l2_heldout_p05": or_null(heldout, s.errors.heldout_spread[0]),
+        "rel_l2_heldout_p95": or_null(heldout, s.errors.heldout_spread[1]),
+        "rel_l1_grid": or_null(grid, s.errors.l1_grid),
+        "rel_l1_heldout": or_null(heldout, s.errors.l1_heldout),
+        "rel_l2_grid_before_refit": s.errors_before_refit.and_then(|e| or_null(grid, e.grid)),
+        "rel_l2_heldout_before_refit": s.errors_before_refit.and_then(|e| or_null(heldout, e.heldout)),
         "wall_s": s.wall_s,
+        "time_training_s": s.train_s,
+        "time_resampling_s": s.resample_s,
+        "time_refit_s": s.refit_s,
+        "time_reference_s": s.reference_s,
+        "time_errors_s": s.errors_s,
         "stop": s.stop,
     })
 }
 
 /// The human-readable summary table.
-pub fn print_summary(s: &FitSummary, scene: &str) {
+pub fn print_summary(s: &FitSummary, scene: &str, defined: super::Defined) {
     let row = |k: &str, v: String| println!("  {k:<24} {v}");
     println!("fit of {scene}");
     row("cells", s.cells.to_string());
@@ -245,18 +318,38 @@ pub fn print_summary(s: &FitSummary, scene: &str) {
         format!("{:.1}", s.samples as f64 / s.cells as f64),
     );
     if let Some(b) = s.errors_before_refit {
-        row(
-            "rel. L2 before refit",
-            format!("grid {:.4}   held out {:.4}", b.grid, b.heldout),
-        );
+        row("rel. L2 before refit", defined.format(&b));
+    }
+    row("rel. L2", defined.format(&s.errors));
+    if defined.heldout {
+        let [lo, hi] = s.errors.heldout_spread;
+        row("held out, bootstrap 90 %", format!("{lo:.4} – {hi:.4}"));
     }
     row(
-        "rel. L2",
+        "rel. L1",
         format!(
-            "grid {:.4}   held out {:.4}",
-            s.errors.grid, s.errors.heldout
+            "grid {}   held out {}",
+            super::error_text(s.errors.l1_grid, defined.grid, 4),
+            super::error_text(s.errors.l1_heldout, defined.heldout, 4)
         ),
     );
+    if let Some(why) = defined.note() {
+        row("", why.to_owned());
+    }
     row("wall time", format!("{:.3} s", s.wall_s));
+    row(
+        "  of which",
+        format!(
+            "training {:.3} s, resampling {:.3} s, refit {:.3} s",
+            s.train_s, s.resample_s, s.refit_s
+        ),
+    );
+    row(
+        "not counted",
+        format!(
+            "reference {:.3} s, measuring errors {:.3} s",
+            s.reference_s, s.errors_s
+        ),
+    );
     row("stopped by", format!("{:?}", s.stop));
 }

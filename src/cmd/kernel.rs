@@ -3,18 +3,19 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
-use flatland_geom::{Kernel, Scene, write_atomic};
+use flatland_geom::{Kernel, write_atomic};
+use rayon::prelude::*;
 
-/// Largest accepted grid resolution (R² values are kept in memory).
-const MAX_RES: usize = 8192;
+use super::SceneArgs;
+use crate::plot::{Heatmap, heatmap_png};
+use crate::{interrupt, output};
 
 /// Arguments of `flatland kernel`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Scene file (.ron or .json).
-    #[arg(long, default_value = "scenes/fig3.ron")]
-    pub scene: PathBuf,
-    /// Grid resolution R: row i is s = (i+0.5)/R, column j is t = (j+0.5)/R.
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Grid resolution R in [16, 4096]: row i is s = (i+0.5)/R, column j is t = (j+0.5)/R.
     #[arg(long, default_value_t = 256)]
     pub res: usize,
     /// Write zeta = E'(e_x) k (the learning target) instead of k.
@@ -23,7 +24,8 @@ pub struct Args {
     /// PNG only: colour by log10 of the value over the top four decades.
     #[arg(long)]
     pub log: bool,
-    /// Output: .csv (R lines of R comma-separated numbers) or .png (heatmap, row 0 at the top).
+    /// Output: .csv (R lines of R comma-separated numbers, line i ↔ s) or .png (heatmap with
+    /// axes: t to the right, s upwards, a colour bar).
     #[arg(long)]
     pub out: PathBuf,
 }
@@ -51,27 +53,82 @@ fn output_of(path: &Path) -> anyhow::Result<Output> {
     }
 }
 
+/// Rows of the grid computed between two Ctrl-C checks.
+const ROWS_PER_CHUNK: usize = 16;
+
 /// Evaluates the grid and writes it (atomically).
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    let output = output_of(&args.out)?;
-    if args.res == 0 || args.res > MAX_RES {
-        bail!("--res must be in [1, {MAX_RES}], but is {}", args.res);
-    }
-    let scene = Scene::load(&args.scene)?;
+    output_of(&args.out)?;
+    super::check_res(args.res)?;
+    let (scene, label) = args.scene.load()?;
+    output::file(
+        &args.out,
+        &args.scene.path().into_iter().collect::<Vec<_>>(),
+    )?;
     let kernel = Kernel::new(scene);
-    let grid = kernel.grid(args.res, args.weighted);
-    let bytes = match output {
-        Output::Csv => csv(&grid, args.res).into_bytes(),
-        Output::Png => png(&grid, args.res, args.log)?,
-    };
-    write_atomic(&args.out, &bytes)?;
     let what = if args.weighted { "zeta" } else { "k" };
+    eprintln!(
+        "computing {what} on a {0}×{0} grid of {label} (Ctrl-C stops)",
+        args.res
+    );
+    let grid = grid(&kernel, args.res, args.weighted)?;
+    let quantity = if args.weighted { "ζ(s, t)" } else { "k(s, t)" };
+    let title = format!("{quantity} of {label}, {0}×{0} grid", args.res);
+    write_grid(
+        &args.out,
+        args.res,
+        &grid,
+        &heatmap(title, quantity, kernel.scene(), &grid, args.log),
+    )?;
     eprintln!(
         "wrote {what} on a {0}x{0} grid to {1}",
         args.res,
         args.out.display()
     );
     Ok(())
+}
+
+/// [`Kernel::grid`], a few rows at a time so that Ctrl-C stops it (the same values).
+fn grid(kernel: &Kernel, res: usize, weighted: bool) -> anyhow::Result<Vec<f64>> {
+    let mut grid = Vec::with_capacity(res * res);
+    let n = res as f64;
+    for rows in (0..res).collect::<Vec<_>>().chunks(ROWS_PER_CHUNK) {
+        interrupt::check()?;
+        let first = rows[0] * res;
+        let chunk: Vec<f64> = (first..first + rows.len() * res)
+            .into_par_iter()
+            .with_min_len(1024)
+            .map(|idx| {
+                let s = ((idx / res) as f64 + 0.5) / n;
+                let t = ((idx % res) as f64 + 0.5) / n;
+                if weighted {
+                    kernel.zeta(s, t)
+                } else {
+                    kernel.k(s, t)
+                }
+            })
+            .collect();
+        grid.extend(chunk);
+    }
+    Ok(grid)
+}
+
+/// A heatmap of `grid` over `scene` whose top colour is [`top_value`] of the grid.
+pub fn heatmap<'a>(
+    title: String,
+    quantity: &'a str,
+    scene: &'a flatland_geom::Scene,
+    grid: &[f64],
+    log: bool,
+) -> Heatmap<'a> {
+    Heatmap {
+        title,
+        quantity,
+        scene,
+        log,
+        top: top_value(grid),
+        overlay: None,
+    }
 }
 
 /// R lines of R comma-separated values (shortest round-trip decimal form).
@@ -86,7 +143,7 @@ fn csv(grid: &[f64], res: usize) -> String {
 }
 
 /// Decades shown by `--log`.
-const LOG_DECADES: f64 = 4.0;
+pub(crate) const LOG_DECADES: f64 = 4.0;
 
 /// The value that maps to the top colour: the 99.5th percentile of the positive values, since
 /// the kernel is unbounded (≈ 1/r) at shared corners and the maximum would wash out the rest.
@@ -115,20 +172,6 @@ pub(crate) fn normalise(grid: &[f64], log: bool, top: f64) -> Vec<f64> {
             x.clamp(0.0, 1.0)
         })
         .collect()
-}
-
-fn png(grid: &[f64], res: usize, log: bool) -> anyhow::Result<Vec<u8>> {
-    use image::ImageEncoder as _;
-    let pixels: Vec<u8> = normalise(grid, log, top_value(grid))
-        .into_iter()
-        .flat_map(viridis)
-        .collect();
-    let side = u32::try_from(res).context("resolution too large for a PNG")?;
-    let mut bytes = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut bytes)
-        .write_image(&pixels, side, side, image::ExtendedColorType::Rgb8)
-        .context("cannot encode the PNG")?;
-    Ok(bytes)
 }
 
 /// Viridis (perceptually uniform; matplotlib's, sampled at 17 points), linearly interpolated.
@@ -161,14 +204,15 @@ pub(crate) fn viridis(x: f64) -> [u8; 3] {
     std::array::from_fn(|c| (f64::from(a[c]) * (1.0 - w) + f64::from(b[c]) * w).round() as u8)
 }
 
-/// Writes any R×R grid (row ↔ s) as CSV or a PNG heatmap, chosen by `path`'s extension,
-/// atomically: what `flatland eval` and `flatland figure` share with this command.
-pub fn write_grid(path: &Path, res: usize, grid: &[f64], log: bool) -> anyhow::Result<()> {
+/// Writes any R×R grid (row ↔ s) as CSV or the PNG heatmap `map`, chosen by `path`'s
+/// extension, atomically (Ctrl-C waits for the write): what `flatland eval` shares with this
+/// command.
+pub fn write_grid(path: &Path, res: usize, grid: &[f64], map: &Heatmap<'_>) -> anyhow::Result<()> {
     let bytes = match output_of(path)? {
         Output::Csv => csv(grid, res).into_bytes(),
-        Output::Png => png(grid, res, log)?,
+        Output::Png => heatmap_png(grid, res, map)?,
     };
-    write_atomic(path, &bytes).context("cannot write the output")?;
+    interrupt::writing(|| write_atomic(path, &bytes)).context("cannot write the output")?;
     Ok(())
 }
 

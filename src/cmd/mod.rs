@@ -2,12 +2,12 @@
 //! what several of them share (scene loading, progress bars, references) lives here.
 
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use flatland_geom::{Kernel, Scene};
 use indicatif::{ProgressBar, ProgressStyle};
-use kernel_fit::{FitParams, Reference};
+use kernel_fit::{Errors, FitParams, REFERENCE_SEED, Reference, limits};
 
 pub mod bench;
 pub mod check;
@@ -26,13 +26,15 @@ pub struct SceneArgs {
     /// Scene file (.ron or .json). Default: the bundled `fig3` scene.
     #[arg(long, value_name = "FILE")]
     pub scene: Option<PathBuf>,
-    /// Split every surface edge into M equal edges (the kernel over (s, t) does not change).
+    /// Split every surface edge into M equal edges (the kernel over (s, t) does not change);
+    /// at most 1 000 000 edges in all.
     #[arg(long, value_name = "M", default_value_t = 1)]
     pub subdivide: usize,
 }
 
 impl SceneArgs {
-    /// Loads (or takes the bundled) scene, subdivides it, and names it for reports.
+    /// Loads (or takes the bundled) scene, subdivides it, and names it for reports. Warns on
+    /// stderr about overlapping surface edges.
     pub fn load(&self) -> Result<(Scene, String)> {
         let (scene, mut label) = match &self.scene {
             Some(path) => (Scene::load(path)?, path.display().to_string()),
@@ -41,11 +43,18 @@ impl SceneArgs {
                 "fig3 (bundled)".to_owned(),
             ),
         };
+        warn_overlaps(&scene, &label);
         if self.subdivide != 1 {
+            let scene = subdivide(&scene, self.subdivide)?;
             label = format!("{label} ×{}", self.subdivide);
-            return Ok((scene.subdivide(self.subdivide)?, label));
+            return Ok((scene, label));
         }
         Ok((scene, label))
+    }
+
+    /// The input file, if any (outputs must never overwrite it).
+    pub fn path(&self) -> Option<&Path> {
+        self.scene.as_deref()
     }
 
     /// The scene's exact kernel with default parameters.
@@ -58,9 +67,113 @@ impl SceneArgs {
 /// The bundled default scene (the paper's Fig. 3), so the binary runs from any folder.
 pub const BUNDLED_FIG3: &str = include_str!("../../scenes/fig3.ron");
 
-/// The reference every error of a fit is measured against.
+/// The reference every error of a fit is measured against: `res × res` grid and
+/// `params.heldout` points drawn with the one [`REFERENCE_SEED`] every command uses, so fits of
+/// any seed are measured on the same points and `flatland results` reports what `flatland fit`
+/// prints.
 pub fn reference(kernel: &Kernel, res: usize, params: &FitParams) -> Reference {
-    Reference::new(kernel, res, params.heldout, params.seed)
+    Reference::new(kernel, res, params.heldout, REFERENCE_SEED)
+}
+
+/// Which relative errors mean something: against a ζ that is 0 everywhere it was measured (a
+/// scene where nothing emits), a relative error is 0/0 and is printed as "undefined", not as a
+/// perfect 0.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Defined {
+    /// The error on the reference grid.
+    pub grid: bool,
+    /// The error at the held-out points.
+    pub heldout: bool,
+}
+
+impl Defined {
+    /// Whether the reference has a non-zero value on its grid and at its held-out points.
+    pub fn of(reference: &Reference) -> Defined {
+        Defined {
+            grid: reference.grid().iter().any(|v| *v != 0.0),
+            heldout: reference.heldout().1.iter().any(|v| *v != 0.0),
+        }
+    }
+
+    /// `grid 0.1234   held out 0.5678`, with "undefined" where it is.
+    pub fn format(&self, e: &Errors) -> String {
+        format!(
+            "grid {}   held out {}",
+            error_text(e.grid, self.grid, 4),
+            error_text(e.heldout, self.heldout, 4)
+        )
+    }
+
+    /// Why an error is undefined, when one is.
+    pub fn note(&self) -> Option<&'static str> {
+        (!(self.grid && self.heldout)).then_some(
+            "undefined: the exact ζ is 0 everywhere it was measured (does anything emit?)",
+        )
+    }
+}
+
+/// A relative error with `digits` decimals, or "undefined".
+pub fn error_text(value: f64, defined: bool, digits: usize) -> String {
+    if defined {
+        format!("{value:.digits$}")
+    } else {
+        "undefined".to_owned()
+    }
+}
+
+/// Refuses a grid resolution outside the range every command shares, before anything is
+/// allocated.
+pub fn check_res(res: usize) -> Result<()> {
+    let (lo, hi) = (limits::GRID_RES.start(), limits::GRID_RES.end());
+    anyhow::ensure!(
+        limits::GRID_RES.contains(&res),
+        "--res must be in [{lo}, {hi}], but is {res}"
+    );
+    Ok(())
+}
+
+/// Refuses a cell count or budget (`--cells`, `--budgets`: basis functions) outside the range
+/// every command and file shares, before anything is allocated.
+pub fn check_cells(flag: &str, n: usize) -> Result<()> {
+    let max = limits::MAX_CELLS;
+    anyhow::ensure!(
+        (3..=max).contains(&n),
+        "{flag} must be in [3, {max}], but is {n}"
+    );
+    Ok(())
+}
+
+/// Largest scene `--subdivide` may produce, in edges.
+pub const MAX_EDGES: usize = 1_000_000;
+
+/// Splits every surface edge into `m`, refusing (before allocating) a count outside
+/// `[1, MAX_EDGES]` or a result of more than [`MAX_EDGES`] edges.
+pub fn subdivide(scene: &Scene, m: usize) -> Result<Scene> {
+    let surfaces = scene.surface_edges().len();
+    let blockers = scene.edges().len() - surfaces;
+    let edges = surfaces
+        .checked_mul(m)
+        .and_then(|e| e.checked_add(blockers));
+    let most = MAX_EDGES.saturating_sub(blockers) / surfaces;
+    match edges {
+        Some(e) if m >= 1 && e <= MAX_EDGES => Ok(scene.subdivide(m)?),
+        _ => anyhow::bail!(
+            "--subdivide must be in [1, {most}] for this scene ({surfaces} surface edges; at most \
+             {MAX_EDGES} edges in all), but is {m}"
+        ),
+    }
+}
+
+/// Warns (stderr, one line) when surface edges overlap: light is then counted on each copy.
+pub fn warn_overlaps(scene: &Scene, label: &str) {
+    let pairs = scene.overlapping_surface_edges();
+    if let Some(&(a, b)) = pairs.first() {
+        eprintln!(
+            "warning: {label}: {} pair(s) of surface edges overlap (first: edges {a} and {b}); \
+             each copy carries its own light, doubling it there (`flatland check` lists them)",
+            pairs.len()
+        );
+    }
 }
 
 /// A progress bar on a terminal, nothing otherwise (so piped output stays clean).

@@ -10,12 +10,13 @@ use anyhow::{Context, Result, anyhow, bail};
 use flatland_geom::{Kernel, Role, Scene, write_atomic};
 use kernel_fit::baselines::{BlockValue, HrParams, UniformParams, run_hr_at_budget, run_uniform};
 use kernel_fit::solve::{
-    Comparison, ExactReference, KernelRepresentation, Mesh, SolveParams, Stop, never, solve_against,
+    Comparison, ExactReference, KernelRepresentation, Mesh, SolveParams, Stop, solve_against,
 };
-use kernel_fit::{Fit, ModelFile};
+use kernel_fit::{Fit, FitError, ModelFile};
 use plotters::prelude::*;
 
 use super::SceneArgs;
+use crate::interrupt;
 use crate::plot::{register_font, write_rgb_png};
 
 /// Arguments of `flatland solve`.
@@ -115,17 +116,6 @@ fn output_of(path: &Path) -> Result<Output> {
             path.display()
         ),
     };
-    // Refuse a missing folder now, not after minutes of work.
-    if let Some(dir) = path.parent()
-        && !dir.as_os_str().is_empty()
-        && !dir.is_dir()
-    {
-        bail!(
-            "{}: the folder {} does not exist",
-            path.display(),
-            dir.display()
-        );
-    }
     Ok(output)
 }
 
@@ -139,6 +129,13 @@ struct Built {
 pub fn run(args: &Args) -> Result<()> {
     let output = args.out.as_deref().map(output_of).transpose()?;
     let choice = Choice::parse(&args.kernel)?;
+    if let Some(out) = &args.out {
+        let mut inputs: Vec<&Path> = args.scene.scene.iter().map(PathBuf::as_path).collect();
+        if let Choice::Model(model) = &choice {
+            inputs.push(model);
+        }
+        crate::output::file(out, &inputs)?;
+    }
     if choice != Choice::Exact && args.basis == 0 {
         bail!("--basis must be at least 1, got 0");
     }
@@ -155,22 +152,30 @@ pub fn run(args: &Args) -> Result<()> {
     // Check the reference size before the (maybe long) build of the representation.
     Mesh::new(&kernel, reference_elements).context("--reference-elements")?;
 
-    // Every long loop below polls `stop`; it becomes the CLI's shared Ctrl-C flag once that
-    // exists. Until then Ctrl-C ends the process, and nothing is half-written (writes are
-    // atomic and come last).
-    let stop: &Stop = &never;
+    // Every long loop below polls Ctrl-C; nothing is written before the end.
+    let stop: &Stop = &interrupt::requested;
+    let interrupted = |e: FitError| -> anyhow::Error {
+        match e {
+            FitError::Interrupted => interrupt::stopped().into(),
+            other => other.into(),
+        }
+    };
     let built = build(&choice, &kernel, args)?;
+    interrupt::check()?;
     let reference = ExactReference::new(&kernel, reference_elements, &params, stop)
+        .map_err(interrupted)
         .context("the exact reference solve")?;
-    let exact = reference.radiosity_on(&mesh, stop)?;
+    let exact = reference.radiosity_on(&mesh, stop).map_err(interrupted)?;
     let comparison = solve_against(built.rep.as_ref(), &mesh, &exact, &params, stop)
+        .map_err(interrupted)
         .with_context(|| format!("solving with the {} kernel", choice.label()))?;
+    interrupt::check()?;
 
     if let (Some(path), Some(output)) = (&args.out, output) {
         match output {
-            Output::Csv => {
-                write_atomic(path, csv(&mesh, &comparison.solution.radiosity).as_bytes())?
-            }
+            Output::Csv => interrupt::writing(|| {
+                write_atomic(path, csv(&mesh, &comparison.solution.radiosity).as_bytes())
+            })?,
             Output::Png => lit_scene_png(
                 path,
                 &Picture {
@@ -262,14 +267,23 @@ fn build(choice: &Choice, kernel: &Kernel, args: &Args) -> Result<Built> {
             let fit_params = fit_args.params()?;
             fit_params.validate().context("--basis")?;
             let kernel = Arc::new(Kernel::new(kernel.scene().clone()));
-            let reference = Arc::new(super::reference(&kernel, fit_args.res, &fit_params));
+            // The fit's own errors are not reported here: a small reference will do.
+            let reference = Arc::new(super::reference(&kernel, 16, &fit_params));
             let mut fit = Fit::new(kernel, reference, fit_params)?;
             let bar = super::progress_bar(fit_params.target_cells as u64, "cells");
-            fit.run(1000, |f| {
+            fit.train(1000, |f| {
                 bar.set_position(f.network().len() as u64);
-                ControlFlow::Continue(())
-            })?;
+                if interrupt::requested() {
+                    ControlFlow::Break(())
+                } else {
+                    ControlFlow::Continue(())
+                }
+            });
             bar.finish_and_clear();
+            interrupt::check()?;
+            if fit_params.refit {
+                fit.refit()?;
+            }
             Box::new(fit.model().clone())
         }
     };

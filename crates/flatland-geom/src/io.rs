@@ -149,7 +149,13 @@ impl Scene {
     }
 }
 
-/// Writes `bytes` to `path` through a temporary file in the same directory and a rename.
+/// Writes `bytes` to `path` through a temporary file in the same directory and a rename, so a
+/// reader sees the old file or the new one, never half of one.
+///
+/// The data is synced to disk before the rename and the directory after it, so a power cut
+/// cannot leave an empty or truncated file under the final name. On any error the temporary
+/// file is removed. A temporary file left by a process that was killed while writing (they are
+/// named `.NAME.tmpPID`) is removed by the next successful write of the same file.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), GeomError> {
     let io = |error| GeomError::Io {
         path: path.to_path_buf(),
@@ -161,13 +167,132 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), GeomError> {
             "not a file name",
         ))
     })?;
-    let mut tmp_name = std::ffi::OsString::from(".");
-    tmp_name.push(name);
-    tmp_name.push(format!(".tmp{}", std::process::id()));
+    let prefix = tmp_prefix(name);
+    let mut tmp_name = prefix.clone();
+    tmp_name.push(std::process::id().to_string());
     let tmp: PathBuf = path.with_file_name(tmp_name);
-    let result = std::fs::write(&tmp, bytes).and_then(|()| std::fs::rename(&tmp, path));
+    let result = write_synced(&tmp, bytes).and_then(|()| {
+        std::fs::rename(&tmp, path)?;
+        sync_folder(path);
+        Ok(())
+    });
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
+    } else {
+        remove_orphans(path, &prefix);
     }
     result.map_err(io)
+}
+
+/// `.NAME.tmp`: the start of every temporary file name of `NAME`.
+fn tmp_prefix(name: &std::ffi::OsStr) -> std::ffi::OsString {
+    let mut prefix = std::ffi::OsString::from(".");
+    prefix.push(name);
+    prefix.push(".tmp");
+    prefix
+}
+
+fn write_synced(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    use std::io::Write as _;
+    let mut file = std::fs::File::create(path)?;
+    file.write_all(bytes)?;
+    file.sync_all()
+}
+
+/// Makes the rename durable (best effort: some file systems cannot sync a folder).
+fn sync_folder(path: &Path) {
+    #[cfg(unix)]
+    if let Some(folder) = path.parent() {
+        let folder = if folder.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            folder
+        };
+        if let Ok(f) = std::fs::File::open(folder) {
+            let _ = f.sync_all();
+        }
+    }
+    #[cfg(not(unix))]
+    let _ = path;
+}
+
+/// Removes `.NAME.tmpPID` files next to `path` whose process no longer runs (Linux, where
+/// `/proc` says so; elsewhere nothing is removed).
+fn remove_orphans(path: &Path, prefix: &std::ffi::OsStr) {
+    if !cfg!(target_os = "linux") {
+        return;
+    }
+    let folder = match path.parent() {
+        Some(f) if !f.as_os_str().is_empty() => f,
+        _ => Path::new("."),
+    };
+    let Ok(entries) = std::fs::read_dir(folder) else {
+        return;
+    };
+    let prefix = prefix.to_string_lossy();
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let name = name.to_string_lossy();
+        let Some(pid) = name.strip_prefix(prefix.as_ref()) else {
+            continue;
+        };
+        if !pid.is_empty()
+            && pid.bytes().all(|b| b.is_ascii_digit())
+            && !Path::new("/proc").join(pid).exists()
+        {
+            let _ = std::fs::remove_file(entry.path());
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn temp(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("flatland-io-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    fn names(dir: &Path) -> Vec<String> {
+        let mut names: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    }
+
+    #[test]
+    fn a_failed_write_leaves_no_temporary_file_and_the_old_file_intact() {
+        let dir = temp("failed");
+        // The target is a non-empty folder: the rename fails after the data was written.
+        std::fs::create_dir_all(dir.join("out.json/inside")).unwrap();
+        assert!(write_atomic(&dir.join("out.json"), b"new").is_err());
+        assert_eq!(names(&dir), ["out.json"]);
+        std::fs::write(dir.join("keep.json"), b"old").unwrap();
+        assert!(write_atomic(&dir.join("missing/keep.json"), b"new").is_err());
+        assert_eq!(std::fs::read(dir.join("keep.json")).unwrap(), b"old");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn the_temporary_file_of_a_killed_writer_is_removed_by_the_next_write() {
+        let dir = temp("orphan");
+        // No process has pid 4 000 000 (above Linux's largest pid); pid 1 always runs; a name
+        // that is not a pid is someone else's.
+        for name in [".m.json.tmp4000000", ".m.json.tmp1", ".m.json.tmpx"] {
+            std::fs::write(dir.join(name), b"half").unwrap();
+        }
+        write_atomic(&dir.join("m.json"), b"whole").unwrap();
+        assert_eq!(std::fs::read(dir.join("m.json")).unwrap(), b"whole");
+        let mut expected = vec![".m.json.tmp1", ".m.json.tmpx", "m.json"];
+        if !cfg!(target_os = "linux") {
+            expected.insert(0, ".m.json.tmp4000000");
+        }
+        assert_eq!(names(&dir), expected);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

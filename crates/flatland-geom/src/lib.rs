@@ -42,6 +42,7 @@
 mod error;
 mod io;
 mod kernel;
+mod overlap;
 mod scene;
 mod visibility;
 

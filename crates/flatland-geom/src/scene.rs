@@ -482,6 +482,23 @@ impl Scene {
             })
     }
 
+    /// The parameter interval `[s0, s1)` of the parent surface edge of rank `rank` (the
+    /// surface edges laid end to end, pieces of a subdivided edge together); `None` past the
+    /// last rank.
+    #[must_use]
+    pub fn parent_param_range(&self, rank: usize) -> Option<(f64, f64)> {
+        if rank + 1 >= self.cum.len() {
+            return None;
+        }
+        let l = self.total_length;
+        let s1 = if rank + 2 == self.cum.len() {
+            1.0
+        } else {
+            self.cum[rank + 1] / l
+        };
+        Some((self.cum[rank] / l, s1))
+    }
+
     // ----- crate internals used by the kernel -----
 
     /// The parent groups (a single edge is a group of one).

@@ -1,7 +1,7 @@
 //! Opens the viewer with every option on the command line (used by `scripts/screenshot.sh`):
 //!
-//! `cargo run --release -p flatland-viewer --example viewer -- [--scene FILE] [--play]
-//! [--cells N] [--fresh] [--fps-log]`
+//! `cargo run --release -p flatland-viewer --example viewer -- [--scene FILE] [--paused]
+//! [--cells N] [--fresh] [--fps-log]` (it learns at once unless `--paused`)
 
 use std::path::PathBuf;
 
@@ -11,7 +11,9 @@ fn main() {
     while let Some(arg) = args.next() {
         match arg.as_str() {
             "--scene" => options.scene = args.next().map(PathBuf::from),
-            "--play" => options.autoplay = true,
+            "--paused" => options.paused = true,
+            // Learning at once is the default; kept so older command lines still work.
+            "--play" => options.paused = false,
             "--cells" => options.target_cells = args.next().and_then(|n| n.parse().ok()),
             "--fresh" => options.fresh_settings = true,
             "--fps-log" => options.fps_log = true,

@@ -19,7 +19,8 @@ use crate::BUNDLED_SCENES;
 use crate::colormap::{Scale, grid_image, samples_image};
 use crate::views::{self, Hover, PlotFrame, SceneDrag};
 use crate::worker::{
-    APPROX_RES, Approx, Command, REFERENCE_RES, Status, WorkerHandle, World, format_errors,
+    APPROX_RES, Approx, Command, REFERENCE_RES, Status, WorkerHandle, World, error_text,
+    format_errors,
 };
 
 /// Key of the settings in eframe's storage.
@@ -66,7 +67,9 @@ impl Default for Settings {
             params: FitParams::default(),
             scene: SceneChoice::Bundled("fig3".into()),
             subdivide: 1,
-            speed: 30_000.0,
+            // Slow enough to watch: the default learner is exact on fig3 after about 20 000
+            // steps (a few seconds), the paper's network reaches 400 cells in 20 s.
+            speed: 6_000.0,
             unlimited: false,
             step_size: 1,
             log_scale: true,
@@ -77,13 +80,13 @@ impl Default for Settings {
     }
 }
 
-/// How [`crate::run_with`] starts the viewer.
+/// How [`crate::run_with`] starts the viewer. The default starts learning at once.
 #[derive(Clone, Debug, Default)]
 pub struct Options {
     /// Open this scene file instead of the remembered scene.
     pub scene: Option<PathBuf>,
-    /// Start training at once.
-    pub autoplay: bool,
+    /// Start paused instead of learning at once.
+    pub paused: bool,
     /// Override the target cell count.
     pub target_cells: Option<usize>,
     /// Ignore (but still save) the remembered settings.
@@ -181,28 +184,39 @@ impl ViewerApp {
     /// The app inside eframe: settings from eframe's storage (unless `options.fresh_settings`),
     /// the scene from `options.scene`, else the remembered one, else `fig3`.
     pub fn new(cc: &eframe::CreationContext<'_>, options: &Options) -> ViewerApp {
-        let mut settings: Settings = if options.fresh_settings {
+        let settings: Settings = if options.fresh_settings {
             Settings::default()
         } else {
             cc.storage
                 .and_then(|s| eframe::get_value(s, SETTINGS_KEY))
                 .unwrap_or_default()
         };
+        ViewerApp::with_options(cc.egui_ctx.clone(), settings, options)
+    }
+
+    /// The app as [`ViewerApp::new`] starts it, from given settings: the options applied, and
+    /// learning at once unless `options.paused`.
+    pub fn with_options(
+        ctx: egui::Context,
+        mut settings: Settings,
+        options: &Options,
+    ) -> ViewerApp {
         if let Some(cells) = options.target_cells {
             settings.params.target_cells = cells;
         }
         if let Some(path) = &options.scene {
             settings.scene = SceneChoice::File(path.clone());
         }
-        let mut app = ViewerApp::headless(cc.egui_ctx.clone(), settings);
+        let mut app = ViewerApp::headless(ctx, settings);
         app.fps_log = options.fps_log;
-        if options.autoplay {
+        if !options.paused {
             app.play();
         }
         app
     }
 
-    /// The app without eframe (for tests): starts the learner and a fresh fit of the chosen scene.
+    /// The app without eframe (for tests): starts the learner and a fresh fit of the chosen
+    /// scene, paused.
     pub fn headless(ctx: egui::Context, mut settings: Settings) -> ViewerApp {
         let mut message = None;
         let (scene, label) = match load_choice(&settings.scene) {
@@ -304,6 +318,25 @@ impl ViewerApp {
     pub fn fps(&self) -> f64 {
         self.fps_now
     }
+    /// Final errors of the finished fit (after the refit), once the learner has them.
+    pub fn final_errors(&self) -> Option<kernel_fit::Errors> {
+        self.status
+            .as_ref()
+            .and_then(|s| s.summary.as_ref())
+            .map(|s| s.errors)
+    }
+    /// Whether the newest status was made after the learner handled every command sent so far
+    /// (what a test waits for before it asserts on the learner's state).
+    pub fn caught_up(&self) -> bool {
+        self.status
+            .as_ref()
+            .is_some_and(|s| s.handled == self.worker.sent())
+    }
+    /// Blocks until the learner publishes something this app has not taken yet, or `timeout`
+    /// passes (for tests: wait on the learner instead of sleeping). The UI never calls it.
+    pub fn wait_for_learner(&self, timeout: Duration) -> bool {
+        self.worker.wait(timeout)
+    }
 
     // ----- actions -----
 
@@ -314,6 +347,10 @@ impl ViewerApp {
     /// Pauses training.
     pub fn pause(&mut self) {
         self.worker.send(Command::Pause);
+    }
+    /// Asks the learner for a status made after every command sent so far ([`Self::caught_up`]).
+    pub fn sync(&mut self) {
+        self.worker.send(Command::Sync);
     }
     /// Trains `settings.step_size` steps.
     pub fn step(&mut self) {
@@ -499,6 +536,7 @@ impl ViewerApp {
     }
 
     fn top_bar(&mut self, ui: &mut egui::Ui) {
+        let defined = self.world.as_ref().map_or([true; 2], |w| w.defined);
         ui.horizontal(|ui| {
             if self.running() {
                 if ui.button("Pause").clicked() {
@@ -521,7 +559,7 @@ impl ViewerApp {
             let mut stats = String::new();
             if let Some(st) = &self.status {
                 let snap = &st.snapshot;
-                let err = snap.history.last().map_or("–".into(), |h| format!("{:.3}", h.rel_l2_heldout));
+                let err = snap.history.last().map_or("–".into(), |h| error_text(h.rel_l2_heldout, defined[1]));
                 let per_cell = snap.samples.len() as f64 / snap.cells.len().max(1) as f64;
                 stats = format!(
                     "steps {}   rays {}   cells {}/{}   samples {} ({:.1}/cell)   sets {}   held-out rel. L2 {}   {:.0} steps/s",
@@ -550,7 +588,7 @@ impl ViewerApp {
                 let errs = st
                     .summary
                     .as_ref()
-                    .map(|s| format!(": final rel. L2 {}", format_errors(&s.errors)))
+                    .map(|s| format!(": final rel. L2 {}", format_errors(&s.errors, defined)))
                     .unwrap_or_default();
                 let hint = if r == kernel_fit::StopReason::TargetCells {
                     "; raise the target cells and press Play to go on"

@@ -95,7 +95,7 @@ fn limit_learner_threads() {
 }
 
 /// Opens the viewer on `scene` (a `.ron`/`.json` file), or on the scene remembered from the last
-/// run, else the bundled `fig3`. Returns when the window is closed.
+/// run, else the bundled `fig3`, learning at once. Returns when the window is closed.
 pub fn run(scene: Option<PathBuf>) -> Result<(), ViewerError> {
     run_with(Options {
         scene,
@@ -103,7 +103,7 @@ pub fn run(scene: Option<PathBuf>) -> Result<(), ViewerError> {
     })
 }
 
-/// [`run`] with all options (autoplay, target cells, fresh settings, frame-rate log).
+/// [`run`] with all options (start paused, target cells, fresh settings, frame-rate log).
 pub fn run_with(options: Options) -> Result<(), ViewerError> {
     if let Some(path) = &options.scene {
         // Refuse a bad file before a window opens.

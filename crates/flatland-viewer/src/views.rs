@@ -713,6 +713,7 @@ mod drag_tests {
             reference: Arc::new(Reference::new(&kernel, 4, 16, 1)),
             kernel,
             exact_small: Vec::new(),
+            defined: [true; 2],
         };
         let rect = Rect::from_min_size(pos2(0.0, 0.0), vec2(400.0, 300.0));
         let state = (None::<SceneDrag>, Vec::<(DVec2, DVec2)>::new());

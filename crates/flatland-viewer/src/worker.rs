@@ -1,11 +1,14 @@
 //! The learner's thread. It owns the [`Fit`]; the UI talks to it with [`Command`]s and reads
 //! what it publishes from a [`Mailbox`] with `try_lock`, so a frame never waits for training.
+//! Each publication also wakes whoever waits for one ([`WorkerHandle::wait`]: tests, which wait
+//! on what the learner says instead of sleeping), and every status says how many commands the
+//! learner has handled, so the UI knows when it has caught up.
 //!
 //! Publishing is throttled: a [`Snapshot`] at most every [`PUBLISH_EVERY`], the learned ζ̃ on
 //! the display grid at most every [`APPROX_EVERY`] (it costs `APPROX_RES²` network evaluations).
 
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender, TryRecvError};
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Condvar, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
@@ -56,6 +59,8 @@ pub enum Command {
     },
     /// Steps per second; `None` trains as fast as possible.
     Speed(Option<f64>),
+    /// Nothing but a status: the UI's way to learn that everything before it was handled.
+    Sync,
 }
 
 /// A scene and everything derived from it that the UI shows. Replaced, never mutated.
@@ -71,6 +76,9 @@ pub struct World {
     pub reference: Arc<Reference>,
     /// The exact ζ on the `APPROX_RES` display grid, for the error panel.
     pub exact_small: Vec<f64>,
+    /// Whether relative errors are defined on the grid and at the held-out points: against a ζ
+    /// that is 0 everywhere (nothing emits) they are 0/0 and shown as "undefined".
+    pub defined: [bool; 2],
 }
 
 /// The learned ζ̃ on the display grid.
@@ -101,6 +109,8 @@ pub struct Status {
     pub steps_per_s: f64,
     /// Final errors of the last finished fit (after the refit, if enabled).
     pub summary: Option<FitSummary>,
+    /// Commands handled before this status was made.
+    pub handled: u64,
 }
 
 /// What the learner publishes. Each field holds the newest value; the UI takes them.
@@ -116,12 +126,22 @@ pub struct Mailbox {
     pub error: Option<String>,
     /// Work that keeps the learner busy for a noticeable time (e.g. "computing the reference").
     pub busy: Option<&'static str>,
+    /// Something was posted since the UI last took the mail.
+    fresh: bool,
+}
+
+/// The mailbox and the signal that something was posted to it.
+#[derive(Default)]
+struct Shared {
+    mailbox: Mutex<Mailbox>,
+    posted: Condvar,
 }
 
 /// The UI's end: a command channel and the mailbox. Dropping it stops the thread.
 pub struct WorkerHandle {
     commands: Option<Sender<Command>>,
-    mailbox: Arc<Mutex<Mailbox>>,
+    sent: u64,
+    shared: Arc<Shared>,
     thread: Option<JoinHandle<()>>,
 }
 
@@ -129,33 +149,55 @@ impl WorkerHandle {
     /// Starts the thread. `repaint` is called after each publication (the UI's repaint request).
     pub fn spawn(repaint: impl Fn() + Send + 'static) -> WorkerHandle {
         let (tx, rx) = mpsc::channel();
-        let mailbox = Arc::new(Mutex::new(Mailbox::default()));
-        let shared = Arc::clone(&mailbox);
+        let shared = Arc::new(Shared::default());
+        let learner_end = Arc::clone(&shared);
         let thread = std::thread::Builder::new()
             .name("flatland-learner".into())
-            .spawn(move || Learner::new(rx, shared, Box::new(repaint)).run())
+            .spawn(move || Learner::new(rx, learner_end, Box::new(repaint)).run())
             .expect("spawning the learner thread");
         WorkerHandle {
             commands: Some(tx),
-            mailbox,
+            sent: 0,
+            shared,
             thread: Some(thread),
         }
     }
 
     /// Sends a command (ignored if the thread has ended).
-    pub fn send(&self, command: Command) {
-        if let Some(tx) = &self.commands {
-            let _ = tx.send(command);
+    pub fn send(&mut self, command: Command) {
+        if let Some(tx) = &self.commands
+            && tx.send(command).is_ok()
+        {
+            self.sent += 1;
         }
+    }
+
+    /// Commands sent so far (compare with [`Status::handled`]).
+    pub fn sent(&self) -> u64 {
+        self.sent
     }
 
     /// Takes what was published since the last call, without waiting: `None` when the learner
     /// holds the lock right now (try again next frame).
     pub fn take(&self) -> Option<Mailbox> {
-        let mut guard = self.mailbox.try_lock().ok()?;
+        let mut guard = self.shared.mailbox.try_lock().ok()?;
         let mail = std::mem::take(&mut *guard);
         guard.busy = mail.busy; // a state, not an event: it stays until the learner clears it
         Some(mail)
+    }
+
+    /// Blocks until the learner has posted something the UI has not taken yet, or `timeout`
+    /// passes; returns whether there is something. For tests and tools that wait on the
+    /// learner: the UI itself never waits.
+    pub fn wait(&self, timeout: Duration) -> bool {
+        let Ok(guard) = self.shared.mailbox.lock() else {
+            return false;
+        };
+        self.shared
+            .posted
+            .wait_timeout_while(guard, timeout, |m| !m.fresh)
+            .map(|(m, _)| m.fresh)
+            .unwrap_or(false)
     }
 }
 
@@ -170,7 +212,7 @@ impl Drop for WorkerHandle {
 
 struct Learner {
     rx: Receiver<Command>,
-    mailbox: Arc<Mutex<Mailbox>>,
+    shared: Arc<Shared>,
     repaint: Box<dyn Fn() + Send>,
     fit: Option<Fit>,
     world: Option<Arc<World>>,
@@ -186,19 +228,17 @@ struct Learner {
     approx_steps: Option<u64>,
     rate: (Instant, u64, f64),
     summary: Option<FitSummary>,
+    /// A command changed something a status shows: publish one as soon as it is due.
     dirty: bool,
+    handled: u64,
 }
 
 impl Learner {
-    fn new(
-        rx: Receiver<Command>,
-        mailbox: Arc<Mutex<Mailbox>>,
-        repaint: Box<dyn Fn() + Send>,
-    ) -> Self {
+    fn new(rx: Receiver<Command>, shared: Arc<Shared>, repaint: Box<dyn Fn() + Send>) -> Self {
         let now = Instant::now();
         Learner {
             rx,
-            mailbox,
+            shared,
             repaint,
             fit: None,
             world: None,
@@ -215,15 +255,32 @@ impl Learner {
             rate: (now, 0, 0.0),
             summary: None,
             dirty: false,
+            handled: 0,
         }
+    }
+
+    /// Changes the mailbox, marks it fresh, wakes waiters and asks the UI to repaint.
+    fn post(&self, change: impl FnOnce(&mut Mailbox)) {
+        if let Ok(mut m) = self.shared.mailbox.lock() {
+            change(&mut m);
+            m.fresh = true;
+        }
+        self.shared.posted.notify_all();
+        (self.repaint)();
     }
 
     fn run(mut self) {
         loop {
-            // Read every waiting command; sleep on the channel only when there is nothing to do.
-            let idle = !(self.running || self.steps_left > 0 || self.dirty);
-            let first = if idle {
-                match self.rx.recv_timeout(Duration::from_millis(200)) {
+            // Read every waiting command; sleep on the channel only when there is nothing to
+            // train, and then not past the moment a pending status is due.
+            let training = self.running || self.steps_left > 0;
+            let first = if !training {
+                let wait = if self.dirty {
+                    PUBLISH_EVERY.saturating_sub(self.last_publish.elapsed())
+                } else {
+                    Duration::from_millis(200)
+                };
+                match self.rx.recv_timeout(wait) {
                     Ok(c) => Some(c),
                     Err(RecvTimeoutError::Timeout) => None,
                     Err(RecvTimeoutError::Disconnected) => return,
@@ -251,6 +308,7 @@ impl Learner {
     }
 
     fn handle(&mut self, command: Command) {
+        self.handled += 1;
         match command {
             Command::Play => {
                 self.running = true;
@@ -280,22 +338,17 @@ impl Learner {
                 }
             }
             Command::Edit { scene, subdivide } => self.edit(scene, subdivide),
+            Command::Sync => {}
         }
         self.dirty = true;
     }
 
     fn report(&self, message: String) {
-        if let Ok(mut m) = self.mailbox.lock() {
-            m.error = Some(message);
-        }
-        (self.repaint)();
+        self.post(|m| m.error = Some(message));
     }
 
     fn set_busy(&self, busy: Option<&'static str>) {
-        if let Ok(mut m) = self.mailbox.lock() {
-            m.busy = busy;
-        }
-        (self.repaint)();
+        self.post(|m| m.busy = busy);
     }
 
     /// The scene's kernel, reference and display grid: the expensive part of a scene change.
@@ -317,9 +370,13 @@ impl Learner {
                 &kernel,
                 REFERENCE_RES,
                 params.heldout,
-                params.seed,
+                kernel_fit::REFERENCE_SEED,
             ));
             let exact_small = kernel.grid(APPROX_RES, true);
+            let defined = [
+                reference.grid().iter().any(|v| *v != 0.0),
+                reference.heldout().1.iter().any(|v| *v != 0.0),
+            ];
             let id = self.next_world;
             self.next_world += 1;
             Arc::new(World {
@@ -328,6 +385,7 @@ impl Learner {
                 kernel,
                 reference,
                 exact_small,
+                defined,
             })
         });
         self.set_busy(None);
@@ -377,17 +435,16 @@ impl Learner {
         self.summary = None;
         self.published_steps = None;
         self.approx_steps = None;
-        if let Ok(mut m) = self.mailbox.lock() {
+        self.post(|m| {
             m.world = Some(world);
             m.approx = None;
-        }
+        });
         self.publish(true);
     }
 
     /// Trains for at most one [`SLICE`], honouring the speed limit and pending single steps.
     fn train_slice(&mut self) {
         let Some(fit) = &mut self.fit else {
-            self.dirty = false;
             return;
         };
         let now = Instant::now();
@@ -407,7 +464,6 @@ impl Learner {
         };
         self.last_tick = now;
         if budget == 0 {
-            self.dirty = false;
             if self.running {
                 std::thread::sleep(Duration::from_millis(2));
             }
@@ -456,7 +512,10 @@ impl Learner {
 
     /// Publishes a snapshot (throttled unless `force`) and, less often, the approximation.
     fn publish(&mut self, force: bool) {
-        let Some(fit) = &self.fit else { return };
+        let Some(fit) = &self.fit else {
+            self.dirty = false; // nothing to show yet
+            return;
+        };
         let steps = fit.steps();
         let now = Instant::now();
         let (since, at, rate) = self.rate;
@@ -467,7 +526,6 @@ impl Learner {
         let busy = self.running || self.steps_left > 0;
         let changed = self.published_steps != Some(steps);
         let due = now.duration_since(self.last_publish) >= PUBLISH_EVERY;
-        let mut published = false;
         if force || (due && (changed || self.dirty)) {
             let status = Status {
                 snapshot: Arc::new(fit.snapshot()),
@@ -476,14 +534,12 @@ impl Learner {
                 stopped: fit.stopped(),
                 steps_per_s: if busy { self.rate.2.max(rate) } else { 0.0 },
                 summary: self.summary.clone(),
+                handled: self.handled,
             };
-            if let Ok(mut m) = self.mailbox.lock() {
-                m.status = Some(status);
-            }
+            self.post(|m| m.status = Some(status));
             self.published_steps = Some(steps);
             self.last_publish = now;
             self.dirty = false;
-            published = true;
         }
         let approx_due = now.duration_since(self.last_approx) >= APPROX_EVERY || !busy;
         if self.approx_steps != Some(steps)
@@ -498,15 +554,9 @@ impl Learner {
                 values,
                 model,
             });
-            if let Ok(mut m) = self.mailbox.lock() {
-                m.approx = Some(approx);
-            }
+            self.post(|m| m.approx = Some(approx));
             self.approx_steps = Some(steps);
             self.last_approx = Instant::now();
-            published = true;
-        }
-        if published {
-            (self.repaint)();
         }
     }
 }
@@ -524,8 +574,22 @@ pub fn approx_grid(model: &LearnedKernel, res: usize) -> Vec<f64> {
         .collect()
 }
 
-/// Both final errors, formatted.
+/// Both final errors, formatted; "undefined" where [`World::defined`] says so.
 #[must_use]
-pub fn format_errors(e: &Errors) -> String {
-    format!("grid {:.3}, held out {:.3}", e.grid, e.heldout)
+pub fn format_errors(e: &Errors, defined: [bool; 2]) -> String {
+    format!(
+        "grid {}, held out {}",
+        error_text(e.grid, defined[0]),
+        error_text(e.heldout, defined[1])
+    )
+}
+
+/// A relative error with three decimals, or "undefined".
+#[must_use]
+pub fn error_text(value: f64, defined: bool) -> String {
+    if defined {
+        format!("{value:.3}")
+    } else {
+        "undefined".to_owned()
+    }
 }

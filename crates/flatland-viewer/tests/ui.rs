@@ -1,5 +1,11 @@
 //! Headless UI tests (egui_kittest, no rendering, no display): the real app state and learner
 //! thread, driven through its widgets where they exist.
+//!
+//! The learner is another thread, so a test never sleeps and then asserts: it runs frames until
+//! a condition on what the learner published holds, blocking on the learner's next publication
+//! in between, with a generous deadline for a loaded machine. "Nothing happens" is checked by a
+//! round trip: after [`ViewerApp::sync`], the learner's next status is made after every earlier
+//! command, so if it still shows the same steps, the learner did not train meanwhile.
 
 use std::time::{Duration, Instant};
 
@@ -7,7 +13,10 @@ use egui::accesskit::Role;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use flatland_geom::DVec2;
-use flatland_viewer::{Settings, ViewerApp};
+use flatland_viewer::{Options, Settings, ViewerApp};
+
+/// Longest wait for one condition; reached only if something is broken.
+const DEADLINE: Duration = Duration::from_secs(120);
 
 /// Small, quick settings: few held-out points, a small S₀.
 fn quick_settings() -> Settings {
@@ -20,25 +29,48 @@ fn quick_settings() -> Settings {
     s
 }
 
-fn harness(settings: Settings) -> Harness<'static, ViewerApp> {
-    let app = ViewerApp::headless(egui::Context::default(), settings);
+fn harness_of(app: ViewerApp) -> Harness<'static, ViewerApp> {
     Harness::builder()
         .with_size([1280.0, 1500.0])
         .build_ui_state(|ui, app: &mut ViewerApp| app.show(ui), app)
 }
 
-/// Runs frames until `cond` holds (the learner is another thread), failing after 60 s.
-fn wait_for(h: &mut Harness<'_, ViewerApp>, what: &str, cond: impl Fn(&ViewerApp) -> bool) {
-    let start = Instant::now();
-    h.run_steps(1);
-    while !cond(h.state()) {
-        assert!(
-            start.elapsed() < Duration::from_secs(60),
-            "timed out waiting for {what}"
-        );
-        std::thread::sleep(Duration::from_millis(5));
+/// The app as the tests drive it: paused until they press Play or Step.
+fn harness(settings: Settings) -> Harness<'static, ViewerApp> {
+    harness_of(ViewerApp::headless(egui::Context::default(), settings))
+}
+
+/// Runs frames until `cond` holds, waiting on the learner's publications in between.
+fn wait_until(
+    h: &mut Harness<'_, ViewerApp>,
+    what: &str,
+    cond: impl Fn(&Harness<'_, ViewerApp>) -> bool,
+) {
+    let deadline = Instant::now() + DEADLINE;
+    loop {
         h.run_steps(1);
+        if cond(h) {
+            return;
+        }
+        let left = deadline.saturating_duration_since(Instant::now());
+        assert!(
+            !left.is_zero(),
+            "timed out after {DEADLINE:?} waiting for {what}"
+        );
+        h.state().wait_for_learner(left.min(Duration::from_secs(1)));
     }
+}
+
+/// [`wait_until`] on the app's state.
+fn wait_for(h: &mut Harness<'_, ViewerApp>, what: &str, cond: impl Fn(&ViewerApp) -> bool) {
+    wait_until(h, what, |h| cond(h.state()));
+}
+
+/// The learner's state once it has handled everything sent so far.
+fn settled(h: &mut Harness<'_, ViewerApp>) -> (u64, usize) {
+    h.state_mut().sync();
+    wait_for(h, "the learner to catch up", ViewerApp::caught_up);
+    (h.state().steps(), h.state().cells())
 }
 
 fn ready(app: &ViewerApp) -> bool {
@@ -46,19 +78,40 @@ fn ready(app: &ViewerApp) -> bool {
 }
 
 #[test]
+fn the_viewer_starts_learning_at_once_and_pause_is_one_click_away() {
+    // What `cargo run --release` and `flatland view` do: default options. Many target cells
+    // on the maze, so the fit is still growing whenever a loaded machine gets to look (on fig3
+    // the default learner is exact after a few dozen cells and stops).
+    let mut settings = quick_settings();
+    settings.params.target_cells = 5000;
+    settings.scene = flatland_viewer::SceneChoice::Bundled("maze".into());
+    let app = ViewerApp::with_options(egui::Context::default(), settings, &Options::default());
+    let mut h = harness_of(app);
+    wait_for(&mut h, "cells to grow without a click", |a| {
+        a.running() && a.cells() > 10
+    });
+    h.get_by_label("Pause").click();
+    wait_for(&mut h, "the pause", |a| a.caught_up() && !a.running());
+    let paused = settled(&mut h);
+    assert_eq!(settled(&mut h), paused, "no training while paused");
+    h.get_by_label("Play");
+}
+
+#[test]
 fn step_play_and_pause() {
-    let mut h = harness(quick_settings());
+    let mut settings = quick_settings();
+    settings.params.target_cells = 5000; // still training when the test looks
+    settings.scene = flatland_viewer::SceneChoice::Bundled("maze".into());
+    let mut h = harness(settings);
     wait_for(&mut h, "the reference", ready);
-    assert_eq!(h.state().steps(), 0);
-    assert_eq!(h.state().scene_label(), "fig3");
+    assert_eq!(settled(&mut h).0, 0, "the tests' app starts paused");
+    assert_eq!(h.state().scene_label(), "maze");
 
     h.state_mut().settings_mut().step_size = 100;
     h.get_by_label("Step").click();
     wait_for(&mut h, "100 steps", |a| a.steps() == 100);
-    std::thread::sleep(Duration::from_millis(100));
-    h.run_steps(2);
     assert_eq!(
-        h.state().steps(),
+        settled(&mut h).0,
         100,
         "Step trains exactly step-size steps"
     );
@@ -66,12 +119,10 @@ fn step_play_and_pause() {
     h.get_by_label("Play").click();
     wait_for(&mut h, "training", |a| a.running() && a.steps() > 1000);
     h.get_by_label("Pause").click();
-    wait_for(&mut h, "the pause", |a| !a.running());
-    let paused_at = h.state().steps();
-    std::thread::sleep(Duration::from_millis(200));
-    h.run_steps(3);
-    assert_eq!(h.state().steps(), paused_at, "no training while paused");
-    assert!(h.state().cells() > 3, "cells grew: {}", h.state().cells());
+    wait_for(&mut h, "the pause", |a| a.caught_up() && !a.running());
+    let (paused_at, cells) = settled(&mut h);
+    assert_eq!(settled(&mut h).0, paused_at, "no training while paused");
+    assert!(cells > 3, "cells grew: {cells}");
 }
 
 #[test]
@@ -86,16 +137,44 @@ fn a_parameter_changed_in_the_panel_reaches_the_learner() {
     wait_for(&mut h, "the fit to stop at the target", |a| {
         !a.running() && a.cells() == 12
     });
-    std::thread::sleep(Duration::from_millis(100));
-    h.run_steps(2);
-    assert_eq!(h.state().cells(), 12, "growth stopped at the new target");
-    h.get_by_label_contains("stopped (TargetCells)");
+    // The refit runs after the stop; the line says so once its errors are in.
+    wait_until(&mut h, "the final errors in the status line", |h| {
+        h.query_by_label_contains("stopped (TargetCells): final rel. L2")
+            .is_some()
+    });
+    assert!(h.state().final_errors().is_some());
+    assert_eq!(settled(&mut h).1, 12, "growth stopped at the new target");
 
     // An out-of-range value typed in is clamped to the valid range by the widget.
     h.get_by_role_and_label(Role::SpinButton, "ψ")
         .set_value_accesskit(5.0);
     h.run_steps(2);
     assert_eq!(h.state().settings().params.psi, 1.0);
+}
+
+/// A scene where nothing emits: its relative errors are 0/0, shown as "undefined", not 0.
+#[test]
+fn errors_against_a_dark_scene_read_undefined() {
+    let mut settings = quick_settings();
+    settings.params.target_cells = 8;
+    let mut h = harness(settings);
+    wait_for(&mut h, "the reference", ready);
+    let path =
+        std::env::temp_dir().join(format!("flatland-viewer-dark-{}.ron", std::process::id()));
+    std::fs::write(
+        &path,
+        "(edges: [(a: (0, 0), b: (1, 0), reflectance: 0.5), (a: (1, 0), b: (1, 1), reflectance: \
+         0.5), (a: (1, 1), b: (0, 1), reflectance: 0.5), (a: (0, 1), b: (0, 0), reflectance: 0.5)])",
+    )
+    .unwrap();
+    h.state_mut().open_file(&path);
+    let _ = std::fs::remove_file(&path);
+    wait_for(&mut h, "the dark scene's reference", ready);
+    h.get_by_label("Play").click();
+    wait_until(&mut h, "the final errors", |h| {
+        h.query_by_label_contains("final rel. L2 grid undefined, held out undefined")
+            .is_some()
+    });
 }
 
 #[test]

@@ -16,6 +16,8 @@ use crate::{
     Approximation, Errors, FitError, FitParams, Gating, InputFrame, Reference, Resampling, Target,
 };
 
+pub(crate) mod checks;
+
 /// Input dimension of the kernel's network: `γ(s, t) = (x₁, y₁, x₂, y₂)`.
 pub const INPUT_DIM: usize = 4;
 
@@ -297,7 +299,27 @@ impl Approximation for LearnedKernel {
     fn memory_bytes(&self) -> usize {
         // Per cell: position (4), output (1), width (1) as f64; per edge two u32 ids.
         let cells = self.network.len() * (INPUT_DIM + 2) * 8;
-        cells + self.network.edges().len() * 8
+        let network = cells + self.network.edges().len() * 8;
+        // A visibility model also keeps what it needs to find a ray's face: each cell's face
+        // (a u32), the class of every pair of surface edges (a byte each) and the event points
+        // of the pairs where visibility varies (two f64 each).
+        let geometry = self.geometry.as_ref().map_or(0, |g| {
+            let n = g.kernel.surface_parents();
+            if n > crate::visibility::MAX_LISTED_PARENTS {
+                // Not kept: computed per pair when asked (as the exact kernel does).
+                return self.network.len() * 4;
+            }
+            let mut events = 0;
+            for a in 0..n {
+                for b in 0..n {
+                    if let Some(e) = g.kernel.visibility_events(a, b) {
+                        events += (0..4).map(|k| e.points(k).len()).sum::<usize>();
+                    }
+                }
+            }
+            self.network.len() * 4 + n * n + events * 16
+        });
+        network + geometry
     }
 }
 
@@ -742,7 +764,7 @@ impl Fit {
     fn stop_reason(&self) -> Option<StopReason> {
         let p = &self.state.params;
         let steps = self.steps();
-        let lambda = u64::from(p.network.lambda).max(p.polish_steps);
+        let lambda = u64::from(p.network.lambda);
         if self.state.model.network.len() >= p.target_cells
             && steps - self.state.steps_at_last_growth >= lambda
         {
@@ -845,7 +867,7 @@ impl Fit {
     /// centres and widths (an improvement beyond the paper; see `sgcs::Network::refit_outputs`).
     ///
     /// The ridge weight is chosen on the training samples alone: every
-    /// [`VALIDATION_STRIDE`]-th sample of the uniform set S₀ is held back, each candidate
+    /// `VALIDATION_STRIDE`-th sample of the uniform set S₀ is held back, each candidate
     /// `params.ridge × 10^k` is fitted on the rest and scored on it, and the learned
     /// (delta-rule) weights compete too. The winner is refitted on all samples; if the learned
     /// weights win, nothing changes. So the refit never trusts a solve that merely interpolates
@@ -1236,7 +1258,8 @@ impl Fit {
     }
 
     /// Continues a fit from a checkpoint. The kernel is rebuilt from the embedded scene with
-    /// `kernel_params`; the reference from it with the checkpoint's resolution and seed.
+    /// `kernel_params`; the reference from it with the checkpoint's resolution and
+    /// [`REFERENCE_SEED`](crate::REFERENCE_SEED).
     /// A file of another kind or version is refused with a message, never misread.
     pub fn resume(
         path: &std::path::Path,
@@ -1280,6 +1303,7 @@ impl Fit {
                 e.column()
             ))
         })?;
+        checks::checkpoint(&c).map_err(bad)?;
         let mut state = c.state;
         if crate::fingerprint_hex(&state.model.scene) != c.scene_fingerprint {
             return Err(bad(
@@ -1295,7 +1319,7 @@ impl Fit {
             &kernel,
             c.reference_res,
             c.reference_heldout,
-            state.params.seed,
+            crate::REFERENCE_SEED,
         ));
         if let Some(geometry) = &mut state.model.geometry {
             geometry.kernel = Arc::clone(&kernel);
@@ -1492,7 +1516,7 @@ mod tests {
     }
 
     fn fit_with(kernel: &Arc<Kernel>, params: FitParams) -> Fit {
-        let reference = Arc::new(Reference::new(kernel, 64, 2048, params.seed));
+        let reference = Arc::new(Reference::new(kernel, 64, 2048, crate::REFERENCE_SEED));
         Fit::new(Arc::clone(kernel), reference, params).unwrap()
     }
 

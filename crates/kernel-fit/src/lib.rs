@@ -58,13 +58,16 @@
 
 #![deny(missing_docs)]
 
+pub mod ablation;
 pub mod baselines;
 pub mod bench;
 mod error;
 mod eval;
 mod fit;
+pub mod limits;
 mod model;
 mod params;
+pub mod rooms;
 mod sampling;
 pub mod solve;
 mod visibility;
@@ -78,6 +81,7 @@ pub use fit::{
     CellSnapshot, Fit, FitSummary, HistoryPoint, INPUT_DIM, LearnedKernel, RefitChoice, Snapshot,
     StopReason,
 };
+pub use limits::REFERENCE_SEED;
 pub use model::{MODEL_FORMAT, MODEL_VERSION, ModelFile, fingerprint_hex};
 pub use params::{FitParams, Gating, Preset, Resampling, Target};
 pub use sampling::InputFrame;

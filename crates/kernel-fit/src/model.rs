@@ -5,7 +5,7 @@ use std::path::Path;
 use flatland_geom::{Scene, write_atomic};
 use serde::{Deserialize, Serialize};
 
-use crate::{FitError, FitParams, FitSummary, LearnedKernel};
+use crate::{Approximation, FitError, FitParams, FitSummary, LearnedKernel};
 
 /// The `format` field every model file carries.
 pub const MODEL_FORMAT: &str = "flatland-model";
@@ -107,7 +107,21 @@ impl ModelFile {
                 file.scene_fingerprint
             )));
         }
+        file.validate().map_err(bad)?;
         Ok(file)
+    }
+
+    /// Checks every field against the others: parameters in range, the network's shape, the
+    /// input frame, the output scale and emission factors, predictions that cannot overflow,
+    /// finite figures. The error names the field and the valid range.
+    fn validate(&self) -> Result<(), String> {
+        use crate::fit::checks;
+        checks::params(&self.params)?;
+        checks::learned_kernel(&self.model, self.params.target)?;
+        if let Some(summary) = &self.summary {
+            checks::summary(summary, self.model.basis_functions())?;
+        }
+        Ok(())
     }
 
     /// Refuses a model learned on another scene.

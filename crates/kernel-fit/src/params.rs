@@ -60,8 +60,6 @@ pub struct FitParams {
     /// the resource (so growth follows the error of ζ, not of V). With `importance > 0` the
     /// weight also undoes the sampling density.
     pub weighted: bool,
-    /// Training steps after the last insertion before the fit stops (at least λ). Valid: any.
-    pub polish_steps: u64,
 }
 
 /// Which known discontinuities of the target the cells may not straddle ([`Target::Visibility`]).
@@ -164,9 +162,12 @@ impl Default for FitParams {
     /// - `insertion: WorstSample`, `insert_rule: SampleTarget`, `resource: ErrorSum`: grow
     ///   where the (importance-weighted) error is, not at an edge midpoint;
     /// - `importance: 0.7`, `weighted: true`: draw samples where the unoccluded ζ is large;
+    /// - `phi: 0.01`: θ's "outside the network" means the cells of a candidate's face reach it
+    ///   with less than 1 % activation; the paper's φ = 1 was set for sums of overlapping
+    ///   ungated cells and here spends rays on faces already learned exactly;
     /// - `refit: false`: the local rule converges exactly; there is nothing to refit.
     ///
-    /// Everything else keeps the paper's values (ε_b, ε_n, η, α, λ, ω, φ, ψ).
+    /// Everything else keeps the paper's values (ε_b, ε_n, η, α, λ, ω, ψ).
     fn default() -> Self {
         FitParams {
             network: sgcs::Params {
@@ -177,6 +178,7 @@ impl Default for FitParams {
                 resource: sgcs::Resource::ErrorSum,
                 ..sgcs::Params::default()
             },
+            phi: 0.01,
             refit: false,
             target: Target::Visibility,
             gating: Gating::Faces,
@@ -214,7 +216,6 @@ impl FitParams {
             gating: Gating::Off,
             importance: 0.0,
             weighted: false,
-            polish_steps: 0,
         }
     }
 }
@@ -313,10 +314,25 @@ mod tests {
     use super::*;
 
     #[test]
-    fn defaults_are_valid_and_papers() {
-        let p = FitParams::default();
-        p.validate().unwrap();
-        assert_eq!((p.omega, p.phi, p.psi), (0.6, 1.0, 0.05));
+    fn presets_are_valid_and_the_paper_keeps_its_values() {
+        let paper = FitParams::paper();
+        paper.validate().unwrap();
+        assert_eq!((paper.omega, paper.phi, paper.psi), (0.6, 1.0, 0.05));
+        assert_eq!(paper.network, sgcs::Params::default());
+        assert_eq!(paper.target, Target::Zeta);
+        let default = FitParams::default();
+        default.validate().unwrap();
+        assert_eq!((default.omega, default.phi, default.psi), (0.6, 0.01, 0.05));
+        assert_eq!(default.target, Target::Visibility);
+        for p in Preset::ALL {
+            assert_eq!(Preset::parse(p.name()).unwrap(), p);
+        }
+        assert!(
+            Preset::parse("nope")
+                .unwrap_err()
+                .to_string()
+                .contains("paper")
+        );
     }
 
     #[test]

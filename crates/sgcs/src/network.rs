@@ -1352,8 +1352,8 @@ impl TryFrom<NetworkData> for Network {
         if d.input_dim == 0
             || d.output_dim == 0
             || len < 3
-            || d.positions.len() != len * d.input_dim
-            || d.outputs.len() != len * d.output_dim
+            || len.checked_mul(d.input_dim) != Some(d.positions.len())
+            || len.checked_mul(d.output_dim) != Some(d.outputs.len())
             || d.count.len() != len
             || d.stamp.len() != len
         {

@@ -1,0 +1,473 @@
+//! Validation of what model and checkpoint files hold, field by field, before anything is built
+//! from them: a file the tools wrote and a user edited loads with a one-line error naming the
+//! field and the valid range, never a panic, an allocation abort or garbage numbers.
+//!
+//! The scene (validated by its deserializer), the network's topology and the parameters' own
+//! ranges (`sgcs::Network`'s deserializer, [`FitParams::validate`]) are checked where they are
+//! defined; this adds what only the whole model knows.
+
+use super::{Checkpoint, FitState, INPUT_DIM, LearnedKernel};
+use crate::{FitParams, FitSummary, Target, limits};
+
+/// Largest magnitude of a sample's input or target: what `sgcs` accepts.
+const MAX_ABS: f64 = 1e100;
+
+/// A field's name and what is wrong with it.
+pub(crate) type Bad = String;
+
+fn bad(field: &str, what: impl std::fmt::Display) -> Bad {
+    format!("`{field}` {what}")
+}
+
+/// The parameters a file holds: their own ranges, plus upper bounds on the counts that size an
+/// allocation (a hand-edited 10¹⁵ must not abort the process).
+pub(crate) fn params(p: &FitParams) -> Result<(), Bad> {
+    p.validate().map_err(|e| e.to_string())?;
+    let counts = [
+        (
+            "params.initial_samples",
+            p.initial_samples,
+            limits::MAX_SET_SIZE,
+        ),
+        ("params.min_set_size", p.min_set_size, limits::MAX_SET_SIZE),
+        ("params.target_cells", p.target_cells, limits::MAX_CELLS),
+        ("params.heldout", p.heldout, *limits::HELDOUT.end()),
+    ];
+    for (field, value, max) in counts {
+        if value > max {
+            return Err(bad(field, format!("is {value}, but must be at most {max}")));
+        }
+    }
+    // The refit tries ridge × 10⁰ … 10⁶: every candidate must be a valid (positive, finite)
+    // ridge.
+    if p.ridge > 1e100 || (p.refit && p.ridge <= 0.0) {
+        return Err(bad(
+            "params.ridge",
+            format!(
+                "is {}, but must be in (0, 1e100] ([0, 1e100] without the refit)",
+                p.ridge
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// A learned kernel: the network's shape, the input frame, the output scale and the emission
+/// factors agree with each other and with `target`, and no prediction can overflow.
+pub(crate) fn learned_kernel(m: &LearnedKernel, target: Target) -> Result<(), Bad> {
+    let net = &m.network;
+    if net.steps() > limits::MAX_COUNT {
+        return Err(bad(
+            "model.network.steps",
+            format!("is {}, but must be at most 2^50", net.steps()),
+        ));
+    }
+    if net.input_dim() != INPUT_DIM || net.output_dim() != 1 {
+        return Err(bad(
+            "model.network",
+            format!(
+                "maps R^{} to R^{}, but a kernel network maps R^{INPUT_DIM} to R^1",
+                net.input_dim(),
+                net.output_dim()
+            ),
+        ));
+    }
+    let frame = m.frame;
+    if !(frame.origin.iter().all(|v| v.is_finite())
+        && frame.inv_scale.is_finite()
+        && frame.inv_scale > 0.0)
+    {
+        return Err(bad(
+            "model.frame",
+            format!(
+                "is origin {:?}, inv_scale {}; the origin must be finite and inv_scale finite and > 0",
+                frame.origin, frame.inv_scale
+            ),
+        ));
+    }
+    // The frame maps the scene into the unit box (a dragged end point may leave it a little):
+    // anything far from that would make every input the same point, or no point at all.
+    let (lo, hi) = m.scene.bounds();
+    let (a, b) = (frame.map(lo), frame.map(hi));
+    let side = (b[0] - a[0]).max(b[1] - a[1]);
+    let far = a
+        .iter()
+        .chain(&b)
+        .any(|v| !v.is_finite() || v.abs() > 100.0);
+    if far || !(1e-3..=100.0).contains(&side) {
+        return Err(bad(
+            "model.frame",
+            format!(
+                "maps the scene to [{:.3e}, {:.3e}] × [{:.3e}, {:.3e}]; a valid frame maps it \
+                 into [-100, 100]² with a side in [0.001, 100] (the file was edited)",
+                a[0], b[0], a[1], b[1]
+            ),
+        ));
+    }
+    let scale = m.output_scale;
+    if !(scale.is_finite() && scale > 0.0) {
+        return Err(bad(
+            "model.output_scale",
+            format!("is {scale}, but must be finite and > 0"),
+        ));
+    }
+    if m.target != target {
+        return Err(bad(
+            "model.target",
+            format!("is {:?}, but the parameters say {target:?}", m.target),
+        ));
+    }
+    let edges = m.scene.edges().len();
+    let factor_max = match target {
+        Target::Zeta | Target::Visibility if !m.emission_factor.is_empty() => {
+            return Err(bad(
+                "model.emission_factor",
+                format!(
+                    "has {} values, but a model of ζ or of V (target `zeta`, `visibility`) \
+                     has none",
+                    m.emission_factor.len()
+                ),
+            ));
+        }
+        Target::Zeta | Target::Visibility => 1.0,
+        Target::FactoredEmission => {
+            if m.emission_factor.len() != edges {
+                return Err(bad(
+                    "model.emission_factor",
+                    format!(
+                        "has {} values, but must have one per edge of the scene ({edges})",
+                        m.emission_factor.len()
+                    ),
+                ));
+            }
+            if let Some(v) = m
+                .emission_factor
+                .iter()
+                .find(|v| !(v.is_finite() && **v >= 0.0))
+            {
+                return Err(bad(
+                    "model.emission_factor",
+                    format!("contains {v}, but every value must be finite and ≥ 0"),
+                ));
+            }
+            m.emission_factor.iter().copied().fold(0.0, f64::max)
+        }
+    };
+    // |ζ̃| ≤ Σ_c |v_c| · scale · max E' (activations are at most 1): keep it finite.
+    let weights: f64 = (0..net.len()).map(|c| net.output(c)[0].abs()).sum();
+    let bound = weights * scale * factor_max;
+    if !bound.is_finite() || weights > MAX_ABS {
+        return Err(bad(
+            "model.network.outputs",
+            format!(
+                "sum to {weights:e} in magnitude (× output_scale {scale:e}); predictions could \
+                 overflow (valid: a sum at most 1e100 whose product with the scale is finite)"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The figures a model file reports: finite, non-negative, and consistent with the model.
+pub(crate) fn summary(s: &FitSummary, cells: usize) -> Result<(), Bad> {
+    let numbers = [
+        ("summary.errors.grid", s.errors.grid),
+        ("summary.errors.heldout", s.errors.heldout),
+        ("summary.wall_s", s.wall_s),
+        ("summary.train_s", s.train_s),
+        ("summary.resample_s", s.resample_s),
+        ("summary.refit_s", s.refit_s),
+        ("summary.reference_s", s.reference_s),
+        ("summary.errors_s", s.errors_s),
+    ];
+    let before = s.errors_before_refit.map(|e| {
+        [
+            ("summary.errors_before_refit", e.grid),
+            ("summary.errors_before_refit", e.heldout),
+        ]
+    });
+    for (field, v) in numbers.into_iter().chain(before.into_iter().flatten()) {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(bad(field, format!("is {v}, but must be finite and ≥ 0")));
+        }
+    }
+    if s.cells != cells {
+        return Err(bad(
+            "summary.cells",
+            format!("is {}, but the network has {cells} cells", s.cells),
+        ));
+    }
+    Ok(())
+}
+
+/// A checkpoint, before the reference it names is built: every field of the state.
+pub(super) fn checkpoint(c: &Checkpoint<FitState>) -> Result<(), Bad> {
+    if !limits::GRID_RES.contains(&c.reference_res) {
+        return Err(bad(
+            "reference_res",
+            format!(
+                "is {}, but must be in [{}, {}]",
+                c.reference_res,
+                limits::GRID_RES.start(),
+                limits::GRID_RES.end()
+            ),
+        ));
+    }
+    if !limits::HELDOUT.contains(&c.reference_heldout) {
+        return Err(bad(
+            "reference_heldout",
+            format!(
+                "is {}, but must be in [{}, {}]",
+                c.reference_heldout,
+                limits::HELDOUT.start(),
+                limits::HELDOUT.end()
+            ),
+        ));
+    }
+    let s = &c.state;
+    params(&s.params)?;
+    learned_kernel(&s.model, s.params.target)?;
+    let steps = s.model.network.steps();
+    // Only a fit with nothing to learn (geometry decides every visibility) has no sample.
+    if s.samples.is_empty() && s.stop != Some(super::StopReason::Exact) {
+        return Err(bad(
+            "state.samples",
+            "is empty, but a fit has at least S₀ (unless it stopped as exact)",
+        ));
+    }
+    for (i, sample) in s.samples.iter().enumerate() {
+        let st_ok = sample.st.iter().all(|v| (0.0..=1.0).contains(v));
+        let xi_ok = sample
+            .xi
+            .iter()
+            .all(|v| v.is_finite() && v.abs() <= MAX_ABS);
+        let target_ok = sample.target.is_finite() && sample.target.abs() <= MAX_ABS;
+        if !(st_ok && xi_ok && target_ok) {
+            return Err(bad(
+                &format!("state.samples[{i}]"),
+                "is out of range: st must be in [0, 1], xi and target finite and at most 1e100 \
+                 in magnitude",
+            ));
+        }
+    }
+    if s.rays > limits::MAX_COUNT {
+        return Err(bad(
+            "state.rays",
+            format!("is {}, but must be at most 2^50", s.rays),
+        ));
+    }
+    for (i, stats) in s.cell_stats.iter().enumerate() {
+        if !(stats.sum_s.is_finite() && stats.sum_t.is_finite() && stats.wins <= steps) {
+            return Err(bad(
+                &format!("state.cell_stats[{i}]"),
+                format!("must have finite sums and at most {steps} wins (the steps)"),
+            ));
+        }
+    }
+    if s.steps_at_last_growth > steps {
+        return Err(bad(
+            "state.steps_at_last_growth",
+            format!(
+                "is {}, but the network has trained {steps} steps",
+                s.steps_at_last_growth
+            ),
+        ));
+    }
+    if let Some(h) = s
+        .history
+        .iter()
+        .find(|h| h.steps > steps || !(h.rel_l2_heldout.is_finite() && h.rel_l2_heldout >= 0.0))
+    {
+        return Err(bad(
+            "state.history",
+            format!(
+                "has a point at step {} with error {}; points must not be later than the fit \
+                 ({steps} steps) and errors finite and ≥ 0",
+                h.steps, h.rel_l2_heldout
+            ),
+        ));
+    }
+    for (field, v) in [
+        ("state.wall_s", s.wall_s),
+        ("state.resample_s", s.resample_s),
+        ("state.refit_s", s.refit_s),
+    ] {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(bad(field, format!("is {v}, but must be finite and ≥ 0")));
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use std::ops::ControlFlow;
+    use std::path::{Path, PathBuf};
+    use std::sync::Arc;
+
+    use flatland_geom::{Kernel, KernelParams, Scene};
+    use serde_json::{Value, json};
+
+    use crate::{Fit, FitParams, ModelFile, Reference, Target};
+
+    const FIG3: &str = include_str!("../../../../scenes/fig3.ron");
+
+    /// A small finished fit of fig3 learning `target`.
+    fn small_fit(target: Target) -> Fit {
+        let kernel = Arc::new(Kernel::new(Scene::from_ron_str(FIG3).unwrap()));
+        let reference = Arc::new(Reference::new(&kernel, 16, 64, crate::REFERENCE_SEED));
+        let params = FitParams {
+            target_cells: 12,
+            initial_samples: 60,
+            heldout: 64,
+            target,
+            ..FitParams::default()
+        };
+        let mut fit = Fit::new(kernel, reference, params).unwrap();
+        fit.run(1000, |_| ControlFlow::Continue(())).unwrap();
+        fit
+    }
+
+    fn temp(name: &str) -> PathBuf {
+        let dir =
+            std::env::temp_dir().join(format!("flatland-checks-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    /// A hand edit of a file's JSON.
+    type Edit = Box<dyn FnOnce(&mut Value)>;
+
+    /// The file at `path` as JSON, edited by `edit`, written to `out`.
+    fn edited(path: &Path, out: &Path, edit: impl FnOnce(&mut Value)) {
+        let mut value: Value = serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap();
+        edit(&mut value);
+        std::fs::write(out, serde_json::to_vec(&value).unwrap()).unwrap();
+    }
+
+    fn expect_refused(result: Result<impl Sized, crate::FitError>, needles: &[&str]) {
+        let message = result
+            .err()
+            .expect("an edited file must be refused")
+            .to_string();
+        assert!(!message.contains('\n'), "{message}");
+        for needle in needles {
+            assert!(
+                message.contains(needle),
+                "`{needle}` missing from: {message}"
+            );
+        }
+    }
+
+    #[test]
+    fn edited_models_are_refused_naming_the_field() {
+        let dir = temp("model");
+        let factored = dir.join("factored.json");
+        let fit = small_fit(Target::FactoredEmission);
+        ModelFile::new(fit.model().clone(), *fit.params(), None)
+            .save(&factored)
+            .unwrap();
+        ModelFile::load(&factored).unwrap();
+        let zeta = dir.join("zeta.json");
+        let fit = small_fit(Target::Zeta);
+        ModelFile::new(fit.model().clone(), *fit.params(), None)
+            .save(&zeta)
+            .unwrap();
+        let bad = dir.join("bad.json");
+        // Each edit once panicked (an emission factor per edge indexed out of bounds in every
+        // rayon worker) or was accepted and printed meaningless errors.
+        let cases: Vec<(&Path, Edit, &[&str])> = vec![
+            (
+                &factored,
+                Box::new(|v| v["model"]["emission_factor"] = json!([1.0, 0.5])),
+                &["model.emission_factor", "one per edge", "(7)"],
+            ),
+            (
+                &zeta,
+                Box::new(|v| v["model"]["emission_factor"] = json!([1.0])),
+                &["model.emission_factor", "has none"],
+            ),
+            (
+                &zeta,
+                Box::new(|v| v["model"]["network"]["outputs"][0] = json!(1e308)),
+                &["model.network.outputs", "overflow"],
+            ),
+            (
+                &zeta,
+                Box::new(|v| v["model"]["output_scale"] = json!(-2.0)),
+                &["model.output_scale", "-2", "> 0"],
+            ),
+            (
+                &zeta,
+                Box::new(|v| v["model"]["frame"]["inv_scale"] = json!(0.0)),
+                &["model.frame", "inv_scale"],
+            ),
+            (
+                &zeta,
+                Box::new(|v| v["model"]["frame"]["inv_scale"] = json!(1e-9)),
+                &["model.frame", "side in [0.001, 100]"],
+            ),
+            (
+                &zeta,
+                Box::new(|v| v["params"]["heldout"] = json!(1u64 << 40)),
+                &["params.heldout", "at most"],
+            ),
+            (
+                &zeta,
+                Box::new(|v| v["model"]["network"]["steps"] = json!(u64::MAX)),
+                &["model.network.steps"],
+            ),
+        ];
+        for (source, edit, needles) in cases {
+            edited(source, &bad, edit);
+            expect_refused(ModelFile::load(&bad), needles);
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn edited_checkpoints_are_refused_before_the_reference_is_built() {
+        let dir = temp("checkpoint");
+        let good = dir.join("good.ckpt");
+        small_fit(Target::Zeta).save_checkpoint(&good).unwrap();
+        Fit::resume(&good, KernelParams::default()).unwrap();
+        let bad = dir.join("bad.ckpt");
+        let cases: Vec<(Edit, &[&str])> = vec![
+            // Once an allocation abort: a 100 000² reference grid.
+            (
+                Box::new(|v| v["reference_res"] = json!(100_000)),
+                &["reference_res", "100000", "[16, 4096]"],
+            ),
+            (
+                Box::new(|v| v["reference_heldout"] = json!(0)),
+                &["reference_heldout"],
+            ),
+            (
+                Box::new(|v| v["state"]["params"]["min_set_size"] = json!(1u64 << 60)),
+                &["params.min_set_size"],
+            ),
+            (
+                Box::new(|v| v["state"]["samples"][3]["xi"][0] = json!(1e300)),
+                &["state.samples[3]"],
+            ),
+            (
+                Box::new(|v| v["state"]["steps_at_last_growth"] = json!(u64::MAX)),
+                &["state.steps_at_last_growth"],
+            ),
+            (
+                Box::new(|v| v["state"]["rays"] = json!(u64::MAX)),
+                &["state.rays"],
+            ),
+            (
+                Box::new(|v| v["state"]["samples"] = json!([])),
+                &["state.samples", "empty"],
+            ),
+        ];
+        for (edit, needles) in cases {
+            edited(&good, &bad, edit);
+            expect_refused(Fit::resume(&bad, KernelParams::default()), needles);
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
