@@ -80,7 +80,9 @@ fn full(kernel: &Arc<Kernel>, paper: bool, cells: usize) -> Fit {
     train(&mut fit);
     assert_eq!(fit.network().len(), cells, "grown to the target");
     let mut p = *fit.params();
-    p.polish_steps = u64::MAX / 2;
+    // No growth period can end, so the target-cells rule never stops it.
+    p.network.lambda = u32::MAX;
+    p.max_steps = u64::MAX;
     fit.set_params(p).expect("valid parameters");
     fit
 }
