@@ -150,20 +150,22 @@ impl Index {
     }
 
     /// Squared distance from `x` to the node's box.
+    #[inline]
     fn box_dist_sq(&self, node: u32, x: &[f64]) -> f64 {
         let (lo, hi) = (self.lo(node), self.hi(node));
-        let mut s = 0.0;
-        for d in 0..self.n {
-            let v = if x[d] < lo[d] {
-                lo[d] - x[d]
-            } else if x[d] > hi[d] {
-                x[d] - hi[d]
-            } else {
-                0.0
-            };
-            s += v * v;
+        if let (Ok(lo), Ok(hi), Ok(x)) = (
+            <&[f64; 4]>::try_from(lo),
+            <&[f64; 4]>::try_from(hi),
+            <&[f64; 4]>::try_from(x),
+        ) {
+            // The kernel's dimension, unrolled and branch-free (the tree is walked on every
+            // step; this is its inner test).
+            return (0..4).map(|d| gap(lo[d], hi[d], x[d])).map(|v| v * v).sum();
         }
-        s
+        (0..self.n)
+            .map(|d| gap(lo[d], hi[d], x[d]))
+            .map(|v| v * v)
+            .sum()
     }
 
     /// Grows the position boxes from `c`'s leaf upwards so they contain `p` (its new position).
@@ -356,6 +358,12 @@ impl Index {
     }
 }
 
+/// How far `x` lies outside `[lo, hi]` (0 inside).
+#[inline]
+fn gap(lo: f64, hi: f64, x: f64) -> f64 {
+    (lo - x).max(x - hi).max(0.0)
+}
+
 /// The activation test shared by the tree and the brute-force path, so both select the same cells.
 #[inline]
 pub(crate) fn is_active(d2: f64, width: f64, reach_sq: f64) -> bool {
@@ -364,5 +372,9 @@ pub(crate) fn is_active(d2: f64, width: f64, reach_sq: f64) -> bool {
 
 #[inline]
 pub(crate) fn dist_sq(a: &[f64], b: &[f64]) -> f64 {
+    if let (Ok(a), Ok(b)) = (<&[f64; 4]>::try_from(a), <&[f64; 4]>::try_from(b)) {
+        // The kernel's dimension, unrolled; summed in the same order, so the same bits.
+        return (0..4).map(|d| (a[d] - b[d]) * (a[d] - b[d])).sum();
+    }
     a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum()
 }

@@ -106,6 +106,9 @@ pub struct Network {
     out: Vec<f64>,
     /// Sorted neighbour lists.
     nbrs: Vec<Vec<CellId>>,
+    /// `|w_c − w_b|` for each `b` of `nbrs[c]`, in the same order (derived; kept up to date
+    /// as cells move, so a width is a sum, not a square root per neighbour).
+    edge_len: Vec<Vec<f64>>,
     /// Triangles, each sorted ascending.
     tris: Vec<[CellId; 3]>,
     /// Indices into `tris` per cell (derived).
@@ -286,6 +289,7 @@ impl Network {
             pos,
             out,
             nbrs,
+            edge_len: vec![Vec::new(); len],
             tris,
             cell_tris,
             width: vec![MIN_WIDTH; len],
@@ -303,6 +307,7 @@ impl Network {
             scratch: Scratch::default(),
         };
         for c in 0..len {
+            net.edge_len[c] = net.measure_edges(c);
             net.width[c] = net.compute_width(c);
         }
         net.index = Index::build(n, net.params.reach_sq().sqrt(), &net.pos, &net.width);
@@ -622,17 +627,33 @@ impl Network {
             w[d] += rate * (xi[d] - w[d]);
         }
         self.index.moved(c, &self.pos[c * n..(c + 1) * n]);
+        // Each length is measured once and stored at both ends (|a − b| = |b − a| exactly).
+        for k in 0..self.nbrs[c].len() {
+            let b = self.nbrs[c][k];
+            let length =
+                dist_sq(&self.pos[c * n..(c + 1) * n], &self.pos[b * n..(b + 1) * n]).sqrt();
+            self.edge_len[c][k] = length;
+            let j = self.nbrs[b]
+                .binary_search(&c)
+                .unwrap_or_else(|_| unreachable!("neighbour lists are symmetric"));
+            self.edge_len[b][j] = length;
+        }
     }
 
-    fn compute_width(&self, c: CellId) -> f64 {
+    /// The lengths of `c`'s edges, measured afresh (in `nbrs[c]`'s order).
+    fn measure_edges(&self, c: CellId) -> Vec<f64> {
         let n = self.n;
         let w = &self.pos[c * n..(c + 1) * n];
-        let nb = &self.nbrs[c];
-        let sum: f64 = nb
+        self.nbrs[c]
             .iter()
             .map(|&b| dist_sq(w, &self.pos[b * n..(b + 1) * n]).sqrt())
-            .sum();
-        (sum / nb.len() as f64).max(MIN_WIDTH)
+            .collect()
+    }
+
+    /// `δ_c`: the mean length of `c`'s edges.
+    fn compute_width(&self, c: CellId) -> f64 {
+        let sum: f64 = self.edge_len[c].iter().sum();
+        (sum / self.edge_len[c].len() as f64).max(MIN_WIDTH)
     }
 
     fn refresh_width(&mut self, c: CellId) {
@@ -1035,9 +1056,17 @@ impl Network {
         }
         nr.sort_unstable();
         self.nbrs.push(nr);
+        self.edge_len.push(Vec::new());
 
         // The new cell's primary state, then widths.
         self.pos.extend_from_slice(&wr);
+        // Edge lengths of every cell whose neighbour list changed (q, f, the opposite cells,
+        // all neighbours of r) and of r.
+        for i in 0..self.nbrs[r].len() {
+            let c = self.nbrs[r][i];
+            self.edge_len[c] = self.measure_edges(c);
+        }
+        self.edge_len[r] = self.measure_edges(r);
         self.out.extend(std::iter::repeat_n(0.0, m));
         self.err_mean.push(0.0);
         self.cnt.push(0.0);
@@ -1219,7 +1248,13 @@ impl Network {
         {
             return Err("a counter is negative".into());
         }
+        if self.edge_len.len() != len {
+            return Err("edge lengths disagree in length".into());
+        }
         for c in 0..len {
+            if self.edge_len[c] != self.measure_edges(c) {
+                return Err(format!("cached edge lengths of {c} are stale"));
+            }
             let w = self.compute_width(c);
             if w != self.width[c] {
                 return Err(format!(
