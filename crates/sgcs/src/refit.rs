@@ -84,9 +84,9 @@ pub struct RefitProgress {
 
 /// Samples per assembly chunk: nearby samples (in Morton order), so their rows share most
 /// cells and a chunk's `ΦᵀΦ` is one small dense product.
-const CHUNK: usize = 256;
+const CHUNK: usize = 128;
 /// Chunks assembled at once (in parallel); bounds the memory in flight.
-const WAVE: usize = 4;
+const WAVE: usize = 2;
 
 /// Which samples a solve of a [`RefitSystem`] fits.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
