@@ -496,66 +496,38 @@ pub fn parameter_cases(suite: &mut Suite, fig3: &Scene) {
     out_of_range_case(suite, fig3);
 }
 
-/// Out-of-range parameters are refused with a one-line message naming the parameter.
+/// Out-of-range parameters are refused with a one-line message naming the parameter: every
+/// value just outside every range of the parameter schema.
 fn out_of_range_case(suite: &mut Suite, fig3: &Scene) {
-    let d = FitParams::default();
-    let net = |f: &dyn Fn(&mut sgcs::Params)| {
-        let mut n = d.network;
-        f(&mut n);
-        FitParams { network: n, ..d }
-    };
+    use kernel_fit::Schema as _;
     suite.case(
         "params out of range",
         "refused, message names parameter and range",
         |row| {
-            let bad: Vec<(&str, FitParams)> = vec![
-                ("eta", net(&|n| n.eta = 2.0)),
-                ("eta", net(&|n| n.eta = 0.0)),
-                ("eta", net(&|n| n.eta = f64::NAN)),
-                ("alpha", net(&|n| n.alpha = 1.0)),
-                ("alpha", net(&|n| n.alpha = -1e-9)),
-                ("lambda", net(&|n| n.lambda = 0)),
-                ("eps_b", net(&|n| n.eps_b = 0.0)),
-                ("eps_n", net(&|n| n.eps_n = 1.5)),
-                ("activation_cutoff", net(&|n| n.activation_cutoff = 1.0)),
-                ("omega", FitParams { omega: -1.0, ..d }),
-                (
-                    "omega",
-                    FitParams {
-                        omega: f64::INFINITY,
-                        ..d
-                    },
-                ),
-                ("phi", FitParams { phi: 0.0, ..d }),
-                ("phi", FitParams { phi: f64::NAN, ..d }),
-                ("psi", FitParams { psi: 0.0, ..d }),
-                ("psi", FitParams { psi: 1.5, ..d }),
-                (
-                    "target_cells",
-                    FitParams {
-                        target_cells: 2,
-                        ..d
-                    },
-                ),
-            ];
             let kernel = Arc::new(Kernel::new(fig3.clone()));
             let reference = Arc::new(Reference::new(&kernel, 8, 16, SEED));
-            let total = bad.len();
-            let mut refused = 0;
-            for (name, params) in bad {
-                match Fit::new(kernel.clone(), reference.clone(), params) {
-                    Ok(_) => row
-                        .failures
-                        .push(format!("{name} out of range was accepted")),
-                    Err(err) => {
-                        let msg = err.to_string();
-                        let clear =
-                            msg.contains(name) && msg.contains("must") && !msg.contains('\n');
-                        row.require(clear, || format!("unclear message for {name}: {msg}"));
-                        refused += usize::from(clear);
+            let (mut total, mut refused) = (0, 0);
+            for spec in FitParams::specs() {
+                for bad in spec.range.outside() {
+                    let mut params = FitParams::default();
+                    params.set(spec.name, bad);
+                    total += 1;
+                    let name = spec.name;
+                    match Fit::new(kernel.clone(), reference.clone(), params) {
+                        Ok(_) => row
+                            .failures
+                            .push(format!("{name} = {bad} (out of range) was accepted")),
+                        Err(err) => {
+                            let msg = err.to_string();
+                            let clear =
+                                msg.contains(name) && msg.contains("must") && !msg.contains('\n');
+                            row.require(clear, || format!("unclear message for {name}: {msg}"));
+                            refused += usize::from(clear);
+                        }
                     }
                 }
             }
+            row.require(total >= 20, || format!("only {total} out-of-range cases"));
             row.error = Some((total - refused) as f64);
             Ok(())
         },

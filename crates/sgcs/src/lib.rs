@@ -107,6 +107,7 @@ mod index;
 mod network;
 mod params;
 mod refit;
+pub mod schema;
 #[cfg(test)]
 mod test_support;
 
