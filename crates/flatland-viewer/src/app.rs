@@ -625,10 +625,35 @@ impl ViewerApp {
             });
             return;
         };
-        let ctx = ui.ctx().clone();
         let layout = Layout::of(full, self.settings.lit);
+        let status = self.status.clone().filter(|s| s.world == world.id);
+        let approx = self.approx.clone().filter(|a| a.world == world.id);
+        self.kernel_panels(ui, &layout, &world, status.as_ref(), approx.as_deref());
 
-        // Colour scale from the reference, shared by all three heatmaps.
+        // The lit scene, when there is one for the scene as it is (not while it is edited).
+        let lit_state = self.lit.clone();
+        let lit = match &lit_state {
+            Some(LitState::Ready(l)) if l.setup.world == world.id && self.scene == world.scene => {
+                Some(l.as_ref())
+            }
+            _ => None,
+        };
+        self.scene_panels(ui, &layout, &world, lit, lit_state.as_ref());
+        ui.scope_builder(UiBuilder::new().max_rect(layout.curves), |ui| {
+            views::curves(ui, status.as_ref().map(|s| s.snapshot.as_ref()), lit);
+        });
+    }
+
+    /// The textures of the three heatmaps and the overlay, re-made only when their data
+    /// changed; one colour scale, fitted to the reference, for all three heatmaps.
+    fn heatmap_textures(
+        &mut self,
+        ctx: &egui::Context,
+        world: &World,
+        status: Option<&Status>,
+        approx: Option<&Approx>,
+        overlay_side: usize,
+    ) -> Heatmaps {
         let log = self.settings.log_scale;
         let scale = match self.scale {
             Some((id, l, s)) if id == world.id && l == log => s,
@@ -639,17 +664,16 @@ impl ViewerApp {
             }
         };
         let key = (world.id, u64::from(log), 0);
-        let kernel_tex = cached_texture(&ctx, &mut self.kernel_tex, "kernel", key, || {
+        let kernel = cached_texture(ctx, &mut self.kernel_tex, "kernel", key, || {
             grid_image(world.reference.grid(), REFERENCE_RES, scale)
         });
-        let approx = self.approx.clone().filter(|a| a.world == world.id);
-        let (approx_tex, error_tex) = match &approx {
+        let (approx_tex, error_tex) = match approx {
             Some(a) => {
                 let key = (world.id, u64::from(log), a.steps + 1);
-                let at = cached_texture(&ctx, &mut self.approx_tex, "approx", key, || {
+                let at = cached_texture(ctx, &mut self.approx_tex, "approx", key, || {
                     grid_image(&a.values, APPROX_RES, scale)
                 });
-                let et = cached_texture(&ctx, &mut self.error_tex, "error", key, || {
+                let et = cached_texture(ctx, &mut self.error_tex, "error", key, || {
                     let err: Vec<f64> = a
                         .values
                         .iter()
@@ -662,92 +686,110 @@ impl ViewerApp {
             }
             None => (None, None),
         };
-        let status = self.status.clone().filter(|s| s.world == world.id);
-        let samples_tex = match (&status, self.settings.show_samples) {
-            (Some(st), true) => {
-                let snap = &st.snapshot;
-                let key = (world.id, snap.samples.len() as u64, snap.sets as u64);
-                Some(cached_texture(
-                    &ctx,
-                    &mut self.samples_tex,
-                    "samples",
-                    key,
-                    || samples_image(&snap.samples, 2 * REFERENCE_RES),
-                ))
-            }
-            _ => None,
-        };
-
-        // Kernel plot with the live overlay.
-        let kernel_frame = PlotFrame::new(layout.kernel, true);
-        let ppp = ui.ctx().pixels_per_point();
-        let side = ((kernel_frame.plot.width() * ppp).round() as usize).clamp(16, 2048);
+        let samples = status.filter(|_| self.settings.show_samples).map(|st| {
+            let snap = &st.snapshot;
+            let key = (world.id, snap.samples.len() as u64, snap.sets as u64);
+            cached_texture(ctx, &mut self.samples_tex, "samples", key, || {
+                samples_image(&snap.samples, 2 * REFERENCE_RES)
+            })
+        });
+        let ppp = ctx.pixels_per_point();
         let (cells, edges) = (self.settings.show_cells, self.settings.show_edges);
-        let cells_tex = status.as_ref().map(|st| {
+        let overlay = status.map(|st| {
             let snap = &st.snapshot;
             let key = (
                 Arc::as_ptr(snap) as u64,
-                side as u64,
+                overlay_side as u64,
                 u64::from(cells) | u64::from(edges) << 1 | u64::from(ppp.to_bits()) << 2,
             );
-            cached_texture(&ctx, &mut self.overlay_tex, "overlay", key, || {
-                views::overlay_image(side, ppp, snap, cells, edges)
+            cached_texture(ctx, &mut self.overlay_tex, "overlay", key, || {
+                views::overlay_image(overlay_side, ppp, snap, cells, edges)
             })
         });
-        let hovered = views::kernel_plot(
-            ui,
-            &kernel_frame,
-            "ζ(s, t) exact, with the cells",
-            Some(kernel_tex),
-            &world.scene,
-            &views::Overlay {
-                cells: cells_tex,
-                samples: samples_tex,
-            },
-            &self.hover,
-        );
-        let approx_frame = PlotFrame::new(layout.approx, false);
-        let learned_title = match status.as_ref().map(|s| s.params.target) {
+        Heatmaps {
+            kernel,
+            approx: approx_tex,
+            error: error_tex,
+            samples,
+            overlay,
+        }
+    }
+
+    /// The exact ζ with the cells over it, the learned ζ and the error; the readout of the
+    /// hovered `(s, t)`.
+    fn kernel_panels(
+        &mut self,
+        ui: &mut egui::Ui,
+        layout: &Layout,
+        world: &World,
+        status: Option<&Status>,
+        approx: Option<&Approx>,
+    ) {
+        let ctx = ui.ctx().clone();
+        let kernel_frame = PlotFrame::new(layout.kernel, true);
+        let side =
+            ((kernel_frame.plot.width() * ctx.pixels_per_point()).round() as usize).clamp(16, 2048);
+        let textures = self.heatmap_textures(&ctx, world, status, approx, side);
+        let overlay = views::Overlay {
+            cells: textures.overlay,
+            samples: textures.samples,
+        };
+        let learned_title = match status.map(|s| s.params.target) {
             Some(kernel_fit::Target::Visibility) => "learned ζ = exact unoccluded ζ × learned V",
             _ => "learned ζ (SGCS)",
         };
-        let h2 = views::kernel_plot(
-            ui,
-            &approx_frame,
-            learned_title,
-            approx_tex,
-            &world.scene,
-            &views::Overlay::none(),
-            &self.hover,
-        );
-        let error_frame = PlotFrame::new(layout.error, false);
-        let h3 = views::kernel_plot(
-            ui,
-            &error_frame,
-            "|learned − exact|",
-            error_tex,
-            &world.scene,
-            &views::Overlay::none(),
-            &self.hover,
-        );
-        self.hover.st = hovered.or(h2).or(h3);
+        let panels = [
+            (
+                kernel_frame,
+                "ζ(s, t) exact, with the cells",
+                Some(textures.kernel),
+                overlay,
+            ),
+            (
+                PlotFrame::new(layout.approx, false),
+                learned_title,
+                textures.approx,
+                views::Overlay::none(),
+            ),
+            (
+                PlotFrame::new(layout.error, false),
+                "|learned − exact|",
+                textures.error,
+                views::Overlay::none(),
+            ),
+        ];
+        let mut hovered = None;
+        for (frame, title, texture, overlay) in &panels {
+            let st = views::kernel_plot(
+                ui,
+                frame,
+                title,
+                *texture,
+                &world.scene,
+                overlay,
+                &self.hover,
+            );
+            hovered = hovered.or(st);
+        }
+        self.hover.st = hovered;
         if let Some([s, t]) = self.hover.st
             && let Some(pointer) = ui.input(|i| i.pointer.hover_pos())
         {
-            let model = approx.as_ref().map(|a| &a.model);
-            let text = readout_text(&world.kernel, model, s, t);
+            let text = readout_text(&world.kernel, approx.map(|a| &a.model), s, t);
             views::readout_box(&ctx, pointer, &text);
         }
+    }
 
-        // The scene, lit by the learned B when there is one for this scene: the hovered ray,
-        // the hovered s, dragged end points.
-        let lit_state = self.lit.clone();
-        let lit = match &lit_state {
-            Some(LitState::Ready(l)) if l.setup.world == world.id && self.scene == world.scene => {
-                Some(l.as_ref())
-            }
-            _ => None,
-        };
+    /// The scene (lit by the learned B when `lit` is given; hovered ray, hovered s, dragged end
+    /// points) and, with the lit view on, the scene lit by the exact kernel.
+    fn scene_panels(
+        &mut self,
+        ui: &mut egui::Ui,
+        layout: &Layout,
+        world: &World,
+        lit: Option<&Lit>,
+        lit_state: Option<&LitState>,
+    ) {
         let learned_paint = lit.map(|l| LitPaint {
             mesh: &l.setup.mesh,
             b: &l.solve.b,
@@ -764,45 +806,50 @@ impl ViewerApp {
         };
         let scene_out = views::scene_view(
             ui,
-            layout.scene,
-            &scene_title,
+            &views::SceneFrame {
+                rect: layout.scene,
+                title: &scene_title,
+                world,
+                lit: learned_paint.as_ref(),
+            },
             &self.scene,
-            &world,
             &self.hover,
             &mut self.drag,
-            learned_paint.as_ref(),
         );
         self.hover.scene_s = scene_out.hovered_s;
         if let Some((from, to)) = scene_out.moved {
             self.move_point(from, to);
         }
-        if let Some(rect) = layout.exact {
-            let title = "lit by the exact kernel";
-            match (lit, &lit_state) {
-                (Some(l), _) => {
-                    let paint = LitPaint {
-                        mesh: &l.setup.mesh,
-                        b: &l.setup.exact,
-                        top: l.setup.top,
-                    };
-                    views::lit_view(ui, rect, title, &world.scene, &paint);
-                }
-                (None, Some(LitState::Failed(why))) => views::placeholder(ui, rect, title, why),
-                (None, Some(LitState::Off)) => {
-                    views::placeholder(ui, rect, title, "the lit scene is off (View)");
-                }
-                (None, Some(LitState::Pending(what))) => {
-                    views::placeholder(ui, rect, title, what);
-                }
-                _ => views::placeholder(ui, rect, title, "solving the exact radiosity…"),
+        let Some(rect) = layout.exact else {
+            return;
+        };
+        let title = "lit by the exact kernel";
+        match (lit, lit_state) {
+            (Some(l), _) => {
+                let paint = LitPaint {
+                    mesh: &l.setup.mesh,
+                    b: &l.setup.exact,
+                    top: l.setup.top,
+                };
+                views::lit_view(ui, rect, title, &world.scene, &paint);
             }
+            (None, Some(LitState::Failed(why))) => views::placeholder(ui, rect, title, why),
+            (None, Some(LitState::Off)) => {
+                views::placeholder(ui, rect, title, "the lit scene is off (View)");
+            }
+            (None, Some(LitState::Pending(what))) => views::placeholder(ui, rect, title, what),
+            _ => views::placeholder(ui, rect, title, "solving the exact radiosity…"),
         }
-
-        // Curves.
-        ui.scope_builder(UiBuilder::new().max_rect(layout.curves), |ui| {
-            views::curves(ui, status.as_ref().map(|s| s.snapshot.as_ref()), lit);
-        });
     }
+}
+
+/// The textures of one frame's heatmaps and overlays.
+struct Heatmaps {
+    kernel: egui::TextureId,
+    approx: Option<egui::TextureId>,
+    error: Option<egui::TextureId>,
+    samples: Option<egui::TextureId>,
+    overlay: Option<egui::TextureId>,
 }
 
 /// Where the panels go: the kernel plot (a big square), ζ̃ and the error beside it, the scene

@@ -442,60 +442,41 @@ fn scene_area(rect: Rect, lit: bool) -> Rect {
     )
 }
 
+/// Where and what the scene view draws besides the scene itself.
+pub struct SceneFrame<'a> {
+    /// The panel.
+    pub rect: Rect,
+    /// Its title.
+    pub title: &'a str,
+    /// The kernel of the scene the references were made for (the hovered ray).
+    pub world: &'a World,
+    /// The radiosity to colour the edges by, if any.
+    pub lit: Option<&'a LitPaint<'a>>,
+}
+
 /// The scene: edges by role (emitters yellow, surfaces grey, blockers red) or, with `lit`, each
 /// element in the colour of its B (emitters marked, blockers blue) with a colour bar;
 /// front-side ticks, surface edge indices, draggable end points; the hovered ray `x(s) → y(t)`.
-#[allow(clippy::too_many_arguments)]
 pub fn scene_view(
     ui: &mut egui::Ui,
-    rect: Rect,
-    title: &str,
+    frame: &SceneFrame<'_>,
     scene: &Scene,
-    world: &World,
     hover: &Hover,
     drag: &mut Option<SceneDrag>,
-    lit: Option<&LitPaint<'_>>,
 ) -> SceneOut {
+    let rect = frame.rect;
     let response = ui.allocate_rect(rect, Sense::click_and_drag());
     let painter = ui.painter_at(rect);
     let weak = ui.visuals().weak_text_color();
     // A dragged end point changes the scene: the solved B belongs to the old one.
-    let lit = lit.filter(|_| drag.is_none());
-    panel_frame(&painter, rect, title, ui.visuals().text_color());
-    let inner = scene_area(rect, lit.is_some());
-    let view = View::of(scene, inner);
-    let pointer = response.hover_pos();
-    let mut out = SceneOut::default();
-
-    // Dragging an end point (snapped to 0.01 scene units).
-    let ends: Vec<DVec2> = {
-        let mut v: Vec<DVec2> = scene.edges().iter().flat_map(|e| [e.a, e.b]).collect();
-        v.dedup();
-        v
+    let lit = frame.lit.filter(|_| drag.is_none());
+    panel_frame(&painter, rect, frame.title, ui.visuals().text_color());
+    let view = View::of(scene, scene_area(rect, lit.is_some()));
+    let ends = EndPoints::of(scene);
+    let mut out = SceneOut {
+        moved: follow_drag(ui, &response, &view, &ends, drag),
+        hovered_s: None,
     };
-    let nearest_end = |q: Pos2| {
-        ends.iter()
-            .map(|&p| (p, view.screen(p).distance(q)))
-            .filter(|(_, d)| *d <= 9.0)
-            .min_by(|a, b| a.1.total_cmp(&b.1))
-            .map(|(p, _)| p)
-    };
-    if response.drag_started()
-        // Where the button went down, not where the pointer is once the drag is recognised.
-        && let Some(p) = ui.input(|i| i.pointer.press_origin()).and_then(nearest_end)
-    {
-        *drag = Some(SceneDrag { from: p, to: p });
-    }
-    if let (Some(d), Some(q)) = (drag.as_mut(), response.interact_pointer_pos()) {
-        let p = view.at(q);
-        d.to = (p * 100.0).round() / 100.0;
-    }
-    if response.drag_stopped()
-        && let Some(d) = drag.take()
-        && d.to != d.from
-    {
-        out.moved = Some((d.from, d.to));
-    }
     let preview;
     let shown = match drag {
         Some(d) => {
@@ -525,103 +506,168 @@ pub fn scene_view(
         FontId::proportional(10.0),
         weak,
     );
-    let hovered_end = pointer.and_then(nearest_end);
-    for p in &ends {
-        let hot = hovered_end == Some(*p) || drag.is_some_and(|d| d.from == *p);
-        let at = match drag {
-            Some(d) if d.from == *p => view.screen(d.to),
-            _ => view.screen(*p),
-        };
-        let (r, c) = if hot {
-            (5.0, Color32::WHITE)
-        } else {
-            (2.5, Color32::from_gray(150))
-        };
-        painter.circle_filled(at, r, c);
-    }
+    let pointer = response.hover_pos();
+    let hovered_end = pointer.and_then(|q| ends.nearest(&view, q));
+    ends.draw(&painter, &view, hovered_end, *drag);
     if hovered_end.is_some() || drag.is_some() {
         ui.ctx().set_cursor_icon(egui::CursorIcon::Grab);
     }
-
-    // The hovered ray of the kernel plot.
     if let Some([s, t]) = hover.st {
-        let k = world.kernel.eval(s, t);
-        let (x, y) = (view.screen(k.x.position), view.screen(k.y.position));
-        let (color, label) = if k.geometry <= 0.0 {
-            (Color32::from_gray(140), "G = 0")
-        } else if k.visible {
-            (Color32::from_rgb(90, 255, 110), "visible")
-        } else {
-            (Color32::from_rgb(255, 80, 80), "blocked")
-        };
-        if k.visible && k.geometry > 0.0 {
-            painter.line_segment([x, y], Stroke::new(2.0, color));
-        } else {
-            painter.extend(Shape::dashed_line(
-                &[x, y],
-                Stroke::new(2.0, color),
-                6.0,
-                4.0,
-            ));
-        }
-        painter.circle_filled(x, 5.0, Color32::from_rgb(255, 150, 40));
-        painter.circle_filled(y, 5.0, CRITICAL);
-        painter.text(
-            x + vec2(6.0, -6.0),
-            Align2::LEFT_BOTTOM,
-            "x(s)",
-            FontId::proportional(12.0),
-            Color32::WHITE,
-        );
-        painter.text(
-            y + vec2(6.0, -6.0),
-            Align2::LEFT_BOTTOM,
-            "y(t)",
-            FontId::proportional(12.0),
-            Color32::WHITE,
-        );
-        painter.text(
-            rect.right_top() + vec2(-6.0, 3.0),
-            Align2::RIGHT_TOP,
-            format!("k = {:.4}, {label}", k.k),
-            FontId::proportional(12.0),
-            color,
-        );
+        draw_ray(&painter, &view, rect, frame.world, s, t);
     }
-
-    // Hovering a surface: its parameter.
     if drag.is_none()
         && hovered_end.is_none()
         && let Some(q) = pointer
     {
-        let mut best: Option<(f64, f32, Pos2)> = None;
-        for &i in scene.surface_edges() {
-            let e = &scene.edges()[i];
-            let (a, b) = (view.screen(e.a), view.screen(e.b));
-            let ab = b - a;
-            let u = ((q - a).dot(ab) / ab.length_sq().max(1e-6)).clamp(0.0, 1.0);
-            let c = a + ab * u;
-            let d = c.distance(q);
-            if d <= 10.0
-                && best.is_none_or(|(_, bd, _)| d < bd)
-                && let Some(s) = scene.param_of(i, view.at(c))
-            {
-                best = Some((s, d, c));
-            }
-        }
-        if let Some((s, _, c)) = best {
-            painter.circle_stroke(c, 5.0, Stroke::new(2.0, SCENE_MARK));
-            painter.text(
-                c + vec2(8.0, 8.0),
-                Align2::LEFT_TOP,
-                format!("s = t = {s:.3}"),
-                FontId::proportional(12.0),
-                SCENE_MARK,
-            );
-            out.hovered_s = Some(s);
-        }
+        out.hovered_s = mark_hovered_surface(&painter, &view, scene, q);
     }
     out
+}
+
+/// The end points of a scene's edges, which the user can drag.
+struct EndPoints(Vec<DVec2>);
+
+impl EndPoints {
+    fn of(scene: &Scene) -> EndPoints {
+        let mut v: Vec<DVec2> = scene.edges().iter().flat_map(|e| [e.a, e.b]).collect();
+        v.dedup();
+        EndPoints(v)
+    }
+
+    /// The end point within 9 points of `q` on screen, the nearest if several.
+    fn nearest(&self, view: &View, q: Pos2) -> Option<DVec2> {
+        self.0
+            .iter()
+            .map(|&p| (p, view.screen(p).distance(q)))
+            .filter(|(_, d)| *d <= 9.0)
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(p, _)| p)
+    }
+
+    /// Dots; the hovered or dragged one big and white, the dragged one where it is dragged to.
+    fn draw(
+        &self,
+        painter: &Painter,
+        view: &View,
+        hovered: Option<DVec2>,
+        drag: Option<SceneDrag>,
+    ) {
+        for p in &self.0 {
+            let hot = hovered == Some(*p) || drag.is_some_and(|d| d.from == *p);
+            let at = match drag {
+                Some(d) if d.from == *p => view.screen(d.to),
+                _ => view.screen(*p),
+            };
+            let (r, c) = if hot {
+                (5.0, Color32::WHITE)
+            } else {
+                (2.5, Color32::from_gray(150))
+            };
+            painter.circle_filled(at, r, c);
+        }
+    }
+}
+
+/// Starts, moves and ends the drag of an end point (snapped to 0.01 scene units); returns a
+/// finished move (from, to).
+fn follow_drag(
+    ui: &egui::Ui,
+    response: &egui::Response,
+    view: &View,
+    ends: &EndPoints,
+    drag: &mut Option<SceneDrag>,
+) -> Option<(DVec2, DVec2)> {
+    if response.drag_started()
+        // Where the button went down, not where the pointer is once the drag is recognised.
+        && let Some(p) = ui
+            .input(|i| i.pointer.press_origin())
+            .and_then(|q| ends.nearest(view, q))
+    {
+        *drag = Some(SceneDrag { from: p, to: p });
+    }
+    if let (Some(d), Some(q)) = (drag.as_mut(), response.interact_pointer_pos()) {
+        let p = view.at(q);
+        d.to = (p * 100.0).round() / 100.0;
+    }
+    if response.drag_stopped()
+        && let Some(d) = drag.take()
+        && d.to != d.from
+    {
+        return Some((d.from, d.to));
+    }
+    None
+}
+
+/// The ray `x(s) → y(t)` hovered in a kernel plot: solid green when visible, dashed red when
+/// blocked, dashed grey when the points do not face each other; its k at the top right.
+fn draw_ray(painter: &Painter, view: &View, rect: Rect, world: &World, s: f64, t: f64) {
+    let k = world.kernel.eval(s, t);
+    let (x, y) = (view.screen(k.x.position), view.screen(k.y.position));
+    let (color, label) = if k.geometry <= 0.0 {
+        (Color32::from_gray(140), "G = 0")
+    } else if k.visible {
+        (Color32::from_rgb(90, 255, 110), "visible")
+    } else {
+        (Color32::from_rgb(255, 80, 80), "blocked")
+    };
+    if k.visible && k.geometry > 0.0 {
+        painter.line_segment([x, y], Stroke::new(2.0, color));
+    } else {
+        painter.extend(Shape::dashed_line(
+            &[x, y],
+            Stroke::new(2.0, color),
+            6.0,
+            4.0,
+        ));
+    }
+    painter.circle_filled(x, 5.0, Color32::from_rgb(255, 150, 40));
+    painter.circle_filled(y, 5.0, CRITICAL);
+    for (at, name) in [(x, "x(s)"), (y, "y(t)")] {
+        painter.text(
+            at + vec2(6.0, -6.0),
+            Align2::LEFT_BOTTOM,
+            name,
+            FontId::proportional(12.0),
+            Color32::WHITE,
+        );
+    }
+    painter.text(
+        rect.right_top() + vec2(-6.0, 3.0),
+        Align2::RIGHT_TOP,
+        format!("k = {:.4}, {label}", k.k),
+        FontId::proportional(12.0),
+        color,
+    );
+}
+
+/// The surface point within 10 points of the pointer `q`, marked with its parameter; returns
+/// that parameter.
+fn mark_hovered_surface(painter: &Painter, view: &View, scene: &Scene, q: Pos2) -> Option<f64> {
+    let mut best: Option<(f64, f32, Pos2)> = None;
+    for &i in scene.surface_edges() {
+        let e = &scene.edges()[i];
+        let (a, b) = (view.screen(e.a), view.screen(e.b));
+        let ab = b - a;
+        let u = ((q - a).dot(ab) / ab.length_sq().max(1e-6)).clamp(0.0, 1.0);
+        let c = a + ab * u;
+        let d = c.distance(q);
+        if d <= 10.0
+            && best.is_none_or(|(_, bd, _)| d < bd)
+            && let Some(s) = scene.param_of(i, view.at(c))
+        {
+            best = Some((s, d, c));
+        }
+    }
+    let (s, _, c) = best?;
+    painter.circle_stroke(c, 5.0, Stroke::new(2.0, SCENE_MARK));
+    painter.text(
+        c + vec2(8.0, 8.0),
+        Align2::LEFT_TOP,
+        format!("s = t = {s:.3}"),
+        FontId::proportional(12.0),
+        SCENE_MARK,
+    );
+    Some(s)
 }
 
 /// The panel background and its title.
@@ -1074,16 +1120,13 @@ mod drag_tests {
         let state = (None::<SceneDrag>, Vec::<(DVec2, DVec2)>::new());
         let mut h = Harness::builder().with_size([400.0, 300.0]).build_ui_state(
             move |ui, state: &mut (Option<SceneDrag>, Vec<(DVec2, DVec2)>)| {
-                let out = scene_view(
-                    ui,
+                let frame = SceneFrame {
                     rect,
-                    "scene",
-                    &scene,
-                    &world,
-                    &Hover::default(),
-                    &mut state.0,
-                    None,
-                );
+                    title: "scene",
+                    world: &world,
+                    lit: None,
+                };
+                let out = scene_view(ui, &frame, &scene, &Hover::default(), &mut state.0);
                 state.1.extend(out.moved);
             },
             state,

@@ -90,41 +90,7 @@ impl ViewerApp {
     /// The preset and what the network learns (ALGORITHM.md §4).
     fn learner_controls(&mut self, ui: &mut egui::Ui) {
         ui.heading("Learner");
-        ui.horizontal(|ui| {
-            ui.label("preset").on_hover_text(
-                "the parameters of a learner; choosing one starts a new fit (target cells and \
-                 seed are kept)",
-            );
-            let presets = [
-                (
-                    Preset::Default,
-                    "Default",
-                    "learns only the visibility V, where geometry cannot decide it, in cells \
-                     that never straddle a shadow boundary (ALGORITHM.md §4)",
-                ),
-                (
-                    Preset::Paper,
-                    "Paper",
-                    "the paper's network: learns ζ everywhere from γ(s, t), with least-squares \
-                     refit (ALGORITHM.md §3)",
-                ),
-            ];
-            for (preset, name, hover) in presets {
-                let selected = self.settings.preset == preset;
-                if ui
-                    .selectable_label(selected, name)
-                    .on_hover_text(hover)
-                    .clicked()
-                {
-                    self.choose_preset(preset);
-                }
-            }
-            if !self.settings.is_preset() {
-                ui.label(RichText::new("(changed)").weak())
-                    .on_hover_text("parameters differ from the preset's");
-            }
-        });
-
+        self.preset_selector(ui);
         let waiting = waiting_for_reset(&self.settings.params, &self.fit_params);
         let p = &mut self.settings.params;
         choice(
@@ -209,168 +175,50 @@ impl ViewerApp {
         }
     }
 
+    /// Default or Paper: choosing one starts a new fit with that learner.
+    fn preset_selector(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            ui.label("preset").on_hover_text(
+                "the parameters of a learner; choosing one starts a new fit (target cells and \
+                 seed are kept)",
+            );
+            let presets = [
+                (
+                    Preset::Default,
+                    "Default",
+                    "learns only the visibility V, where geometry cannot decide it, in cells \
+                     that never straddle a shadow boundary (ALGORITHM.md §4)",
+                ),
+                (
+                    Preset::Paper,
+                    "Paper",
+                    "the paper's network: learns ζ everywhere from γ(s, t), with least-squares \
+                     refit (ALGORITHM.md §3)",
+                ),
+            ];
+            for (preset, name, hover) in presets {
+                let selected = self.settings.preset == preset;
+                if ui
+                    .selectable_label(selected, name)
+                    .on_hover_text(hover)
+                    .clicked()
+                {
+                    self.choose_preset(preset);
+                }
+            }
+            if !self.settings.is_preset() {
+                ui.label(RichText::new("(changed)").weak())
+                    .on_hover_text("parameters differ from the preset's");
+            }
+        });
+    }
+
     /// `sgcs::Params` (ALGORITHM.md §3, §8).
     fn network_controls(&mut self, ui: &mut egui::Ui) {
         let n = &mut self.settings.params.network;
         ui.heading("Network");
-        egui::Grid::new("net-grid")
-            .num_columns(3)
-            .striped(true)
-            .show(ui, |ui| {
-                row(
-                    ui,
-                    "ε_b",
-                    "learning rate of the winner",
-                    &mut n.eps_b,
-                    1e-6..=1.0,
-                    "(0, 1]",
-                    1e-4,
-                );
-                row(
-                    ui,
-                    "ε_n",
-                    "learning rate of its neighbours",
-                    &mut n.eps_n,
-                    0.0..=1.0,
-                    "[0, 1]",
-                    1e-5,
-                );
-                row(
-                    ui,
-                    "η",
-                    "output learning rate",
-                    &mut n.eta,
-                    1e-6..=1.999,
-                    "(0, 2)",
-                    1e-3,
-                );
-                row(
-                    ui,
-                    "α",
-                    "resource forgetting factor",
-                    &mut n.alpha,
-                    0.0..=0.999,
-                    "[0, 1)",
-                    1e-3,
-                );
-                row(
-                    ui,
-                    "λ",
-                    "steps between insertions",
-                    &mut n.lambda,
-                    1..=100_000,
-                    "≥ 1",
-                    1.0,
-                );
-                row(
-                    ui,
-                    "cutoff",
-                    "activations below are 0",
-                    &mut n.activation_cutoff,
-                    0.0..=0.5,
-                    "[0, 1)",
-                    1e-9,
-                );
-            });
-        choice(
-            ui,
-            "output",
-            "how the cells' outputs combine",
-            &mut n.output_mode,
-            &[
-                (OutputMode::Sum, "Σ v·M", "the paper's radial-basis sum"),
-                (
-                    OutputMode::Normalized,
-                    "Σ v·M / Σ M",
-                    "normalised: a face with one cell anywhere has that cell's value (the \
-                     default)",
-                ),
-            ],
-        );
-        choice(
-            ui,
-            "output rule",
-            "how the output weights follow the error",
-            &mut n.output_rule,
-            &[
-                (
-                    OutputRule::Normalized,
-                    "NLMS",
-                    "the delta rule with its step shortened where cells overlap: cannot \
-                     diverge (the paper's preset)",
-                ),
-                (
-                    OutputRule::Plain,
-                    "delta",
-                    "the paper's printed rule; diverges where many cells overlap",
-                ),
-                (
-                    OutputRule::Local,
-                    "local",
-                    "only the winner learns, towards the target itself: exact where the target \
-                     is constant on a face (the default)",
-                ),
-            ],
-        );
-        choice(
-            ui,
-            "insertion",
-            "where a new cell goes",
-            &mut n.insertion,
-            &[
-                (
-                    Insertion::Midpoint,
-                    "midpoint",
-                    "the midpoint of the worst cell's longest edge (the paper)",
-                ),
-                (
-                    Insertion::WorstSample,
-                    "worst sample",
-                    "the worst cell's worst recent sample, where the error is (the default)",
-                ),
-            ],
-        );
-        choice(
-            ui,
-            "new cell's v",
-            "the output weight of a new cell",
-            &mut n.insert_rule,
-            &[
-                (
-                    InsertRule::PreserveOutput,
-                    "preserve",
-                    "the output at the new centre is unchanged (the paper's preset)",
-                ),
-                (
-                    InsertRule::VolumeWeighted,
-                    "volume",
-                    "the neighbours' weights, weighted by the volume each loses",
-                ),
-                (
-                    InsertRule::SampleTarget,
-                    "its sample's",
-                    "the target of the sample it is put at (the default)",
-                ),
-            ],
-        );
-        choice(
-            ui,
-            "resource",
-            "what a cell's resource τ measures (growth, critical cells)",
-            &mut n.resource,
-            &[
-                (
-                    Resource::MeanTimesVolume,
-                    "mean × |F|",
-                    "mean squared error times the Voronoi volume (the paper)",
-                ),
-                (
-                    Resource::ErrorSum,
-                    "error sum",
-                    "decayed sum of the weighted squared errors (the default)",
-                ),
-            ],
-        );
+        network_rates(ui, n);
+        network_rules(ui, n);
     }
 
     /// Sets and θ (ALGORITHM.md §3).
@@ -534,6 +382,172 @@ impl ViewerApp {
             self.settings.params = with_preset(self.settings.preset, &self.settings.params);
         }
     }
+}
+
+/// The network's rates and counts, one row each.
+fn network_rates(ui: &mut egui::Ui, n: &mut sgcs::Params) {
+    egui::Grid::new("net-grid")
+        .num_columns(3)
+        .striped(true)
+        .show(ui, |ui| {
+            row(
+                ui,
+                "ε_b",
+                "learning rate of the winner",
+                &mut n.eps_b,
+                1e-6..=1.0,
+                "(0, 1]",
+                1e-4,
+            );
+            row(
+                ui,
+                "ε_n",
+                "learning rate of its neighbours",
+                &mut n.eps_n,
+                0.0..=1.0,
+                "[0, 1]",
+                1e-5,
+            );
+            row(
+                ui,
+                "η",
+                "output learning rate",
+                &mut n.eta,
+                1e-6..=1.999,
+                "(0, 2)",
+                1e-3,
+            );
+            row(
+                ui,
+                "α",
+                "resource forgetting factor",
+                &mut n.alpha,
+                0.0..=0.999,
+                "[0, 1)",
+                1e-3,
+            );
+            row(
+                ui,
+                "λ",
+                "steps between insertions",
+                &mut n.lambda,
+                1..=100_000,
+                "≥ 1",
+                1.0,
+            );
+            row(
+                ui,
+                "cutoff",
+                "activations below are 0",
+                &mut n.activation_cutoff,
+                0.0..=0.5,
+                "[0, 1)",
+                1e-9,
+            );
+        });
+}
+
+/// How the network's output is made, learned and grown.
+fn network_rules(ui: &mut egui::Ui, n: &mut sgcs::Params) {
+    choice(
+        ui,
+        "output",
+        "how the cells' outputs combine",
+        &mut n.output_mode,
+        &[
+            (OutputMode::Sum, "Σ v·M", "the paper's radial-basis sum"),
+            (
+                OutputMode::Normalized,
+                "Σ v·M / Σ M",
+                "normalised: a face with one cell anywhere has that cell's value (the \
+                 default)",
+            ),
+        ],
+    );
+    choice(
+        ui,
+        "output rule",
+        "how the output weights follow the error",
+        &mut n.output_rule,
+        &[
+            (
+                OutputRule::Normalized,
+                "NLMS",
+                "the delta rule with its step shortened where cells overlap: cannot \
+                 diverge (the paper's preset)",
+            ),
+            (
+                OutputRule::Plain,
+                "delta",
+                "the paper's printed rule; diverges where many cells overlap",
+            ),
+            (
+                OutputRule::Local,
+                "local",
+                "only the winner learns, towards the target itself: exact where the target \
+                 is constant on a face (the default)",
+            ),
+        ],
+    );
+    choice(
+        ui,
+        "insertion",
+        "where a new cell goes",
+        &mut n.insertion,
+        &[
+            (
+                Insertion::Midpoint,
+                "midpoint",
+                "the midpoint of the worst cell's longest edge (the paper)",
+            ),
+            (
+                Insertion::WorstSample,
+                "worst sample",
+                "the worst cell's worst recent sample, where the error is (the default)",
+            ),
+        ],
+    );
+    choice(
+        ui,
+        "new cell's v",
+        "the output weight of a new cell",
+        &mut n.insert_rule,
+        &[
+            (
+                InsertRule::PreserveOutput,
+                "preserve",
+                "the output at the new centre is unchanged (the paper's preset)",
+            ),
+            (
+                InsertRule::VolumeWeighted,
+                "volume",
+                "the neighbours' weights, weighted by the volume each loses",
+            ),
+            (
+                InsertRule::SampleTarget,
+                "its sample's",
+                "the target of the sample it is put at (the default)",
+            ),
+        ],
+    );
+    choice(
+        ui,
+        "resource",
+        "what a cell's resource τ measures (growth, critical cells)",
+        &mut n.resource,
+        &[
+            (
+                Resource::MeanTimesVolume,
+                "mean × |F|",
+                "mean squared error times the Voronoi volume (the paper)",
+            ),
+            (
+                Resource::ErrorSum,
+                "error sum",
+                "decayed sum of the weighted squared errors (the default)",
+            ),
+        ],
+    );
 }
 
 /// One value among a few, as selectable labels with hover texts, after its name.
