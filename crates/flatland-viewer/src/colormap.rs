@@ -1,39 +1,84 @@
-//! Value → colour: the heatmap colour map, its scale (linear or log), and the images built
-//! from grids and sample points. Pure functions, so they are cheap to test and run only when
-//! the data they show has changed.
+//! Value → colour: the heatmap and radiosity colour maps, the heatmap scale (linear or log), and
+//! the images built from grids and sample points. Pure functions, so they are cheap to test and
+//! run only when the data they show has changed.
 
 use egui::{Color32, ColorImage};
 
-/// Inferno-like control points (dark purple → orange → pale yellow), perceptually ordered, so a
-/// brighter pixel always means a larger value and cells drawn in white/cyan stay visible.
-const INFERNO: [[u8; 3]; 9] = [
+// The two colour maps and the scale rule are those of the `flatland` CLI's pictures (viridis
+// heatmaps scaled to the 99.5th percentile over four decades; inferno for radiosity), so a
+// picture from `flatland kernel` or `flatland solve` and the viewer read the same.
+
+/// Viridis (matplotlib's, 17 samples): the kernel heatmaps. Perceptually ordered, so a brighter
+/// pixel always means a larger value; the cells, drawn white and cyan, stay visible over it.
+const VIRIDIS: [[u8; 3]; 17] = [
+    [68, 1, 84],
+    [72, 21, 104],
+    [72, 38, 119],
+    [69, 55, 129],
+    [63, 71, 136],
+    [57, 85, 140],
+    [50, 100, 142],
+    [45, 113, 142],
+    [40, 125, 142],
+    [35, 138, 141],
+    [31, 150, 139],
+    [32, 163, 134],
+    [41, 175, 127],
+    [62, 188, 116],
+    [86, 198, 103],
+    [119, 209, 83],
+    [253, 231, 37],
+];
+
+/// Inferno (matplotlib's, 17 samples): black through purple and orange to pale yellow, the
+/// colours of light, for the radiosity of the lit scene.
+const INFERNO: [[u8; 3]; 17] = [
     [0, 0, 4],
-    [31, 12, 72],
-    [85, 15, 109],
-    [136, 34, 106],
-    [186, 54, 85],
-    [227, 89, 51],
-    [249, 140, 10],
-    [249, 201, 50],
+    [12, 8, 38],
+    [36, 12, 79],
+    [66, 10, 104],
+    [93, 18, 110],
+    [120, 28, 109],
+    [147, 38, 103],
+    [174, 48, 92],
+    [199, 62, 76],
+    [221, 81, 58],
+    [237, 105, 37],
+    [248, 133, 15],
+    [252, 165, 10],
+    [250, 198, 45],
+    [242, 230, 97],
+    [246, 250, 150],
     [252, 255, 164],
 ];
 
-/// The colour of `x ∈ [0, 1]` (clamped; NaN is 0).
-#[must_use]
-pub fn colormap(x: f32) -> Color32 {
+/// `x ∈ [0, 1]` (clamped; NaN is 0) interpolated linearly in `table`.
+fn interpolate(table: &[[u8; 3]], x: f32) -> Color32 {
     let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
-    let f = x * (INFERNO.len() - 1) as f32;
-    let i = (f.floor() as usize).min(INFERNO.len() - 2);
+    let f = x * (table.len() - 1) as f32;
+    let i = (f.floor() as usize).min(table.len() - 2);
     let u = f - i as f32;
-    let [a, b] = [INFERNO[i], INFERNO[i + 1]];
+    let [a, b] = [table[i], table[i + 1]];
     let mix = |k: usize| (f32::from(a[k]) + u * (f32::from(b[k]) - f32::from(a[k]))).round() as u8;
     Color32::from_rgb(mix(0), mix(1), mix(2))
 }
 
+/// The heatmap colour of `x ∈ [0, 1]` (viridis; clamped, NaN is 0).
+#[must_use]
+pub fn heat_colour(x: f32) -> Color32 {
+    interpolate(&VIRIDIS, x)
+}
+
+/// The colour of a radiosity at `x ∈ [0, 1]` of its scale (inferno; clamped, NaN is 0).
+#[must_use]
+pub fn light_colour(x: f32) -> Color32 {
+    interpolate(&INFERNO, x)
+}
+
 /// How values map to `[0, 1]` before the colour map.
 ///
-/// `max` is the 99th percentile of the positive values, not the maximum: the kernel grows like
-/// `1/r` near shared vertices, and a true maximum would paint everything else black.
+/// `max` is the 99.5th percentile of the positive values, not the maximum: the kernel grows
+/// like `1/r` near shared vertices, and a true maximum would paint everything else black.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Scale {
     /// The value shown at full brightness (and above).
@@ -56,7 +101,7 @@ impl Scale {
         let max = if positive.is_empty() {
             1.0
         } else {
-            let k = ((positive.len() - 1) as f64 * 0.99).round() as usize;
+            let k = ((positive.len() - 1) as f64 * 0.995) as usize;
             let (_, v, _) = positive.select_nth_unstable_by(k, f64::total_cmp);
             *v
         };
@@ -97,7 +142,7 @@ pub fn grid_image(values: &[f64], res: usize, scale: Scale) -> ColorImage {
         pixels.extend(
             values[row * res..(row + 1) * res]
                 .iter()
-                .map(|&v| colormap(scale.unit(v))),
+                .map(|&v| heat_colour(scale.unit(v))),
         );
     }
     ColorImage::new([res, res], pixels)
@@ -136,16 +181,23 @@ mod tests {
     use super::*;
 
     #[test]
-    fn colormap_is_monotone_in_brightness_and_total() {
+    fn colour_maps_run_dark_to_bright_and_are_total() {
         let luma = |c: Color32| u32::from(c.r()) + u32::from(c.g()) + u32::from(c.b());
-        let mut last = 0;
-        for i in 0..=100 {
-            let l = luma(colormap(i as f32 / 100.0));
-            assert!(l >= last, "brightness drops at {i}: {l} < {last}");
-            last = l;
+        for map in [heat_colour, light_colour] {
+            let mut last = 0;
+            for i in 0..=100 {
+                let l = luma(map(i as f32 / 100.0));
+                assert!(l >= last, "brightness drops at {i}: {l} < {last}");
+                last = l;
+            }
+            assert_eq!(map(f32::NAN), map(0.0));
+            assert_eq!(map(2.0), map(1.0));
         }
-        assert_eq!(colormap(f32::NAN), colormap(0.0));
-        assert_eq!(colormap(2.0), colormap(1.0));
+        // The CLI's end points.
+        assert_eq!(heat_colour(0.0), Color32::from_rgb(68, 1, 84));
+        assert_eq!(heat_colour(1.0), Color32::from_rgb(253, 231, 37));
+        assert_eq!(light_colour(0.0), Color32::from_rgb(0, 0, 4));
+        assert_eq!(light_colour(1.0), Color32::from_rgb(252, 255, 164));
     }
 
     #[test]
@@ -175,8 +227,8 @@ mod tests {
                 decades: 4.0,
             },
         );
-        assert_eq!(img.pixels[2 + 1], colormap(1.0), "bottom-right pixel");
-        assert_eq!(img.pixels[0], colormap(0.0));
+        assert_eq!(img.pixels[2 + 1], heat_colour(1.0), "bottom-right pixel");
+        assert_eq!(img.pixels[0], heat_colour(0.0));
         let s = samples_image(&[([0.1, 0.9], 3)], 2);
         assert_eq!(s.pixels[2 + 1], set_color(3));
         assert_eq!(s.pixels[0], Color32::TRANSPARENT);
