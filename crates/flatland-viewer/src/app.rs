@@ -530,6 +530,42 @@ impl ViewerApp {
         }
     }
 
+    /// The top bar's numbers: the learner, its progress, the held-out error of ζ and (with the
+    /// lit scene) of the solved `B − E`, its speed.
+    fn stats_text(&self, st: &Status, heldout_defined: bool) -> String {
+        let snap = &st.snapshot;
+        let mut parts = vec![
+            learner_name(&st.params),
+            format!("steps {}", snap.steps),
+            format!("rays {}", snap.rays),
+            format!(
+                "cells {}/{}",
+                snap.cells.len(),
+                self.sent_params.target_cells
+            ),
+        ];
+        if let Some(faces) = st.occupied_faces {
+            parts.push(format!("in {faces} faces"));
+        }
+        parts.push(format!(
+            "samples {} in {} sets",
+            snap.samples.len(),
+            snap.sets
+        ));
+        let err = snap.history.last().map_or("–".into(), |h| {
+            error_text(h.rel_l2_heldout, heldout_defined)
+        });
+        parts.push(format!("ζ held out {err}"));
+        if let Some(l) = self.lit() {
+            let err = error_text(l.solve.errors.rel_l2_reflected, true);
+            parts.push(format!("solved B−E {err}"));
+        }
+        if st.steps_per_s > 0.0 {
+            parts.push(format!("{:.0} steps/s", st.steps_per_s));
+        }
+        parts.join("  ")
+    }
+
     fn top_bar(&mut self, ui: &mut egui::Ui) {
         let defined = self.world.as_ref().map_or([true; 2], |w| w.defined);
         ui.horizontal(|ui| {
@@ -540,36 +576,31 @@ impl ViewerApp {
             } else if ui.button("Play").clicked() {
                 self.play();
             }
-            if ui.button("Step").on_hover_text("train `step size` steps, then pause").clicked() {
+            if ui
+                .button("Step")
+                .on_hover_text("train `step size` steps, then pause")
+                .clicked()
+            {
                 self.step();
             }
             let times = ui.label("×");
             ui.add(DragValue::new(&mut self.settings.step_size).range(1..=1_000_000))
                 .labelled_by(times.id)
                 .on_hover_text("step size: steps per press of Step");
-            if ui.button("Reset").on_hover_text("a fresh fit (seed, |S₀|, subdivision apply)").clicked() {
+            if ui
+                .button("Reset")
+                .on_hover_text("a fresh fit (seed, |S₀|, subdivision apply)")
+                .clicked()
+            {
                 self.reset();
             }
             ui.separator();
-            let mut stats = String::new();
-            if let Some(st) = &self.status {
-                let snap = &st.snapshot;
-                let err = snap.history.last().map_or("–".into(), |h| error_text(h.rel_l2_heldout, defined[1]));
-                let faces = st.occupied_faces.map(|f| format!("   faces with cells {f}")).unwrap_or_default();
-                let lit = self.lit().map(|l| format!("   solved B−E {}", error_text(l.solve.errors.rel_l2_reflected, true))).unwrap_or_default();
-                stats = format!(
-                    "{}   steps {}   rays {}   cells {}/{}{faces}   samples {}   sets {}   ζ held out {err}{lit}   {:.0} steps/s",
-                    learner_name(&st.params),
-                    snap.steps,
-                    snap.rays,
-                    snap.cells.len(),
-                    self.sent_params.target_cells,
-                    snap.samples.len(),
-                    snap.sets,
-                    st.steps_per_s
-                );
-            }
-            ui.label(RichText::new(stats).monospace());
+            let stats = self
+                .status
+                .as_ref()
+                .map(|st| self.stats_text(st, defined[1]))
+                .unwrap_or_default();
+            ui.label(RichText::new(stats).monospace().size(11.0));
             ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
                 ui.label(RichText::new(format!("{:.0} fps", self.fps_now)).weak());
             });
@@ -735,7 +766,7 @@ impl ViewerApp {
             samples: textures.samples,
         };
         let learned_title = match status.map(|s| s.params.target) {
-            Some(kernel_fit::Target::Visibility) => "learned ζ = exact unoccluded ζ × learned V",
+            Some(kernel_fit::Target::Visibility) => "learned ζ (unoccluded ζ × V)",
             _ => "learned ζ (SGCS)",
         };
         let panels = [

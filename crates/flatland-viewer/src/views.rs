@@ -20,6 +20,8 @@ use crate::worker::{Lit, World};
 
 /// Height of a panel's title line.
 pub const TITLE_H: f32 = 18.0;
+/// Height of the scene view's line under the title (the hovered ray's k).
+const INFO_H: f32 = 12.0;
 
 const CELL: Color32 = Color32::from_rgb(245, 245, 245);
 const CRITICAL: Color32 = Color32::from_rgb(40, 230, 255);
@@ -437,7 +439,7 @@ impl LitPaint<'_> {
 fn scene_area(rect: Rect, lit: bool) -> Rect {
     let right = if lit { COLOUR_BAR_W } else { 18.0 };
     Rect::from_min_max(
-        rect.min + vec2(18.0, TITLE_H + 8.0),
+        rect.min + vec2(18.0, TITLE_H + INFO_H + 6.0),
         rect.max - vec2(right, 16.0),
     )
 }
@@ -632,8 +634,8 @@ fn draw_ray(painter: &Painter, view: &View, rect: Rect, world: &World, s: f64, t
         );
     }
     painter.text(
-        rect.right_top() + vec2(-6.0, 3.0),
-        Align2::RIGHT_TOP,
+        rect.left_top() + vec2(6.0, TITLE_H + 1.0),
+        Align2::LEFT_TOP,
         format!("k = {:.4}, {label}", k.k),
         FontId::proportional(12.0),
         color,
@@ -913,6 +915,13 @@ pub fn b_curves(ui: &mut egui::Ui, lit: &Lit, height: f32) {
         });
 }
 
+/// A learning curve. Never aggregated into a band: egui_plot fills the span of points that share
+/// a pixel column, which turned a vertical drop (errors falling while the rays stay the same)
+/// into a filled wedge.
+fn curve(name: &str, points: PlotPoints<'static>) -> Line<'static> {
+    Line::new(name, points).allow_band(false)
+}
+
 /// The learning curves: held-out error of ζ (and, with the lit scene, of the solved `B − E`)
 /// against steps and against rays; cells and samples; and `B(s)` when the lit scene exists.
 pub fn curves(ui: &mut egui::Ui, snapshot: Option<&Snapshot>, lit: Option<&Lit>) {
@@ -936,12 +945,12 @@ pub fn curves(ui: &mut egui::Ui, snapshot: Option<&Snapshot>, lit: Option<&Lit>)
             .allow_zoom(false)
             .allow_drag(false)
             .show(&mut cols[0], |p| {
-                p.line(Line::new(
+                p.line(curve(
                     "ζ held out",
                     series(&|h| [h.steps as f64, h.rel_l2_heldout]),
                 ));
                 if !lit_history.is_empty() {
-                    p.line(Line::new(
+                    p.line(curve(
                         "solved B − E",
                         lit_series(&|h| [h.steps as f64, h.rel_l2_reflected]),
                     ));
@@ -956,12 +965,12 @@ pub fn curves(ui: &mut egui::Ui, snapshot: Option<&Snapshot>, lit: Option<&Lit>)
             .allow_zoom(false)
             .allow_drag(false)
             .show(&mut cols[1], |p| {
-                p.line(Line::new(
+                p.line(curve(
                     "ζ held out",
                     series(&|h| [h.rays as f64, h.rel_l2_heldout]),
                 ));
                 if !lit_history.is_empty() {
-                    p.line(Line::new(
+                    p.line(curve(
                         "solved B − E",
                         lit_series(&|h| [h.rays as f64, h.rel_l2_reflected]),
                     ));
@@ -980,11 +989,9 @@ pub fn curves(ui: &mut egui::Ui, snapshot: Option<&Snapshot>, lit: Option<&Lit>)
             .allow_zoom(false)
             .allow_drag(false)
             .show(&mut cols[2], |p| {
+                p.line(curve("cells", series(&|h| [h.steps as f64, h.cells as f64])).width(2.5));
                 p.line(
-                    Line::new("cells", series(&|h| [h.steps as f64, h.cells as f64])).width(2.5),
-                );
-                p.line(
-                    Line::new(
+                    curve(
                         "samples / 20",
                         series(&|h| [h.steps as f64, h.samples as f64 / 20.0]),
                     )

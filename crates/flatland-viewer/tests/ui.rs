@@ -386,7 +386,7 @@ fn the_lit_scene_publishes_b_and_its_error_while_the_cells_grow() {
     assert!(last.history.len() >= 2, "{:?}", last.history);
     assert_eq!(last.history[0].rel_l2_reflected, start_error);
     assert!(app.occupied_faces().is_some_and(|f| f > 0));
-    h.get_by_label_contains("faces with cells");
+    h.get_by_label_contains(" faces  samples");
     h.get_by_label_contains("solved B−E");
     wait_until(&mut h, "the stop in words", |h| {
         h.query_by_label_contains("stopped: converged").is_some()
