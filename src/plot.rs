@@ -208,7 +208,7 @@ pub fn log_log(
         }
         chart
             .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
+            .position(emptiest_corner(series, (x0, x1), (y0, y1)))
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK)
             .label_font(("sans-serif", 16))
@@ -217,6 +217,39 @@ pub fn log_log(
         root.present().map_err(|e| err(e.to_string()))?;
     }
     write_rgb_png(path, &buffer, WIDTH, HEIGHT)
+}
+
+/// The corner of a log–log chart with the fewest points of `series` near it (where the legend
+/// hides the least).
+fn emptiest_corner(series: &[Series], x: (f64, f64), y: (f64, f64)) -> SeriesLabelPosition {
+    let unit = |v: f64, (lo, hi): (f64, f64)| {
+        if v > 0.0 && v.is_finite() {
+            (v.ln() - lo.ln()) / (hi.ln() - lo.ln())
+        } else {
+            0.0
+        }
+    };
+    let points: Vec<(f64, f64)> = series
+        .iter()
+        .flat_map(|s| s.points.iter())
+        .map(|p| (unit(p.0, x), unit(p.1, y)))
+        .collect();
+    // (position, x range, y range) of each corner's box, in unit coordinates.
+    let corners = [
+        (SeriesLabelPosition::UpperRight, (0.6, 1.0), (0.6, 1.0)),
+        (SeriesLabelPosition::LowerLeft, (0.0, 0.4), (0.0, 0.4)),
+        (SeriesLabelPosition::UpperLeft, (0.0, 0.4), (0.6, 1.0)),
+        (SeriesLabelPosition::LowerRight, (0.6, 1.0), (0.0, 0.4)),
+    ];
+    corners
+        .into_iter()
+        .min_by_key(|(_, (x0, x1), (y0, y1))| {
+            points
+                .iter()
+                .filter(|(px, py)| (*x0..=*x1).contains(px) && (*y0..=*y1).contains(py))
+                .count()
+        })
+        .map_or(SeriesLabelPosition::UpperRight, |c| c.0)
 }
 
 /// A log axis over `[lo, hi]` whose ticks are [`log_ticks`].

@@ -947,12 +947,26 @@ fn assert_interrupted(s: &Stopped, kept: &str) {
 #[test]
 fn regression_ctrl_c_stops_a_fit_and_says_what_was_kept() {
     let dir = temp_dir("ctrl-c-fit");
-    let plain = interrupt_when(&dir, &["fit", "--cells", "3000"], "training to");
+    // The paper's network: 3000 cells take long (the default learner is exact on fig3 within
+    // a tenth of a second and would finish before the signal).
+    let plain = interrupt_when(
+        &dir,
+        &["fit", "--preset", "paper", "--cells", "3000"],
+        "training to",
+    );
     assert_interrupted(&plain, "nothing was saved");
 
     let stopped = interrupt_when(
         &dir,
-        &["fit", "--cells", "3000", "--checkpoint", "run.ckpt"],
+        &[
+            "fit",
+            "--preset",
+            "paper",
+            "--cells",
+            "3000",
+            "--checkpoint",
+            "run.ckpt",
+        ],
         "training to",
     );
     assert_interrupted(&stopped, "checkpoint saved to run.ckpt");
@@ -972,11 +986,13 @@ fn regression_ctrl_c_stops_a_fit_and_says_what_was_kept() {
 #[test]
 fn regression_ctrl_c_stops_the_final_refit() {
     let dir = temp_dir("ctrl-c-refit");
-    // At 600 cells the refit takes several seconds.
+    // At 600 cells the paper's refit takes several seconds (the default learner has none).
     let stopped = interrupt_when(
         &dir,
         &[
             "fit",
+            "--preset",
+            "paper",
             "--cells",
             "600",
             "--checkpoint",

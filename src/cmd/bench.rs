@@ -35,6 +35,10 @@ pub struct Args {
     /// Reference grid resolution R in [16, 4096].
     #[arg(long, default_value_t = 256)]
     pub res: usize,
+    /// Solve the radiosity with every representation on N elements and report the error of
+    /// the solved B against the exact kernel's (0: no solve).
+    #[arg(long, value_name = "N", default_value_t = 256)]
+    pub solve_elements: usize,
     /// Output folder for results.csv and the plots.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
@@ -44,11 +48,35 @@ pub struct Args {
 const MAX_SEEDS: u64 = 1000;
 
 /// Files `flatland bench` writes into its folder.
-pub const OUTPUTS: [&str; 4] = [
+pub const OUTPUTS: [&str; 6] = [
     "results.csv",
     "error_vs_basis.png",
     "error_vs_time.png",
     "error_vs_rays.png",
+    "solve_vs_basis.png",
+    "solve_vs_time.png",
+];
+
+/// The header of `results.csv`.
+pub const CSV_HEADER: [&str; 18] = [
+    "scene",
+    "method",
+    "budget",
+    "seed",
+    "basis_functions",
+    "rel_l2_grid",
+    "rel_l2_heldout",
+    "rel_l2_heldout_p05",
+    "rel_l2_heldout_p95",
+    "rel_l1_grid",
+    "rel_l1_heldout",
+    "rays",
+    "wall_s",
+    "memory_bytes",
+    "bytes_per_basis",
+    "rel_l2_b",
+    "rel_l2_reflected",
+    "solve_s",
 ];
 
 /// Runs `flatland bench`.
@@ -58,7 +86,8 @@ pub fn run(args: &Args) -> Result<()> {
         .iter()
         .map(|m| Method::parse(m.trim()))
         .collect::<Result<Vec<_>, _>>()?;
-    let plan = BenchPlan::new(methods, args.budgets.clone(), args.seeds);
+    let mut plan = BenchPlan::new(methods, args.budgets.clone(), args.seeds);
+    plan.solve_elements = (args.solve_elements > 0).then_some(args.solve_elements);
     plan.validate()?;
     for &budget in &plan.budgets {
         super::check_cells("--budgets", budget)?;
@@ -135,26 +164,42 @@ pub fn write_outputs(
     rows: &[BenchRow],
     defined: super::Defined,
 ) -> Result<()> {
-    let mut csv = String::from(
-        "scene,method,budget,seed,basis_functions,rel_l2_grid,rel_l2_heldout,rays,wall_s,memory_bytes\n",
-    );
+    let mut csv = csv::Writer::from_writer(Vec::new());
+    csv.write_record(CSV_HEADER)?;
     let field = |ok: bool, v: f64| if ok { v.to_string() } else { String::new() };
     for r in rows {
-        writeln!(
-            csv,
-            "{scene},{},{},{},{},{},{},{},{},{}",
-            r.method.name(),
-            r.budget,
-            r.seed,
-            r.basis_functions,
+        let solve = |f: fn(&kernel_fit::solve::SolveErrors) -> f64| {
+            r.solve.as_ref().map_or(String::new(), |e| f(e).to_string())
+        };
+        csv.write_record([
+            scene.to_owned(),
+            r.method.name().to_owned(),
+            r.budget.to_string(),
+            r.seed.to_string(),
+            r.basis_functions.to_string(),
             field(defined.grid, r.errors.grid),
             field(defined.heldout, r.errors.heldout),
-            r.rays,
-            r.wall_s,
-            r.memory_bytes
-        )?;
+            field(defined.heldout, r.errors.heldout_spread[0]),
+            field(defined.heldout, r.errors.heldout_spread[1]),
+            field(defined.grid, r.errors.l1_grid),
+            field(defined.heldout, r.errors.l1_heldout),
+            r.rays.to_string(),
+            r.wall_s.to_string(),
+            r.memory_bytes.to_string(),
+            (r.memory_bytes as f64 / r.basis_functions.max(1) as f64).to_string(),
+            solve(|e| e.rel_l2_b),
+            solve(|e| e.rel_l2_reflected),
+            if r.solve.is_some() {
+                r.solve_s.to_string()
+            } else {
+                String::new()
+            },
+        ])?;
     }
-    interrupt::writing(|| flatland_geom::write_atomic(&dir.join("results.csv"), csv.as_bytes()))?;
+    let csv = csv
+        .into_inner()
+        .map_err(|e| anyhow::anyhow!("writing the CSV: {e}"))?;
+    interrupt::writing(|| flatland_geom::write_atomic(&dir.join("results.csv"), &csv))?;
     if !defined.heldout {
         return Ok(());
     }
@@ -166,7 +211,7 @@ pub fn write_outputs(
         ("error_vs_rays.png", "rays", |r| r.rays as f64),
     ];
     for (file, x_label, x) in axes {
-        let series = series(rows, x);
+        let series = series(rows, x, |r| Some(r.errors.heldout));
         let title = format!("{scene}: relative L2 (held out) vs {x_label}");
         log_log(
             &dir.join(file),
@@ -176,11 +221,35 @@ pub fn write_outputs(
             &series,
         )?;
     }
+    if rows.iter().any(|r| r.solve.is_some()) {
+        let solved: [(&str, &str, XAxis); 2] = [
+            ("solve_vs_basis.png", "basis functions", |r| {
+                r.basis_functions as f64
+            }),
+            ("solve_vs_time.png", "wall time to build (s)", |r| r.wall_s),
+        ];
+        for (file, x_label, x) in solved {
+            let series = series(rows, x, |r| r.solve.map(|e| e.rel_l2_reflected));
+            let title = format!("{scene}: solved radiosity, reflected part, vs {x_label}");
+            log_log(
+                &dir.join(file),
+                &title,
+                x_label,
+                "relative L2 error of B − E",
+                &series,
+            )?;
+        }
+    }
     Ok(())
 }
 
-/// Per method and budget: x and the mean, min and max held-out error over seeds.
-fn series(rows: &[BenchRow], x: fn(&BenchRow) -> f64) -> Vec<Series> {
+/// Per method and budget: x and the mean, min and max of `y` over seeds (rows without a `y`
+/// are left out).
+fn series(
+    rows: &[BenchRow],
+    x: fn(&BenchRow) -> f64,
+    y: fn(&BenchRow) -> Option<f64>,
+) -> Vec<Series> {
     let mut by_method: BTreeMap<Method, BTreeMap<usize, Vec<&BenchRow>>> = BTreeMap::new();
     for r in rows {
         by_method
@@ -196,14 +265,18 @@ fn series(rows: &[BenchRow], x: fn(&BenchRow) -> f64) -> Vec<Series> {
             label: method.name().to_owned(),
             points: budgets
                 .values()
-                .map(|group| {
+                .filter_map(|group| {
+                    let group: Vec<&&BenchRow> = group.iter().filter(|r| y(r).is_some()).collect();
+                    if group.is_empty() {
+                        return None;
+                    }
                     let n = group.len() as f64;
-                    let errors: Vec<f64> = group.iter().map(|r| r.errors.heldout).collect();
+                    let errors: Vec<f64> = group.iter().filter_map(|r| y(r)).collect();
                     let mean_x = group.iter().map(|r| x(r)).sum::<f64>() / n;
                     let mean = errors.iter().sum::<f64>() / n;
                     let min = errors.iter().copied().fold(f64::INFINITY, f64::min);
                     let max = errors.iter().copied().fold(0.0, f64::max);
-                    (mean_x, mean, min, max)
+                    Some((mean_x, mean, min, max))
                 })
                 .collect(),
         })
@@ -217,8 +290,9 @@ pub fn table(rows: &[BenchRow], defined: super::Defined) -> String {
         groups.entry((r.budget, r.method)).or_default().push(r);
     }
     let mut out = String::from(
-        "| budget | method | basis fns | rel. L2 grid | rel. L2 held out (min–max) | rays | wall s | bytes |\n\
-         |---:|---|---:|---:|---:|---:|---:|---:|\n",
+        "| budget | method | basis fns | rel. L2 grid | rel. L2 held out (min–max) | rel. L1 grid \
+         | solved B − E | rays | build s | bytes / basis fn |\n\
+         |---:|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
     for ((budget, method), g) in groups {
         let n = g.len() as f64;
@@ -233,15 +307,24 @@ pub fn table(rows: &[BenchRow], defined: super::Defined) -> String {
         } else {
             "undefined".to_owned()
         };
+        let solved = if g.iter().all(|r| r.solve.is_some()) {
+            format!(
+                "{:.4}",
+                mean(&|r| r.solve.map_or(0.0, |e| e.rel_l2_reflected))
+            )
+        } else {
+            "–".to_owned()
+        };
         let _ = writeln!(
             out,
-            "| {budget} | {} | {:.0} | {} | {heldout} | {:.0} | {:.3} | {:.0} |",
+            "| {budget} | {} | {:.0} | {} | {heldout} | {} | {solved} | {:.0} | {:.3} | {:.0} |",
             method.name(),
             mean(&|r| r.basis_functions as f64),
             super::error_text(mean(&|r| r.errors.grid), defined.grid, 3),
+            super::error_text(mean(&|r| r.errors.l1_grid), defined.grid, 3),
             mean(&|r| r.rays as f64),
             mean(&|r| r.wall_s),
-            mean(&|r| r.memory_bytes as f64),
+            mean(&|r| r.memory_bytes as f64 / r.basis_functions.max(1) as f64),
         );
     }
     out

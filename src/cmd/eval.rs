@@ -86,13 +86,22 @@ pub fn run(args: &Args) -> Result<()> {
             "res": args.res,
             "rel_l2_grid": defined.grid.then_some(errors.grid),
             "rel_l2_heldout": defined.heldout.then_some(errors.heldout),
+            "rel_l2_heldout_p05": defined.heldout.then_some(errors.heldout_spread[0]),
+            "rel_l2_heldout_p95": defined.heldout.then_some(errors.heldout_spread[1]),
+            "rel_l1_grid": defined.grid.then_some(errors.l1_grid),
+            "rel_l1_heldout": defined.heldout.then_some(errors.l1_heldout),
         });
         println!("{json}");
     } else {
         println!(
-            "{cells} cells; relative L2 on the {r}×{r} grid {}, held out {}; wrote {}",
+            "{cells} cells; on the {r}×{r} grid relative L2 {}, L1 {}; held out relative L2 {} \
+             (bootstrap 90 %: {} – {}), L1 {}; wrote {}",
             super::error_text(errors.grid, defined.grid, 4),
+            super::error_text(errors.l1_grid, defined.grid, 4),
             super::error_text(errors.heldout, defined.heldout, 4),
+            super::error_text(errors.heldout_spread[0], defined.heldout, 4),
+            super::error_text(errors.heldout_spread[1], defined.heldout, 4),
+            super::error_text(errors.l1_heldout, defined.heldout, 4),
             args.out.display(),
             r = args.res
         );

@@ -219,7 +219,11 @@ pub fn run(args: &Args) -> Result<()> {
     if reason == StopReason::Interrupted {
         return Err(interrupt::stopped().into());
     }
-    eprintln!("least-squares refit and final errors (Ctrl-C stops)");
+    if fit.params().refit {
+        eprintln!("least-squares refit and final errors (Ctrl-C stops)");
+    } else {
+        eprintln!("final errors");
+    }
     let summary = fit.finish()?;
     interrupt::check()?;
     let defined = super::Defined::of(fit.reference());
@@ -267,6 +271,10 @@ pub fn summary_json(s: &FitSummary, scene: &str, defined: super::Defined) -> ser
         "samples_per_cell": s.samples as f64 / s.cells as f64,
         "rel_l2_grid": or_null(grid, s.errors.grid),
         "rel_l2_heldout": or_null(heldout, s.errors.heldout),
+        "rel_l2_heldout_p05": or_null(heldout, s.errors.heldout_spread[0]),
+        "rel_l2_heldout_p95": or_null(heldout, s.errors.heldout_spread[1]),
+        "rel_l1_grid": or_null(grid, s.errors.l1_grid),
+        "rel_l1_heldout": or_null(heldout, s.errors.l1_heldout),
         "rel_l2_grid_before_refit": s.errors_before_refit.and_then(|e| or_null(grid, e.grid)),
         "rel_l2_heldout_before_refit": s.errors_before_refit.and_then(|e| or_null(heldout, e.heldout)),
         "wall_s": s.wall_s,
@@ -290,6 +298,18 @@ pub fn print_summary(s: &FitSummary, scene: &str, defined: super::Defined) {
         row("rel. L2 before refit", defined.format(&b));
     }
     row("rel. L2", defined.format(&s.errors));
+    if defined.heldout {
+        let [lo, hi] = s.errors.heldout_spread;
+        row("held out, bootstrap 90 %", format!("{lo:.4} – {hi:.4}"));
+    }
+    row(
+        "rel. L1",
+        format!(
+            "grid {}   held out {}",
+            super::error_text(s.errors.l1_grid, defined.grid, 4),
+            super::error_text(s.errors.l1_heldout, defined.heldout, 4)
+        ),
+    );
     if let Some(why) = defined.note() {
         row("", why.to_owned());
     }

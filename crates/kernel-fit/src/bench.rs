@@ -9,6 +9,9 @@ use flatland_geom::Kernel;
 use serde::{Deserialize, Serialize};
 
 use crate::baselines::{BaselineRun, HrParams, UniformParams, run_hr_at_budget, run_uniform};
+use crate::solve::{
+    ExactReference, KernelRepresentation, Mesh, SolveErrors, SolveParams, never, solve_against,
+};
 use crate::{Approximation, Errors, Fit, FitError, FitParams, Reference};
 
 /// A method the benchmark compares.
@@ -81,6 +84,13 @@ pub struct BenchRow {
     pub wall_s: f64,
     /// Bytes of the representation.
     pub memory_bytes: usize,
+    /// The radiosity solved with it against the exact kernel's, when the plan asks
+    /// ([`BenchPlan::solve_elements`]).
+    #[serde(default)]
+    pub solve: Option<SolveErrors>,
+    /// Wall time of that solve (operator and linear solve), seconds.
+    #[serde(default)]
+    pub solve_s: f64,
 }
 
 /// What to run.
@@ -100,6 +110,9 @@ pub struct BenchPlan {
     pub hr: HrParams,
     /// Uniform-grid parameters.
     pub uniform: UniformParams,
+    /// Solve the radiosity with every representation on this many elements and report the
+    /// error of B against the exact kernel's (`None`: no solve).
+    pub solve_elements: Option<usize>,
 }
 
 impl BenchPlan {
@@ -113,6 +126,7 @@ impl BenchPlan {
             paper: FitParams::paper(),
             hr: HrParams::default(),
             uniform: UniformParams::default(),
+            solve_elements: None,
         }
     }
 
@@ -156,6 +170,10 @@ pub fn run_bench(
     plan.validate()?;
     let total = plan.methods.len() * plan.budgets.len() * plan.seeds as usize;
     let mut rows = Vec::with_capacity(total);
+    let solver = plan
+        .solve_elements
+        .map(|n| Solver::new(kernel, n))
+        .transpose()?;
     for &budget in &plan.budgets {
         for seed in 1..=plan.seeds {
             let wants_paper = plan
@@ -163,13 +181,21 @@ pub fn run_bench(
                 .iter()
                 .any(|m| matches!(m, Method::SgcsPaper | Method::SgcsPaperNoRefit));
             let paper = if wants_paper {
-                Some(paper_rows(kernel, reference, &plan.paper, budget, seed)?)
+                Some(paper_rows(
+                    kernel,
+                    reference,
+                    &plan.paper,
+                    budget,
+                    seed,
+                    solver.as_ref(),
+                )?)
             } else {
                 None
             };
             for &method in &plan.methods {
+                let s = solver.as_ref();
                 let row = match method {
-                    Method::Sgcs => learner_row(kernel, reference, &plan.fit, budget, seed)?,
+                    Method::Sgcs => learner_row(kernel, reference, &plan.fit, budget, seed, s)?,
                     Method::SgcsPaper => paper.as_ref().map(|r| r.0.clone()).expect("fitted above"),
                     Method::SgcsPaperNoRefit => {
                         paper.as_ref().map(|r| r.1.clone()).expect("fitted above")
@@ -180,14 +206,16 @@ pub fn run_bench(
                         seed,
                         run_hr_at_budget(kernel, budget, seed, &plan.hr)?,
                         reference,
-                    ),
+                        s,
+                    )?,
                     Method::Uniform => baseline_row(
                         method,
                         budget,
                         seed,
                         run_uniform(kernel, budget, seed, &plan.uniform)?,
                         reference,
-                    ),
+                        s,
+                    )?,
                 };
                 rows.push(row);
                 progress(rows.len(), total);
@@ -197,35 +225,80 @@ pub fn run_bench(
     Ok(rows)
 }
 
+/// The radiosity solve every row is scored with: one mesh and the exact kernel's B on it.
+struct Solver {
+    mesh: Mesh,
+    exact: Vec<f64>,
+}
+
+impl Solver {
+    fn new(kernel: &Kernel, elements: usize) -> Result<Solver, FitError> {
+        let mesh = Mesh::new(kernel, elements)?;
+        let reference = ExactReference::new(
+            kernel,
+            ExactReference::default_elements(elements),
+            &SolveParams::default(),
+            &never,
+        )?;
+        let exact = reference.radiosity_on(&mesh, &never)?;
+        Ok(Solver { mesh, exact })
+    }
+
+    /// The errors of B solved with `rep`, and the solve's wall time.
+    fn score(&self, rep: &dyn KernelRepresentation) -> Result<(SolveErrors, f64), FitError> {
+        let started = Instant::now();
+        let c = solve_against(
+            rep,
+            &self.mesh,
+            &self.exact,
+            &SolveParams::default(),
+            &never,
+        )?;
+        Ok((c.errors, started.elapsed().as_secs_f64()))
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
 fn row(
     method: Method,
     budget: usize,
     seed: u64,
-    approx: &dyn Approximation,
+    approx: &(impl Approximation + KernelRepresentation),
     reference: &Reference,
     rays: u64,
     wall_s: f64,
-) -> BenchRow {
-    BenchRow {
+    solver: Option<&Solver>,
+) -> Result<BenchRow, FitError> {
+    let (solve, solve_s) = match solver {
+        Some(solver) => {
+            let (errors, s) = solver.score(approx)?;
+            (Some(errors), s)
+        }
+        None => (None, 0.0),
+    };
+    Ok(BenchRow {
         method,
         budget,
         seed,
-        basis_functions: approx.basis_functions(),
+        basis_functions: Approximation::basis_functions(approx),
         errors: reference.errors(approx),
         rays,
         wall_s,
-        memory_bytes: approx.memory_bytes(),
-    }
+        memory_bytes: Approximation::memory_bytes(approx),
+        solve,
+        solve_s,
+    })
 }
 
 /// The row of a baseline run.
-fn baseline_row<A: Approximation>(
+fn baseline_row<A: Approximation + KernelRepresentation>(
     method: Method,
     budget: usize,
     seed: u64,
     run: BaselineRun<A>,
     reference: &Reference,
-) -> BenchRow {
+    solver: Option<&Solver>,
+) -> Result<BenchRow, FitError> {
     let wall_s = run.wall.as_secs_f64();
     row(
         method,
@@ -235,6 +308,7 @@ fn baseline_row<A: Approximation>(
         reference,
         run.rays,
         wall_s,
+        solver,
     )
 }
 
@@ -245,6 +319,7 @@ fn learner_row(
     fit: &FitParams,
     budget: usize,
     seed: u64,
+    solver: Option<&Solver>,
 ) -> Result<BenchRow, FitError> {
     let params = FitParams {
         target_cells: budget,
@@ -259,7 +334,7 @@ fn learner_row(
         learner.refit()?;
     }
     let wall_s = started.elapsed().as_secs_f64();
-    Ok(row(
+    row(
         Method::Sgcs,
         budget,
         seed,
@@ -267,7 +342,8 @@ fn learner_row(
         reference,
         learner.rays(),
         wall_s,
-    ))
+        solver,
+    )
 }
 
 /// One fit of the paper's network at `budget` cells: the row after the refit and the row
@@ -278,6 +354,7 @@ fn paper_rows(
     paper: &FitParams,
     budget: usize,
     seed: u64,
+    solver: Option<&Solver>,
 ) -> Result<(BenchRow, BenchRow), FitError> {
     let params = FitParams {
         target_cells: budget,
@@ -298,7 +375,8 @@ fn paper_rows(
         reference,
         fit.rays(),
         train_s,
-    );
+        solver,
+    )?;
     let started = Instant::now();
     fit.refit()?;
     let refit_s = started.elapsed().as_secs_f64();
@@ -310,7 +388,8 @@ fn paper_rows(
         reference,
         fit.rays(),
         train_s + refit_s,
-    );
+        solver,
+    )?;
     Ok((after, before))
 }
 
@@ -324,7 +403,8 @@ mod tests {
         let scene = Scene::from_ron_str(include_str!("../../../scenes/fig3.ron")).unwrap();
         let kernel = Arc::new(Kernel::new(scene));
         let reference = Arc::new(Reference::new(&kernel, 48, 512, 3));
-        let plan = BenchPlan::new(Method::ALL.to_vec(), vec![30, 60], 2);
+        let mut plan = BenchPlan::new(Method::ALL.to_vec(), vec![30, 60], 2);
+        plan.solve_elements = Some(64);
         let mut calls = 0;
         let rows = run_bench(&kernel, &reference, &plan, |done, total| {
             calls += 1;
@@ -339,6 +419,11 @@ mod tests {
             );
             assert!(
                 r.rays > 0 && r.basis_functions > 0 && r.memory_bytes > 0,
+                "{r:?}"
+            );
+            let solve = r.solve.expect("the plan asks for a solve");
+            assert!(
+                solve.rel_l2_reflected.is_finite() && r.solve_s > 0.0,
                 "{r:?}"
             );
         }
@@ -361,12 +446,15 @@ mod tests {
                 pick(Method::SgcsPaper, budget).errors.heldout
                     <= pick(Method::SgcsPaperNoRefit, budget).errors.heldout * 1.05
             );
-            // The learner beats hierarchical radiosity by far at the same budget (R4).
+            // The learner beats hierarchical radiosity by far at the same budget (R4), and so
+            // does the scene it lights.
             let (learned, hr) = (pick(Method::Sgcs, budget), pick(Method::Hr, budget));
             assert!(
                 learned.errors.grid < 0.5 * hr.errors.grid,
                 "{learned:?} vs {hr:?}"
             );
+            let reflected = |r: &BenchRow| r.solve.unwrap().rel_l2_reflected;
+            assert!(reflected(learned) < reflected(hr), "{learned:?} vs {hr:?}");
         }
     }
 

@@ -265,7 +265,27 @@ impl Approximation for LearnedKernel {
     fn memory_bytes(&self) -> usize {
         // Per cell: position (4), output (1), width (1) as f64; per edge two u32 ids.
         let cells = self.network.len() * (INPUT_DIM + 2) * 8;
-        cells + self.network.edges().len() * 8
+        let network = cells + self.network.edges().len() * 8;
+        // A visibility model also keeps what it needs to find a ray's face: each cell's face
+        // (a u32), the class of every pair of surface edges (a byte each) and the event points
+        // of the pairs where visibility varies (two f64 each).
+        let geometry = self.geometry.as_ref().map_or(0, |g| {
+            let n = g.kernel.surface_parents();
+            if n > crate::visibility::MAX_LISTED_PARENTS {
+                // Not kept: computed per pair when asked (as the exact kernel does).
+                return self.network.len() * 4;
+            }
+            let mut events = 0;
+            for a in 0..n {
+                for b in 0..n {
+                    if let Some(e) = g.kernel.visibility_events(a, b) {
+                        events += (0..4).map(|k| e.points(k).len()).sum::<usize>();
+                    }
+                }
+            }
+            self.network.len() * 4 + n * n + events * 16
+        });
+        network + geometry
     }
 }
 

@@ -148,10 +148,8 @@ impl KernelRepresentation for Kernel {
     }
 }
 
-/// The learned model: the default operator (quadrature of ζ̃ / E', no rays at solve time).
-/// This is the place to override once the model keeps the geometry exact.
 /// The learned model. A visibility model (the default learner) integrates its own `Ṽ` exactly
-/// against the closed-form transfer, asking `Ṽ` once per face ([`super::learned`]); the paper's
+/// against the closed-form transfer, asking `Ṽ` once per face (the `learned` module); the paper's
 /// network, which learns ζ itself, uses the quadrature default.
 impl KernelRepresentation for LearnedKernel {
     fn zeta(&self, s: f64, t: f64) -> f64 {
