@@ -501,9 +501,15 @@ pub fn scene_view(
         pos2(x, rect.bottom() - 3.0),
         Align2::LEFT_BOTTOM,
         format!(
-            "· {} edges, L = {:.3} · drag an end point to edit",
+            "· {} edges, L = {:.3}{}",
             scene.edges().len(),
-            scene.total_length()
+            scene.total_length(),
+            // Lit, the colour bar's labels take the bottom right.
+            if lit.is_some() {
+                ""
+            } else {
+                " · drag an end point to edit"
+            }
         ),
         FontId::proportional(10.0),
         weak,
