@@ -7,6 +7,7 @@ mod cmd;
 mod interrupt;
 mod output;
 mod plot;
+mod report;
 
 /// Learn the Flatland radiosity kernel with supervised growing cell structures (Bohn 1996).
 #[derive(Parser)]

@@ -391,39 +391,9 @@ const WIDTH: u32 = 1600;
 const HEIGHT: u32 = 760;
 const SCENE_WIDTH: u32 = 760;
 
-/// Inferno (matplotlib's, 17 samples): black through purple and orange to pale yellow, the
-/// colours of light.
-const INFERNO: [[u8; 3]; 17] = [
-    [0, 0, 4],
-    [12, 8, 38],
-    [36, 12, 79],
-    [66, 10, 104],
-    [93, 18, 110],
-    [120, 28, 109],
-    [147, 38, 103],
-    [174, 48, 92],
-    [199, 62, 76],
-    [221, 81, 58],
-    [237, 105, 37],
-    [248, 133, 15],
-    [252, 165, 10],
-    [250, 198, 45],
-    [242, 230, 97],
-    [246, 250, 150],
-    [252, 255, 164],
-];
-
 fn inferno(x: f64) -> RGBColor {
-    let f = if x.is_finite() {
-        x.clamp(0.0, 1.0)
-    } else {
-        0.0
-    } * (INFERNO.len() - 1) as f64;
-    let i = (f as usize).min(INFERNO.len() - 2);
-    let w = f - i as f64;
-    let (a, b) = (INFERNO[i], INFERNO[i + 1]);
-    let c = |k: usize| (f64::from(a[k]) * (1.0 - w) + f64::from(b[k]) * w).round() as u8;
-    RGBColor(c(0), c(1), c(2))
+    let [r, g, b] = kernel_fit::colormap::inferno(x);
+    RGBColor(r, g, b)
 }
 
 /// The brightest non-emitting element (emitters are drawn above the scale): the top colour.

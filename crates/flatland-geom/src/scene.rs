@@ -1,4 +1,4 @@
-//! Edges, validated scenes and the arc-length parameterization (SPEC §1).
+//! Edges, validated scenes and the arc-length parameterization (docs/ALGORITHM.md §1).
 
 use std::fmt;
 
@@ -98,7 +98,7 @@ impl Edge {
         self.a + (self.b - self.a) * u
     }
 
-    /// Checks every rule of SPEC §1 for this edge; `index` names it in the error.
+    /// Checks every rule of docs/ALGORITHM.md §1 for this edge; `index` names it in the error.
     fn validate(&self, index: usize) -> Result<(), GeomError> {
         let coords = [
             ("a.x", self.a.x),
@@ -184,7 +184,7 @@ pub(crate) struct Group {
     pub rank: Option<usize>,
 }
 
-/// A validated Flatland scene (SPEC §1): edges, the arc-length parameterization of its surface
+/// A validated Flatland scene (docs/ALGORITHM.md §1): edges, the arc-length parameterization of its surface
 /// edges, and the parent structure left by [`Scene::subdivide`].
 ///
 /// The only ways to get one are [`Scene::new`], loading/deserializing (which validate) and the

@@ -1008,7 +1008,7 @@ impl Fit {
         }
     }
 
-    /// Continues learning on a changed scene (SPEC §6: the representation stays adaptive).
+    /// Continues learning on a changed scene (the representation stays adaptive: a changed scene is learned on, not from scratch).
     ///
     /// The network keeps its cells, weights and counters and the input frame stays put (so the
     /// cells keep their meaning); the old samples describe the old scene and are dropped, and a

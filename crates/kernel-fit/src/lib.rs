@@ -61,6 +61,7 @@
 pub mod ablation;
 pub mod baselines;
 pub mod bench;
+pub mod colormap;
 mod error;
 mod eval;
 mod fit;

@@ -35,7 +35,7 @@ pub enum InsertRule {
     /// adds capacity.
     PreserveOutput,
     /// The mean of the new cell's neighbours' output weights, each weighted by the Voronoi volume
-    /// `|F_c|` it loses to the new cell (the rule SPEC §3 suggests, consistent with the counters).
+    /// `|F_c|` it loses to the new cell (the rule of docs/ALGORITHM.md §3, consistent with the counters).
     /// Falls back to the plain mean of the split edge's two ends when no neighbour loses volume.
     VolumeWeighted,
     /// The target of the sample the cell is put at ([`Insertion::WorstSample`]); the
