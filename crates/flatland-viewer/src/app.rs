@@ -17,13 +17,14 @@ use flatland_geom::{DVec2, Kernel, PairClass, Scene};
 use kernel_fit::{Approximation, FitParams, LearnedKernel, Preset, StopReason};
 
 use crate::BUNDLED_SCENES;
-use crate::colormap::{Scale, grid_image, samples_image};
+use crate::colormap::{grid_image, samples_image};
 use crate::settings::{SETTINGS_KEY, SceneChoice, Settings, live_params};
 use crate::views::{self, Hover, LitPaint, PlotFrame, SceneDrag};
 use crate::worker::{
     APPROX_RES, Approx, Command, Lit, LitState, REFERENCE_RES, Status, WorkerHandle, World,
     error_text, format_errors,
 };
+use kernel_fit::colormap::Scale;
 
 /// How [`crate::run_with`] starts the viewer. The default starts learning at once.
 #[derive(Clone, Debug, Default)]

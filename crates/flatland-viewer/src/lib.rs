@@ -52,7 +52,7 @@ mod worker;
 use std::path::PathBuf;
 
 pub use app::{Options, ViewerApp, stop_text};
-pub use colormap::{Scale, grid_image, heat_colour, light_colour, samples_image, set_color};
+pub use colormap::{colour, grid_image, samples_image, set_color};
 pub use settings::{SceneChoice, Settings, live_params, waiting_for_reset, with_preset};
 pub use worker::{Lit, LitState};
 

@@ -14,7 +14,7 @@ use flatland_geom::{DVec2, GeomError, Role, Scene};
 use kernel_fit::Snapshot;
 use kernel_fit::solve::Mesh;
 
-use crate::colormap::light_colour;
+use crate::colormap::colour;
 use crate::lit::LitPoint;
 use crate::worker::{Lit, World};
 
@@ -430,7 +430,7 @@ pub struct LitPaint<'a> {
 
 impl LitPaint<'_> {
     fn color(&self, b: f64) -> Color32 {
-        light_colour((b / self.top) as f32)
+        colour(b / self.top)
     }
 }
 
@@ -783,7 +783,7 @@ fn colour_bar(painter: &Painter, rect: Rect, top: f64, text: Color32) {
             pos2(bar.left(), bar.bottom() - u1 * bar.height()),
             pos2(bar.right(), bar.bottom() - u0 * bar.height() + 0.5),
         );
-        painter.rect_filled(slice, 0.0, light_colour((u0 + u1) / 2.0));
+        painter.rect_filled(slice, 0.0, colour(f64::from((u0 + u1) / 2.0)));
     }
     painter.rect_stroke(bar, 0.0, Stroke::new(1.0, text), egui::StrokeKind::Outside);
     let font = FontId::proportional(10.0);

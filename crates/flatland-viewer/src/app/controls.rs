@@ -358,7 +358,13 @@ impl ViewerApp {
 
     fn view_controls(&mut self, ui: &mut egui::Ui) {
         ui.heading("View");
-        ui.checkbox(&mut self.settings.log_scale, "log colour scale (4 decades)");
+        ui.checkbox(
+            &mut self.settings.log_scale,
+            format!(
+                "log colour scale ({} decades)",
+                kernel_fit::colormap::LOG_DECADES
+            ),
+        );
         ui.checkbox(
             &mut self.settings.show_cells,
             "cells (size ~ δ_c, cyan = critical)",
