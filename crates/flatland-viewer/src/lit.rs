@@ -1,5 +1,5 @@
 //! The lit scene: the radiosity `B` solved with the kernel as learned so far, beside the
-//! exact `B`, made on the learner's thread ([`crate::worker`]) and drawn by [`crate::views`].
+//! exact `B`, made on the learner's thread (`worker`) and drawn by `views`.
 //!
 //! Per scene, once: a [`Mesh`] and an [`ExactReference`] (the exact kernel solved on a mesh four
 //! times finer), whose `B` at the mesh's collocation points is what every learned solve is
@@ -49,7 +49,7 @@ pub fn solve_interval(cost: Duration) -> Duration {
 /// What the lit view needs of one scene, made once per scene (after a reset or an edit).
 #[derive(Debug)]
 pub struct LitSetup {
-    /// The [`crate::worker::World`] it belongs to.
+    /// The id of the reference (the worker's `World`) it belongs to.
     pub world: u64,
     /// The elements the learned kernel is solved on.
     pub mesh: Mesh,

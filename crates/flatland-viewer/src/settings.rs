@@ -80,7 +80,7 @@ impl Default for Settings {
 }
 
 impl Settings {
-    /// The settings saved in `storage` ([`SETTINGS_KEY`]), [`upgraded`](Settings::upgraded),
+    /// The settings saved in `storage` (key `SETTINGS_KEY`), [`upgraded`](Settings::upgraded),
     /// with a note for the message line when something saved was not kept. Nothing saved, or
     /// settings that no longer decode, give the defaults.
     #[must_use]

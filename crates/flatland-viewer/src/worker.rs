@@ -140,7 +140,7 @@ pub enum LitState {
 /// The scene lit by the learned kernel.
 #[derive(Debug)]
 pub struct Lit {
-    /// The mesh and the exact B (its `world` is the [`World`] it belongs to).
+    /// The mesh and the exact B (its `world` is the id of the reference it belongs to).
     pub setup: Arc<LitSetup>,
     /// Training steps of the model solved.
     pub steps: u64,
