@@ -8,6 +8,7 @@ mod interrupt;
 mod output;
 mod plot;
 mod report;
+mod stress;
 
 /// Learn the Flatland radiosity kernel with supervised growing cell structures (Bohn 1996).
 #[derive(Parser)]

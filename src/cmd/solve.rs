@@ -512,12 +512,11 @@ fn draw_scene(area: &Area<'_>, p: &Picture<'_>) -> DrawResult {
     Ok(())
 }
 
-/// B(s): the solution as steps, the exact reference as a line, emitters shaded, edges marked.
-fn draw_curves(area: &Area<'_>, p: &Picture<'_>) -> DrawResult {
-    let fine = p.reference.mesh();
-    let exact = &p.reference.solution().radiosity;
-    // Emitters are 10–100× brighter than what they light: the axis stops above the brightest
-    // non-emitter, and emitters' values are written where they leave the plot.
+/// The B axis of the curves: emitters are 10–100× brighter than what they light, so the axis
+/// stops above the brightest non-emitter (emitters' values are written where they leave the
+/// plot); a poor kernel can give negative radiosity, shown down to a quarter of the range.
+fn curve_range(p: &Picture<'_>) -> (f64, f64) {
+    let (fine, exact) = (p.reference.mesh(), &p.reference.solution().radiosity);
     let lit = |mesh: &Mesh, b: &[f64]| {
         (0..mesh.len())
             .filter(|&i| mesh.edge_of(i).emission == 0.0)
@@ -534,9 +533,16 @@ fn draw_curves(area: &Area<'_>, p: &Picture<'_>) -> DrawResult {
                 .max(1e-300)
                 * 1.08;
     }
-    // A poor kernel can give negative radiosity: show it, down to a quarter of the range.
     let lowest = p.b.iter().copied().fold(0.0_f64, f64::min);
     let y_min = lowest.max(-0.25 * y_max);
+    (y_min, y_max)
+}
+
+/// B(s): the solution as steps, the exact reference as a line, emitters shaded, edges marked.
+fn draw_curves(area: &Area<'_>, p: &Picture<'_>) -> DrawResult {
+    let fine = p.reference.mesh();
+    let exact = &p.reference.solution().radiosity;
+    let (y_min, y_max) = curve_range(p);
     let clip = |b: f64| b.clamp(y_min, y_max);
     let mut chart = ChartBuilder::on(area)
         .caption(

@@ -198,7 +198,22 @@ fn draw_labels(root: &Area<'_>, map: &Heatmap<'_>, side: u32) -> DrawResult {
             .pos(Pos::new(HPos::Center, VPos::Center)),
     ))?;
 
-    // Colour bar: frame, ticks with values, label.
+    draw_colour_bar(root, map, side)?;
+
+    // Title.
+    root.draw(&Text::new(
+        map.title.clone(),
+        (left + side_i / 2, 8),
+        text(17.0).pos(Pos::new(HPos::Center, VPos::Top)),
+    ))?;
+    Ok(())
+}
+
+/// The colour bar right of the plot: frame, ticks with values, the quantity's name.
+fn draw_colour_bar(root: &Area<'_>, map: &Heatmap<'_>, side: u32) -> DrawResult {
+    let (left, top, side_i) = (LEFT as i32, TOP as i32, side as i32);
+    let fside = f64::from(side);
+    let text = |size: f64| TextStyle::from(("sans-serif", size).into_font()).color(&BLACK);
     let bar_left = left + side_i + BAR_GAP as i32;
     let bar_right = bar_left + BAR_WIDTH as i32;
     root.draw(&Rectangle::new(
@@ -233,12 +248,6 @@ fn draw_labels(root: &Area<'_>, map: &Heatmap<'_>, side: u32) -> DrawResult {
         text(13.0).pos(Pos::new(HPos::Center, VPos::Bottom)),
     ))?;
 
-    // Title.
-    root.draw(&Text::new(
-        map.title.clone(),
-        (left + side_i / 2, 8),
-        text(17.0).pos(Pos::new(HPos::Center, VPos::Top)),
-    ))?;
     Ok(())
 }
 
@@ -251,7 +260,7 @@ mod tests {
     /// and text in the margins.
     #[test]
     fn heatmaps_have_axes_a_colour_bar_and_a_title() {
-        let scene = Scene::from_ron_str(crate::cmd::BUNDLED_FIG3).unwrap();
+        let scene = flatland_geom::bundled::scene("fig3").unwrap();
         // 16 × 16, 1 in row 0 (s smallest) and column 15 (t largest) only.
         let res = 16;
         let grid: Vec<f64> = (0..res * res)

@@ -47,13 +47,9 @@ pub fn unit_box() -> Scene {
     Scene::new(edges).unwrap()
 }
 
-/// The bundled scene `scenes/NAME.ron`.
+/// The bundled scene `NAME`.
 pub fn bundled(name: &str) -> Scene {
-    Scene::load(format!(
-        "{}/../../scenes/{name}.ron",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .unwrap()
+    crate::bundled::scene(name).unwrap()
 }
 
 /// A random point in `[-1, 1]²`.

@@ -1374,9 +1374,9 @@ mod tests {
     use super::*;
     use crate::{Preset, density_ratio, discontinuity_mask};
 
-    const FIG3: &str = include_str!("../../../scenes/fig3.ron");
-    const MAZE: &str = include_str!("../../../scenes/maze.ron");
-    const BOX: &str = include_str!("../../../scenes/box.ron");
+    const FIG3: &str = flatland_geom::bundled::SCENES[0].2;
+    const MAZE: &str = flatland_geom::bundled::SCENES[2].2;
+    const BOX: &str = flatland_geom::bundled::SCENES[1].2;
 
     fn fig3() -> Arc<Kernel> {
         Arc::new(Kernel::new(Scene::from_ron_str(FIG3).unwrap()))

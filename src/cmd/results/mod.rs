@@ -203,13 +203,13 @@ fn figure_dirs(plots: &Path) -> Vec<PathBuf> {
 #[cfg(test)]
 mod tests {
     use super::experiments::{RES, reference_of};
-    use flatland_geom::{Kernel, Scene};
+    use flatland_geom::Kernel;
 
     /// RESULTS.md reported 0.536 held out for the default fit where `flatland fit` printed
     /// 0.406: its held-out points were drawn with seed 0, the command's with the fit's seed.
     #[test]
     fn results_measures_on_the_points_flatland_fit_measures_on() {
-        let kernel = Kernel::new(Scene::from_ron_str(crate::cmd::BUNDLED_FIG3).unwrap());
+        let kernel = Kernel::new(flatland_geom::bundled::scene("fig3").unwrap());
         let args = crate::cmd::fit::Args::for_scene(None);
         assert_eq!(args.res, RES, "the default grid of `flatland fit`");
         let fit = crate::cmd::reference(&kernel, args.res, &args.params().unwrap());

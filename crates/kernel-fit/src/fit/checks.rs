@@ -302,7 +302,7 @@ mod tests {
 
     use crate::{Fit, FitParams, ModelFile, Reference, Target};
 
-    const FIG3: &str = include_str!("../../../../scenes/fig3.ron");
+    const FIG3: &str = flatland_geom::bundled::SCENES[0].2;
 
     /// A small finished fit of fig3 learning `target`.
     fn small_fit(target: Target) -> Fit {

@@ -2,13 +2,9 @@
 
 use flatland_geom::{DVec2, Edge, Scene};
 
-/// The bundled scene `scenes/NAME.ron`.
+/// The bundled scene `NAME`.
 pub fn bundled(name: &str) -> Scene {
-    Scene::load(format!(
-        "{}/../../scenes/{name}.ron",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .expect("bundled scene")
+    flatland_geom::bundled::scene(name).expect("bundled scene")
 }
 
 /// A closed polygon room listed counter-clockwise (facing in), every wall with `rho` and `e`.
