@@ -13,10 +13,9 @@ use egui::{
     CentralPanel, Color32, ColorImage, DragValue, Panel, Pos2, Rect, RichText, ScrollArea,
     TextureHandle, TextureOptions, UiBuilder, Vec2,
 };
-use flatland_geom::{DVec2, Kernel, PairClass, Scene};
+use flatland_geom::{DVec2, Kernel, PairClass, Scene, bundled};
 use kernel_fit::{Approximation, FitParams, LearnedKernel, Preset, StopReason};
 
-use crate::BUNDLED_SCENES;
 use crate::colormap::{grid_image, samples_image};
 use crate::settings::{SETTINGS_KEY, SceneChoice, Settings, live_params};
 use crate::views::{self, Hover, LitPaint, PlotFrame, SceneDrag};
@@ -176,8 +175,8 @@ impl ViewerApp {
             Ok(found) => found,
             Err(e) => {
                 message = Some((format!("{e}; opened fig3 instead"), true));
-                settings.scene = SceneChoice::Bundled("fig3".into());
-                bundled("fig3").expect("fig3 is bundled")
+                settings.scene = SceneChoice::Bundled(bundled::DEFAULT.into());
+                bundled(bundled::DEFAULT).expect("the default scene is bundled")
             }
         };
         if settings.params.validate().is_err() {
@@ -1043,11 +1042,7 @@ impl eframe::App for ViewerApp {
 
 /// A bundled scene by name, with its label.
 fn bundled(name: &str) -> Result<(Scene, String), String> {
-    let (_, text) = BUNDLED_SCENES
-        .iter()
-        .find(|(n, _)| *n == name)
-        .ok_or_else(|| format!("no bundled scene named {name:?}"))?;
-    let scene = Scene::from_ron_str(text).map_err(|e| format!("bundled scene {name}: {e}"))?;
+    let scene = bundled::scene(name).map_err(|e| e.to_string())?;
     Ok((scene, name.to_string()))
 }
 

@@ -56,14 +56,6 @@ pub use colormap::{colour, grid_image, samples_image, set_color};
 pub use settings::{SceneChoice, Settings, live_params, waiting_for_reset, with_preset};
 pub use worker::{Lit, LitState};
 
-/// The scenes shipped with the project, by name, as RON text.
-pub const BUNDLED_SCENES: &[(&str, &str)] = &[
-    ("fig3", include_str!("../../../scenes/fig3.ron")),
-    ("box", include_str!("../../../scenes/box.ron")),
-    ("maze", include_str!("../../../scenes/maze.ron")),
-    ("corners", include_str!("../../../scenes/corners.ron")),
-];
-
 /// Why the viewer could not run.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -160,13 +152,6 @@ mod tests {
     fn errors_can_cross_threads_and_into_anyhow() {
         fn check<T: std::error::Error + Send + Sync + 'static>() {}
         check::<ViewerError>();
-    }
-
-    #[test]
-    fn bundled_scenes_load() {
-        for (name, text) in BUNDLED_SCENES {
-            flatland_geom::Scene::from_ron_str(text).unwrap_or_else(|e| panic!("{name}: {e}"));
-        }
     }
 
     #[test]

@@ -152,19 +152,13 @@ pub fn colour_top(mesh: &Mesh, b: &[f64]) -> f64 {
 mod tests {
     use std::sync::Arc;
 
-    use flatland_geom::Scene;
     use kernel_fit::solve::never;
     use kernel_fit::{Fit, FitParams, Reference, StopReason};
 
     use super::*;
 
     fn kernel(name: &str) -> Kernel {
-        let text = crate::BUNDLED_SCENES
-            .iter()
-            .find(|(n, _)| *n == name)
-            .unwrap()
-            .1;
-        Kernel::new(Scene::from_ron_str(text).unwrap())
+        Kernel::new(flatland_geom::bundled::scene(name).unwrap())
     }
 
     #[test]

@@ -17,7 +17,7 @@ pub const SETTINGS_KEY: &str = "flatland-viewer-settings";
 /// Which scene to open: a bundled one by name or a file.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum SceneChoice {
-    /// One of [`crate::BUNDLED_SCENES`].
+    /// One of `flatland_geom::bundled::SCENES`.
     Bundled(String),
     /// A scene file (`.ron` or `.json`).
     File(PathBuf),
@@ -63,7 +63,7 @@ impl Default for Settings {
             preset: Preset::Default,
             params: FitParams::default(),
             learner_defaults: Some(Preset::Default.params()),
-            scene: SceneChoice::Bundled("fig3".into()),
+            scene: SceneChoice::Bundled(flatland_geom::bundled::DEFAULT.into()),
             subdivide: 1,
             // Slow enough to watch: the default learner is exact on fig3 after about 20 000
             // steps (a few seconds), the paper's network reaches 400 cells in 20 s.

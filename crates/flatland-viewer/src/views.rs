@@ -1093,7 +1093,7 @@ mod tests {
 
     #[test]
     fn moving_a_shared_corner_moves_both_edges() {
-        let scene = Scene::from_ron_str(crate::BUNDLED_SCENES[0].1).unwrap();
+        let scene = flatland_geom::bundled::scene("fig3").unwrap();
         let from = DVec2::new(4.0, 0.0);
         let moved = moved_scene(&scene, from, DVec2::new(4.5, -0.5)).unwrap();
         let hits = moved
@@ -1119,7 +1119,7 @@ mod drag_tests {
 
     #[test]
     fn dragging_an_end_point_reports_the_move() {
-        let scene = Scene::from_ron_str(crate::BUNDLED_SCENES[0].1).unwrap();
+        let scene = flatland_geom::bundled::scene("fig3").unwrap();
         let kernel = Arc::new(Kernel::new(scene.clone()));
         let world = World {
             id: 1,
@@ -1146,10 +1146,7 @@ mod drag_tests {
         );
         // The blocker's first end point, through the same mapping the view uses.
         let inner = scene_area(rect, false);
-        let view = View::of(
-            &Scene::from_ron_str(crate::BUNDLED_SCENES[0].1).unwrap(),
-            inner,
-        );
+        let view = View::of(&flatland_geom::bundled::scene("fig3").unwrap(), inner);
         let from = DVec2::new(1.2, 1.7);
         let p = view.screen(from);
         let press = |pos, pressed| Event::PointerButton {

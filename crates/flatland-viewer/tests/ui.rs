@@ -194,7 +194,7 @@ fn picking_another_scene_starts_a_fresh_fit_on_it() {
     });
     let app = h.state();
     assert_eq!(app.scene_label(), "maze");
-    let maze = flatland_geom::Scene::from_ron_str(flatland_viewer::BUNDLED_SCENES[2].1).unwrap();
+    let maze = flatland_geom::bundled::scene("maze").unwrap();
     assert_eq!(app.reference_scene().unwrap().edges(), maze.edges());
     wait_for(&mut h, "a fresh snapshot", |a| {
         a.steps() == 0 && a.cells() == 3

@@ -9,7 +9,6 @@ use kernel_fit::{Gating, Preset, Resampling, Target};
 use sgcs::{InsertRule, Insertion, OutputMode, OutputRule, Resource};
 
 use super::ViewerApp;
-use crate::BUNDLED_SCENES;
 use crate::settings::{SceneChoice, waiting_for_reset, with_preset};
 use crate::worker::Command;
 
@@ -36,9 +35,13 @@ impl ViewerApp {
     fn scene_controls(&mut self, ui: &mut egui::Ui) {
         ui.heading("Scene");
         ui.horizontal_wrapped(|ui| {
-            for (name, _) in BUNDLED_SCENES {
+            for (name, about, _) in flatland_geom::bundled::SCENES {
                 let selected = self.settings.scene == SceneChoice::Bundled(name.to_string());
-                if ui.selectable_label(selected, *name).clicked() {
+                if ui
+                    .selectable_label(selected, name)
+                    .on_hover_text(about)
+                    .clicked()
+                {
                     self.open_bundled(name);
                 }
             }
