@@ -738,6 +738,7 @@ impl ViewerApp {
             })
         });
         Heatmaps {
+            scale,
             kernel,
             approx: approx_tex,
             error: error_tex,
@@ -757,10 +758,11 @@ impl ViewerApp {
         approx: Option<&Approx>,
     ) {
         let ctx = ui.ctx().clone();
-        let kernel_frame = PlotFrame::new(layout.kernel, true);
+        let mut kernel_frame = PlotFrame::new(layout.kernel, true);
         let side =
             ((kernel_frame.plot.width() * ctx.pixels_per_point()).round() as usize).clamp(16, 2048);
         let textures = self.heatmap_textures(&ctx, world, status, approx, side);
+        kernel_frame.scale = Some(textures.scale);
         let overlay = views::Overlay {
             cells: textures.overlay,
             samples: textures.samples,
@@ -874,8 +876,9 @@ impl ViewerApp {
     }
 }
 
-/// The textures of one frame's heatmaps and overlays.
+/// The textures of one frame's heatmaps and overlays, and the heatmaps' colour scale.
 struct Heatmaps {
+    scale: Scale,
     kernel: egui::TextureId,
     approx: Option<egui::TextureId>,
     error: Option<egui::TextureId>,

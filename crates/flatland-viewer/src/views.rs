@@ -14,6 +14,8 @@ use flatland_geom::{DVec2, GeomError, Role, Scene};
 use kernel_fit::Snapshot;
 use kernel_fit::solve::Mesh;
 
+use kernel_fit::colormap::Scale;
+
 use crate::colormap::colour;
 use crate::lit::LitPoint;
 use crate::worker::{Lit, World};
@@ -33,6 +35,8 @@ const SURFACE: Color32 = Color32::from_rgb(190, 190, 195);
 const BLOCKER: Color32 = Color32::from_rgb(235, 80, 70);
 /// Blockers in a lit scene: out of the colour map's range, so never read as a radiosity.
 const LIT_BLOCKER: Color32 = Color32::from_rgb(110, 150, 210);
+/// Width of the colour bar beside the big kernel plot, labels included.
+const HEAT_BAR_W: f32 = 56.0;
 /// Width of the colour bar beside a lit scene, labels included.
 const COLOUR_BAR_W: f32 = 58.0;
 
@@ -70,24 +74,31 @@ pub struct PlotFrame {
     pub outer: Rect,
     /// The square the unit square maps to.
     pub plot: Rect,
-    /// Whether axis titles and edge labels are drawn.
+    /// Whether axis titles, edge labels and a colour bar are drawn.
     pub big: bool,
+    /// The colour scale, for the colour bar of a big frame.
+    pub scale: Option<Scale>,
 }
 
 impl PlotFrame {
     /// Fits the square plot into `outer`, leaving room for a title and (if `big`) axis labels.
     #[must_use]
     pub fn new(outer: Rect, big: bool) -> PlotFrame {
-        let (left, bottom) = if big { (34.0, 30.0) } else { (4.0, 4.0) };
+        let (left, bottom, right) = if big {
+            (34.0, 30.0, HEAT_BAR_W)
+        } else {
+            (4.0, 4.0, 2.0)
+        };
         let avail = Rect::from_min_max(
             outer.min + vec2(left, TITLE_H),
-            outer.max - vec2(2.0, bottom),
+            outer.max - vec2(right, bottom),
         );
         let side = avail.width().min(avail.height()).max(8.0);
         PlotFrame {
             outer,
             plot: Rect::from_min_size(avail.min, Vec2::splat(side)),
             big,
+            scale: None,
         }
     }
 
@@ -311,6 +322,9 @@ pub fn kernel_plot(
         painter.add(TextShape::new(pos, galley, weak).with_angle(-FRAC_PI_2));
     }
 
+    if let (true, Some(scale)) = (frame.big, frame.scale) {
+        scale_bar(&painter, frame, scale, weak);
+    }
     if let Some(tex) = overlay.samples {
         painter.image(tex, plot, uv(), Color32::WHITE);
     }
@@ -431,6 +445,56 @@ pub struct LitPaint<'a> {
 impl LitPaint<'_> {
     fn color(&self, b: f64) -> Color32 {
         colour(b / self.top)
+    }
+}
+
+/// The heatmaps' colour bar, right of `frame`'s plot: the scale's values at its ticks (each
+/// decade of a log scale; 0, half and the top of a linear one). The learned and error panels
+/// share the scale.
+fn scale_bar(painter: &Painter, frame: &PlotFrame, scale: Scale, text: Color32) {
+    let plot = frame.plot;
+    let bar = Rect::from_min_max(
+        pos2(plot.right() + 8.0, plot.top() + 14.0),
+        pos2(plot.right() + 20.0, plot.bottom()),
+    );
+    let steps = 64;
+    for k in 0..steps {
+        let (u0, u1) = (k as f32 / steps as f32, (k + 1) as f32 / steps as f32);
+        let slice = Rect::from_min_max(
+            pos2(bar.left(), bar.bottom() - u1 * bar.height()),
+            pos2(bar.right(), bar.bottom() - u0 * bar.height() + 0.5),
+        );
+        painter.rect_filled(slice, 0.0, colour(f64::from((u0 + u1) / 2.0)));
+    }
+    painter.rect_stroke(bar, 0.0, Stroke::new(1.0, text), egui::StrokeKind::Outside);
+    painter.text(
+        bar.center_top() - vec2(0.0, 2.0),
+        Align2::CENTER_BOTTOM,
+        "ζ",
+        FontId::proportional(12.0),
+        text,
+    );
+    let ticks: Vec<f64> = if scale.log {
+        let decades = kernel_fit::colormap::LOG_DECADES;
+        (0..=decades as usize).map(|d| d as f64 / decades).collect()
+    } else {
+        vec![0.0, 0.5, 1.0]
+    };
+    for x in ticks {
+        let y = bar.bottom() - x as f32 * bar.height();
+        painter.hline(bar.right()..=bar.right() + 3.0, y, Stroke::new(1.0, text));
+        let label = if scale.log && x == 0.0 {
+            format!("≤{}", short(scale.value_at(x)))
+        } else {
+            short(scale.value_at(x))
+        };
+        painter.text(
+            pos2(bar.right() + 4.0, y),
+            Align2::LEFT_CENTER,
+            label,
+            FontId::proportional(10.0),
+            text,
+        );
     }
 }
 
