@@ -5,6 +5,8 @@
 use std::path::PathBuf;
 
 use egui::{Color32, DragValue, RichText};
+use kernel_fit::Schema;
+use kernel_fit::schema::{Bound, Range};
 use kernel_fit::{Gating, Preset, Resampling, Target};
 use sgcs::{InsertRule, Insertion, OutputMode, OutputRule, Resource};
 
@@ -144,17 +146,7 @@ impl ViewerApp {
                 .num_columns(3)
                 .striped(true)
                 .show(ui, |ui| {
-                    row(
-                        ui,
-                        "importance",
-                        "share of samples drawn in proportion to the clipped square of the \
-                         unoccluded ζ, the rest uniform over the pairs where V varies (target V \
-                         only; applies on Reset)",
-                        &mut p.importance,
-                        0.0..=0.99,
-                        "[0, 1)",
-                        1e-2,
-                    );
+                    schema_row(ui, p, "importance", "importance", 0.0..=0.99, 1e-2);
                 });
             ui.checkbox(&mut p.weighted, "weighted errors")
                 .on_hover_text(
@@ -232,60 +224,12 @@ impl ViewerApp {
             .num_columns(3)
             .striped(true)
             .show(ui, |ui| {
-                row(
-                    ui,
-                    "ω",
-                    "critical: τ > ω · mean τ",
-                    &mut p.omega,
-                    0.0..=100.0,
-                    "≥ 0",
-                    1e-2,
-                );
-                row(
-                    ui,
-                    "φ",
-                    "inside a network: Σ M > φ",
-                    &mut p.phi,
-                    1e-6..=100.0,
-                    "> 0",
-                    1e-2,
-                );
-                row(
-                    ui,
-                    "ψ",
-                    "new set when |A|/|S| > ψ",
-                    &mut p.psi,
-                    1e-4..=1.0,
-                    "(0, 1]",
-                    1e-3,
-                );
-                row(
-                    ui,
-                    "|S₀|",
-                    "initial samples (applies on Reset)",
-                    &mut p.initial_samples,
-                    3..=1_000_000,
-                    "≥ 3",
-                    10.0,
-                );
-                row(
-                    ui,
-                    "min |S_j|",
-                    "smallest resampled set",
-                    &mut p.min_set_size,
-                    1..=1_000_000,
-                    "≥ 1",
-                    1.0,
-                );
-                row(
-                    ui,
-                    "scan ×",
-                    "θ scans ≤ this × set size",
-                    &mut p.scan_factor,
-                    1..=100_000,
-                    "≥ 1",
-                    1.0,
-                );
+                schema_row(ui, p, "omega", "ω", 0.0..=100.0, 1e-2);
+                schema_row(ui, p, "phi", "φ", 1e-6..=100.0, 1e-2);
+                schema_row(ui, p, "psi", "ψ", 1e-4..=1.0, 1e-3);
+                schema_row(ui, p, "initial_samples", "|S₀|", 3.0..=1_000_000.0, 10.0);
+                schema_row(ui, p, "min_set_size", "min |S_j|", 1.0..=1_000_000.0, 1.0);
+                schema_row(ui, p, "scan_factor", "scan ×", 1.0..=100_000.0, 1.0);
             });
         choice(
             ui,
@@ -314,15 +258,7 @@ impl ViewerApp {
             .num_columns(3)
             .striped(true)
             .show(ui, |ui| {
-                row(
-                    ui,
-                    "target cells",
-                    "growth stops here",
-                    &mut p.target_cells,
-                    3..=20_000,
-                    "≥ 3",
-                    5.0,
-                );
+                schema_row(ui, p, "target_cells", "target cells", 3.0..=20_000.0, 5.0);
                 row(
                     ui,
                     "seed",
@@ -332,24 +268,8 @@ impl ViewerApp {
                     "any",
                     1.0,
                 );
-                row(
-                    ui,
-                    "ridge",
-                    "smallest refit ridge tried (×10⁰…10⁶, best on S₀ kept)",
-                    &mut p.ridge,
-                    1e-12..=1.0,
-                    "> 0",
-                    1e-7,
-                );
-                row(
-                    ui,
-                    "eval every",
-                    "steps between error points",
-                    &mut p.eval_every,
-                    0..=1_000_000,
-                    "≥ 0",
-                    100.0,
-                );
+                schema_row(ui, p, "ridge", "ridge", 1e-12..=1.0, 1e-7);
+                schema_row(ui, p, "eval_every", "eval every", 0.0..=1_000_000.0, 100.0);
             });
         let learns_zeta = p.target != Target::Visibility;
         ui.add_enabled(
@@ -399,60 +319,12 @@ fn network_rates(ui: &mut egui::Ui, n: &mut sgcs::Params) {
         .num_columns(3)
         .striped(true)
         .show(ui, |ui| {
-            row(
-                ui,
-                "ε_b",
-                "learning rate of the winner",
-                &mut n.eps_b,
-                1e-6..=1.0,
-                "(0, 1]",
-                1e-4,
-            );
-            row(
-                ui,
-                "ε_n",
-                "learning rate of its neighbours",
-                &mut n.eps_n,
-                0.0..=1.0,
-                "[0, 1]",
-                1e-5,
-            );
-            row(
-                ui,
-                "η",
-                "output learning rate",
-                &mut n.eta,
-                1e-6..=1.999,
-                "(0, 2)",
-                1e-3,
-            );
-            row(
-                ui,
-                "α",
-                "resource forgetting factor",
-                &mut n.alpha,
-                0.0..=0.999,
-                "[0, 1)",
-                1e-3,
-            );
-            row(
-                ui,
-                "λ",
-                "steps between insertions",
-                &mut n.lambda,
-                1..=100_000,
-                "≥ 1",
-                1.0,
-            );
-            row(
-                ui,
-                "cutoff",
-                "activations below are 0",
-                &mut n.activation_cutoff,
-                0.0..=0.5,
-                "[0, 1)",
-                1e-9,
-            );
+            schema_row(ui, n, "eps_b", "ε_b", 1e-6..=1.0, 1e-4);
+            schema_row(ui, n, "eps_n", "ε_n", 0.0..=1.0, 1e-5);
+            schema_row(ui, n, "eta", "η", 1e-6..=1.999, 1e-3);
+            schema_row(ui, n, "alpha", "α", 0.0..=0.999, 1e-3);
+            schema_row(ui, n, "lambda", "λ", 1.0..=100_000.0, 1.0);
+            schema_row(ui, n, "activation_cutoff", "cutoff", 0.0..=0.5, 1e-9);
         });
 }
 
@@ -575,6 +447,68 @@ fn choice<T: PartialEq + Copy>(
                 .on_hover_text(hover);
         }
     });
+}
+
+/// A parameter of the schema in a 3-column grid: label (hover: the schema's help) | value |
+/// the schema's range. The value is kept inside the range (and inside `shown`, a practical
+/// window for dragging), so the learner never sees an invalid value.
+fn schema_row<S: Schema>(
+    ui: &mut egui::Ui,
+    params: &mut S,
+    name: &str,
+    label: &str,
+    shown: std::ops::RangeInclusive<f64>,
+    speed: f64,
+) {
+    let Some(spec) = S::spec(name) else {
+        return;
+    };
+    let (lo, hi) = valid_window(spec.range, shown);
+    let Some(mut value) = params.get(name) else {
+        return;
+    };
+    let meaning = spec.help;
+    let label = ui.label(label).on_hover_text(meaning);
+    let mut drag = DragValue::new(&mut value).range(lo..=hi).speed(speed);
+    drag = if spec.range.integer {
+        drag.fixed_decimals(0)
+    } else {
+        drag.max_decimals(9)
+    };
+    if ui
+        .add(drag)
+        .labelled_by(label.id)
+        .on_hover_text(meaning)
+        .changed()
+    {
+        let value = if spec.range.integer {
+            value.round()
+        } else {
+            value
+        };
+        if spec.range.contains(value) {
+            params.set(name, value);
+        }
+    }
+    ui.label(RichText::new(spec.range.to_string()).small().weak());
+    ui.end_row();
+}
+
+/// The closed window a drag value may take: the valid range (open ends moved one step in)
+/// within `shown`.
+fn valid_window(range: Range, shown: std::ops::RangeInclusive<f64>) -> (f64, f64) {
+    let lo = match range.lo {
+        Bound::Closed(v) => v,
+        Bound::Open(v) => v.next_up(),
+        Bound::None => f64::MIN,
+    };
+    let hi = match range.hi {
+        Bound::Closed(v) => v,
+        Bound::Open(v) if range.integer => v - 1.0,
+        Bound::Open(v) => v.next_down(),
+        Bound::None => f64::MAX,
+    };
+    (lo.max(*shown.start()), hi.min(*shown.end()))
 }
 
 /// A labelled, range-limited number in a 3-column grid: name (hover: meaning) | value | range.
