@@ -26,9 +26,7 @@ pub fn rng(seed: u64) -> ChaCha8Rng {
 
 /// A closed room through `points`, counter-clockwise (so it faces inwards), all with `rho`.
 pub fn room(points: &[DVec2], rho: f64) -> Vec<Edge> {
-    (0..points.len())
-        .map(|i| Edge::surface(points[i], points[(i + 1) % points.len()], rho))
-        .collect()
+    Edge::polygon(points, rho)
 }
 
 /// Every edge mapped through `f` (scale, translate, …).

@@ -53,6 +53,15 @@ impl Edge {
         }
     }
 
+    /// The walls of a closed polygon room through `points`, each with `reflectance`: listed
+    /// counter-clockwise, they face inwards.
+    #[must_use]
+    pub fn polygon(points: &[DVec2], reflectance: f64) -> Vec<Edge> {
+        (0..points.len())
+            .map(|i| Edge::surface(points[i], points[(i + 1) % points.len()], reflectance))
+            .collect()
+    }
+
     /// A blocker edge (occludes only; reflectance and emission are 0).
     #[must_use]
     pub const fn blocker(a: DVec2, b: DVec2) -> Edge {

@@ -9,8 +9,9 @@ pub fn bundled(name: &str) -> Scene {
 
 /// A closed polygon room listed counter-clockwise (facing in), every wall with `rho` and `e`.
 pub fn room(points: &[DVec2], rho: f64, e: f64) -> Scene {
-    let edges = (0..points.len())
-        .map(|i| Edge::surface(points[i], points[(i + 1) % points.len()], rho).with_emission(e))
+    let edges = Edge::polygon(points, rho)
+        .into_iter()
+        .map(|edge| edge.with_emission(e))
         .collect();
     Scene::new(edges).expect("valid room")
 }
