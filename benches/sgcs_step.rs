@@ -4,7 +4,7 @@
 //! Each network is grown with a short insertion interval until it has the wanted size, then
 //! `max_cells` freezes it and the bench measures plain steps (growth every λ = 300 steps would add
 //! about one insertion's cost / 300 per step). Samples come from a precomputed ring, so only the
-//! network is timed. Aim (issue 3): the step at 4000 cells costs at most 3× the step at 400.
+//! network is timed. Aim: the step at 4000 cells costs at most 3× the step at 400.
 //! Measured with `-- --warm-up-time 1 --measurement-time 3` on 2 cores shared with other builds
 //! (load ≈ 7): step 4.3 / 14.0 / 21.5 µs, predict 3.0 / 9.7 / 18.4 µs at 100 / 400 / 4000 cells.
 //!

@@ -18,7 +18,7 @@ use super::*;
 /// reaches the same relative errors (within 5 %).
 pub fn scale_cases(suite: &mut Suite, fig3: &Scene, baseline: &mut Baseline) {
     let mut transforms: Vec<(String, f64, DVec2)> = Vec::new();
-    // 1e±120 is beyond issue 7's range: where r³ used to under/overflow (k ≡ 0) and where
+    // 1e±120 is beyond the ranges the suite first covered: where r³ used to under/overflow (k ≡ 0) and where
     // ζ leaves the network's supported magnitude (1e100).
     let scales: &[f64] = if suite.quick {
         &[1e-6, 1e6]
