@@ -8,7 +8,7 @@ use std::ops::ControlFlow;
 use std::sync::Arc;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use flatland_geom::{Kernel, Scene};
+use flatland_geom::Kernel;
 use kernel_fit::baselines::{HrParams, UniformParams, run_hr_at_budget, run_uniform};
 use kernel_fit::solve::{Mesh, SolveParams, exact_operator, never, solve, solve_operator};
 use kernel_fit::{Fit, FitParams, Reference};
@@ -18,8 +18,7 @@ const ELEMENTS: usize = 1024;
 const BASIS: usize = 400;
 
 fn bundled(name: &str) -> Kernel {
-    let path = format!("{}/scenes/{name}.ron", env!("CARGO_MANIFEST_DIR"));
-    Kernel::new(Scene::load(&path).expect("a bundled scene loads"))
+    Kernel::new(flatland_geom::bundled::scene(name).expect("a bundled scene loads"))
 }
 
 fn solves(c: &mut Criterion) {

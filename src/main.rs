@@ -7,6 +7,8 @@ mod cmd;
 mod interrupt;
 mod output;
 mod plot;
+mod report;
+mod stress;
 
 /// Learn the Flatland radiosity kernel with supervised growing cell structures (Bohn 1996).
 #[derive(Parser)]
@@ -20,6 +22,8 @@ struct Cli {
 enum Command {
     /// Validate a scene file and print a summary.
     Check(cmd::check::Args),
+    /// List every numeric learner parameter: name, symbol, valid range, defaults, meaning.
+    Params,
     /// Evaluate the exact kernel k(s,t) (or zeta with --weighted) on an RxR grid, to CSV or PNG.
     Kernel(cmd::kernel::Args),
     /// Learn a scene's kernel with SGCS; print the figures, optionally save the model.
@@ -46,6 +50,10 @@ fn main() {
     interrupt::install();
     let result: Result<()> = match cli.command {
         Some(Command::Check(args)) => cmd::check::run(&args),
+        Some(Command::Params) => {
+            print!("{}", kernel_fit::parameter_table());
+            Ok(())
+        }
         Some(Command::Kernel(args)) => cmd::kernel::run(&args),
         Some(Command::Fit(args)) => cmd::fit::run(&args),
         Some(Command::Eval(args)) => cmd::eval::run(&args),

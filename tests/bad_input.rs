@@ -1,10 +1,10 @@
-//! Bad scene files never panic (issue 7): truncated, binary, huge, deeply nested, wrong-typed
+//! Bad scene files never panic: truncated, binary, huge, deeply nested, wrong-typed
 //! and randomly mutated files give a one-line error naming the file and a position (parse
 //! errors) or the edge (validation errors), through the library and through the CLI; a file
 //! that is accepted gives a finite, non-negative kernel. The same property as the cargo-fuzz
 //! target `fuzz/fuzz_targets/scene.rs`, run with proptest inside the normal test suite.
 //!
-//! Model and checkpoint files the tools wrote and a user edited (issue 13): any field replaced,
+//! Model and checkpoint files the tools wrote and a user edited: any field replaced,
 //! removed, emptied or duplicated loads with a one-line error naming the file, or loads and
 //! then evaluates (a model) or trains and finishes (a checkpoint) to finite errors — never a
 //! panic or an allocation abort.

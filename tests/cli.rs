@@ -271,7 +271,7 @@ fn regression_missing_file_error_is_printed_once() {
     assert_eq!(err.matches("os error").count(), 1, "{err}");
 }
 
-// ===== `flatland solve` (issue 11): the lit scene =====
+// ===== `flatland solve`: the lit scene =====
 
 /// Runs `flatland solve` with `args` and parses its `--json` object.
 fn solve_json(args: &[&str]) -> serde_json::Value {

@@ -1,4 +1,4 @@
-//! `flatland stress` (issue 7) from the command line: the quick suite CI runs passes, and the
+//! `flatland stress` from the command line: the quick suite CI runs passes, and the
 //! command refuses an `--only` that selects nothing.
 
 use std::process::{Command, Output};
@@ -23,7 +23,7 @@ fn stress_quick_passes_every_case() {
         .skip(2)
         .take_while(|l| !l.contains(" passed, "))
         .collect();
-    // Every family of issue 7 is there.
+    // Every family of cases is there.
     for family in [
         "scale ×1e-6",
         "scale ×1e6",

@@ -22,7 +22,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let (scene, label) = match &args.scene {
         Some(path) => (Scene::load(path)?, path.display().to_string()),
         None => (
-            Scene::from_ron_str(super::BUNDLED_FIG3)?,
+            flatland_geom::bundled::scene(flatland_geom::bundled::DEFAULT)?,
             "fig3 (bundled)".to_owned(),
         ),
     };

@@ -69,14 +69,14 @@ pub fn run(args: &Args) -> Result<()> {
         args.model.display(),
         r = args.res
     );
-    let map = super::kernel::heatmap(
+    let map = crate::report::grid::heatmap(
         title,
         "learned ζ",
         kernel.scene(),
         reference.grid(),
         args.log,
     );
-    super::kernel::write_grid(&args.out, args.res, &values, &map)
+    crate::report::grid::write_grid(&args.out, args.res, &values, &map)
         .with_context(|| format!("writing {}", args.out.display()))?;
     let errors = reference.errors(&file.model);
     let defined = super::Defined::of(&reference);

@@ -74,6 +74,10 @@ pub struct Args {
     /// Skip the final least-squares refit of the output weights.
     #[arg(long)]
     pub no_refit: bool,
+    /// Set any numeric parameter of the learner, e.g. `--set eta=0.05 --set phi=0.1`; each is
+    /// checked against its range (`flatland params` lists every name, range and default).
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    pub set: Vec<String>,
     /// Reference grid resolution R for the error on the grid, in [16, 4096].
     #[arg(long, default_value_t = 256)]
     pub res: usize,
@@ -115,7 +119,7 @@ impl Args {
             !self.factor_emission || d.target == Target::Zeta,
             "--factor-emission applies to the paper's network (--preset paper), which learns ζ"
         );
-        Ok(FitParams {
+        let mut params = FitParams {
             target_cells: self.cells,
             seed: self.seed,
             max_steps: self.max_steps.unwrap_or(d.max_steps),
@@ -132,7 +136,12 @@ impl Args {
                 d.target
             },
             ..d
-        })
+        };
+        for assignment in &self.set {
+            kernel_fit::schema::set_checked(&mut params, assignment)
+                .map_err(|e| anyhow::anyhow!("--set {e}"))?;
+        }
+        Ok(params)
     }
 }
 

@@ -39,7 +39,8 @@ impl SceneArgs {
         let (scene, mut label) = match &self.scene {
             Some(path) => (Scene::load(path)?, path.display().to_string()),
             None => (
-                Scene::from_ron_str(BUNDLED_FIG3).context("the bundled fig3 scene")?,
+                flatland_geom::bundled::scene(flatland_geom::bundled::DEFAULT)
+                    .context("the bundled fig3 scene")?,
                 "fig3 (bundled)".to_owned(),
             ),
         };
@@ -63,9 +64,6 @@ impl SceneArgs {
         Ok((Kernel::new(scene), label))
     }
 }
-
-/// The bundled default scene (the paper's Fig. 3), so the binary runs from any folder.
-pub const BUNDLED_FIG3: &str = include_str!("../../scenes/fig3.ron");
 
 /// The reference every error of a fit is measured against: `res × res` grid and
 /// `params.heldout` points drawn with the one [`REFERENCE_SEED`] every command uses, so fits of

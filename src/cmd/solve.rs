@@ -391,39 +391,9 @@ const WIDTH: u32 = 1600;
 const HEIGHT: u32 = 760;
 const SCENE_WIDTH: u32 = 760;
 
-/// Inferno (matplotlib's, 17 samples): black through purple and orange to pale yellow, the
-/// colours of light.
-const INFERNO: [[u8; 3]; 17] = [
-    [0, 0, 4],
-    [12, 8, 38],
-    [36, 12, 79],
-    [66, 10, 104],
-    [93, 18, 110],
-    [120, 28, 109],
-    [147, 38, 103],
-    [174, 48, 92],
-    [199, 62, 76],
-    [221, 81, 58],
-    [237, 105, 37],
-    [248, 133, 15],
-    [252, 165, 10],
-    [250, 198, 45],
-    [242, 230, 97],
-    [246, 250, 150],
-    [252, 255, 164],
-];
-
 fn inferno(x: f64) -> RGBColor {
-    let f = if x.is_finite() {
-        x.clamp(0.0, 1.0)
-    } else {
-        0.0
-    } * (INFERNO.len() - 1) as f64;
-    let i = (f as usize).min(INFERNO.len() - 2);
-    let w = f - i as f64;
-    let (a, b) = (INFERNO[i], INFERNO[i + 1]);
-    let c = |k: usize| (f64::from(a[k]) * (1.0 - w) + f64::from(b[k]) * w).round() as u8;
-    RGBColor(c(0), c(1), c(2))
+    let [r, g, b] = kernel_fit::colormap::inferno(x);
+    RGBColor(r, g, b)
 }
 
 /// The brightest non-emitting element (emitters are drawn above the scale): the top colour.
@@ -542,12 +512,11 @@ fn draw_scene(area: &Area<'_>, p: &Picture<'_>) -> DrawResult {
     Ok(())
 }
 
-/// B(s): the solution as steps, the exact reference as a line, emitters shaded, edges marked.
-fn draw_curves(area: &Area<'_>, p: &Picture<'_>) -> DrawResult {
-    let fine = p.reference.mesh();
-    let exact = &p.reference.solution().radiosity;
-    // Emitters are 10–100× brighter than what they light: the axis stops above the brightest
-    // non-emitter, and emitters' values are written where they leave the plot.
+/// The B axis of the curves: emitters are 10–100× brighter than what they light, so the axis
+/// stops above the brightest non-emitter (emitters' values are written where they leave the
+/// plot); a poor kernel can give negative radiosity, shown down to a quarter of the range.
+fn curve_range(p: &Picture<'_>) -> (f64, f64) {
+    let (fine, exact) = (p.reference.mesh(), &p.reference.solution().radiosity);
     let lit = |mesh: &Mesh, b: &[f64]| {
         (0..mesh.len())
             .filter(|&i| mesh.edge_of(i).emission == 0.0)
@@ -564,9 +533,16 @@ fn draw_curves(area: &Area<'_>, p: &Picture<'_>) -> DrawResult {
                 .max(1e-300)
                 * 1.08;
     }
-    // A poor kernel can give negative radiosity: show it, down to a quarter of the range.
     let lowest = p.b.iter().copied().fold(0.0_f64, f64::min);
     let y_min = lowest.max(-0.25 * y_max);
+    (y_min, y_max)
+}
+
+/// B(s): the solution as steps, the exact reference as a line, emitters shaded, edges marked.
+fn draw_curves(area: &Area<'_>, p: &Picture<'_>) -> DrawResult {
+    let fine = p.reference.mesh();
+    let exact = &p.reference.solution().radiosity;
+    let (y_min, y_max) = curve_range(p);
     let clip = |b: f64| b.clamp(y_min, y_max);
     let mut chart = ChartBuilder::on(area)
         .caption(

@@ -8,7 +8,7 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::{register_font, short_number};
-use crate::cmd::kernel::{LOG_DECADES, normalise, viridis};
+use kernel_fit::colormap::{LOG_DECADES, Scale, inferno};
 
 /// Smallest side of the plotted square in pixels: small grids are scaled up (nearest
 /// neighbour), so labels fit and a cell stays a crisp square.
@@ -47,6 +47,15 @@ pub struct Heatmap<'a> {
     pub overlay: Option<Overlay<'a>>,
 }
 
+impl Heatmap<'_> {
+    fn scale(&self) -> Scale {
+        Scale {
+            top: self.top,
+            log: self.log,
+        }
+    }
+}
+
 /// The heatmap of an `res × res` grid (row `i` ↔ `s = (i + ½)/res`, column `j` ↔ `t`), PNG-encoded.
 pub fn heatmap_png(grid: &[f64], res: usize, map: &Heatmap<'_>) -> Result<Vec<u8>> {
     anyhow::ensure!(
@@ -63,9 +72,10 @@ pub fn heatmap_png(grid: &[f64], res: usize, map: &Heatmap<'_>) -> Result<Vec<u8
 
     // The values, s upwards: pixel row y shows grid row res − 1 − y / zoom.
     let dim = if map.overlay.is_some() { 0.55 } else { 1.0 };
-    let colours: Vec<[u8; 3]> = normalise(grid, map.log, map.top)
-        .into_iter()
-        .map(|v| viridis(v).map(|c| (f64::from(c) * dim) as u8))
+    let scale = map.scale();
+    let colours: Vec<[u8; 3]> = grid
+        .iter()
+        .map(|&v| scale.colour(v).map(|c| (f64::from(c) * dim) as u8))
         .collect();
     for y in 0..side {
         let row = res - 1 - y / zoom;
@@ -78,7 +88,7 @@ pub fn heatmap_png(grid: &[f64], res: usize, map: &Heatmap<'_>) -> Result<Vec<u8
     // The colour bar: bottom to top, 0 to 1.
     let bar_left = (LEFT + side_px + BAR_GAP) as usize;
     for y in 0..side {
-        let colour = viridis(1.0 - y as f64 / (side - 1).max(1) as f64);
+        let colour = inferno(1.0 - y as f64 / (side - 1).max(1) as f64);
         let line = (TOP as usize + y) * width as usize + bar_left;
         for x in 0..BAR_WIDTH as usize {
             let at = (line + x) * 3;
@@ -135,7 +145,7 @@ fn draw_labels(root: &Area<'_>, map: &Heatmap<'_>, side: u32) -> DrawResult {
         }
         for c in 0..cells.len() {
             if let Some(p) = at(c) {
-                root.draw(&Circle::new(p, 3, RGBColor(255, 80, 60).filled()))?;
+                root.draw(&Circle::new(p, 3, RGBColor(60, 220, 255).filled()))?;
             }
         }
     }
@@ -188,20 +198,29 @@ fn draw_labels(root: &Area<'_>, map: &Heatmap<'_>, side: u32) -> DrawResult {
             .pos(Pos::new(HPos::Center, VPos::Center)),
     ))?;
 
-    // Colour bar: frame, ticks with values, label.
+    draw_colour_bar(root, map, side)?;
+
+    // Title.
+    root.draw(&Text::new(
+        map.title.clone(),
+        (left + side_i / 2, 8),
+        text(17.0).pos(Pos::new(HPos::Center, VPos::Top)),
+    ))?;
+    Ok(())
+}
+
+/// The colour bar right of the plot: frame, ticks with values, the quantity's name.
+fn draw_colour_bar(root: &Area<'_>, map: &Heatmap<'_>, side: u32) -> DrawResult {
+    let (left, top, side_i) = (LEFT as i32, TOP as i32, side as i32);
+    let fside = f64::from(side);
+    let text = |size: f64| TextStyle::from(("sans-serif", size).into_font()).color(&BLACK);
     let bar_left = left + side_i + BAR_GAP as i32;
     let bar_right = bar_left + BAR_WIDTH as i32;
     root.draw(&Rectangle::new(
         [(bar_left - 1, top - 1), (bar_right, top + side_i)],
         BLACK.stroke_width(1),
     ))?;
-    let value_at = |x: f64| {
-        if map.log {
-            map.top * 10f64.powf((x - 1.0) * LOG_DECADES)
-        } else {
-            x * map.top
-        }
-    };
+    let value_at = |x: f64| map.scale().value_at(x);
     let steps = if map.log { LOG_DECADES as i32 } else { 4 };
     let value_label = text(13.0).pos(Pos::new(HPos::Left, VPos::Center));
     for k in 0..=steps {
@@ -229,12 +248,6 @@ fn draw_labels(root: &Area<'_>, map: &Heatmap<'_>, side: u32) -> DrawResult {
         text(13.0).pos(Pos::new(HPos::Center, VPos::Bottom)),
     ))?;
 
-    // Title.
-    root.draw(&Text::new(
-        map.title.clone(),
-        (left + side_i / 2, 8),
-        text(17.0).pos(Pos::new(HPos::Center, VPos::Top)),
-    ))?;
     Ok(())
 }
 
@@ -247,7 +260,7 @@ mod tests {
     /// and text in the margins.
     #[test]
     fn heatmaps_have_axes_a_colour_bar_and_a_title() {
-        let scene = Scene::from_ron_str(crate::cmd::BUNDLED_FIG3).unwrap();
+        let scene = flatland_geom::bundled::scene("fig3").unwrap();
         // 16 × 16, 1 in row 0 (s smallest) and column 15 (t largest) only.
         let res = 16;
         let grid: Vec<f64> = (0..res * res)
@@ -278,12 +291,12 @@ mod tests {
         let cell = side / res as u32;
         // The bright cell is at the bottom right: s = 0 at the bottom, t = 1 at the right.
         let (right, bottom) = (LEFT + side - cell / 2, TOP + side - cell / 2);
-        assert_eq!(at(right, bottom), viridis(1.0));
-        assert_eq!(at(LEFT + cell / 2, TOP + cell / 2), viridis(0.0));
+        assert_eq!(at(right, bottom), inferno(1.0));
+        assert_eq!(at(LEFT + cell / 2, TOP + cell / 2), inferno(0.0));
         // The colour bar runs from the bottom colour to the top colour.
         let bar_x = LEFT + side + BAR_GAP + BAR_WIDTH / 2;
-        assert_eq!(at(bar_x, TOP), viridis(1.0));
-        assert_eq!(at(bar_x, TOP + side - 1), viridis(0.0));
+        assert_eq!(at(bar_x, TOP), inferno(1.0));
+        assert_eq!(at(bar_x, TOP + side - 1), inferno(0.0));
         // Text: dark pixels in the title band, left of the plot (s labels), under it (t labels)
         // and right of the bar (values).
         let dark = |x0: u32, x1: u32, y0: u32, y1: u32| {

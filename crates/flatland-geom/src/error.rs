@@ -9,6 +9,14 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum GeomError {
+    /// A bundled scene name that does not exist.
+    #[error("no bundled scene is called \"{name}\"; the bundled scenes are {valid}")]
+    UnknownBundled {
+        /// The name asked for.
+        name: String,
+        /// The valid names, comma-separated.
+        valid: String,
+    },
     /// A coordinate or the edge's direction is not a finite number.
     #[error("edge {edge}: {field} must be finite, but is {value}")]
     NonFinite {

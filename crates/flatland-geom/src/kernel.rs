@@ -1,4 +1,4 @@
-//! The radiosity kernel `k(s, t)` and the learning target `ζ(s, t)` (SPEC §2).
+//! The radiosity kernel `k(s, t)` and the learning target `ζ(s, t)` (docs/ALGORITHM.md §2).
 
 use std::borrow::Cow;
 use std::sync::OnceLock;
@@ -17,7 +17,7 @@ use crate::visibility::{Bvh, PairEvents, Segment, Shaft, Side, classify, open_se
 #[serde(default)]
 pub struct KernelParams {
     /// Source weight `E'` of a non-emitting surface, as a fraction of the largest emission
-    /// (SPEC §2: "a small floor, default 1 %"). Valid range `[0, 1]`.
+    /// (docs/ALGORITHM.md §2: a small floor, default 1 %). Valid range `[0, 1]`.
     pub emission_floor: f64,
 }
 
@@ -241,7 +241,7 @@ impl Kernel {
         self.params
     }
 
-    /// `E'` of SPEC §2: the emission of an emitter, `emission_floor · max emission` for any
+    /// `E'` of docs/ALGORITHM.md §2: the emission of an emitter, `emission_floor · max emission` for any
     /// other edge (so 0 everywhere if nothing emits). 0 for a bad index.
     #[must_use]
     pub fn source_weight(&self, edge: usize) -> f64 {

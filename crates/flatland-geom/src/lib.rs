@@ -1,5 +1,5 @@
 //! Flatland geometry: 2D scenes, their arc-length parameterization, exact visibility and the
-//! radiosity kernel `k(s, t)` of Bohn (1996), with the errata of the project's SPEC §2.
+//! radiosity kernel `k(s, t)` of Bohn (1996), with the errata of the printed paper listed in docs/ALGORITHM.md §2.
 //!
 //! # Conventions
 //! - A [`Scene`] is a list of [`Edge`]s (segments, `f64`). The **front** of an edge is the left
@@ -39,6 +39,7 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
+pub mod bundled;
 mod error;
 mod io;
 mod kernel;

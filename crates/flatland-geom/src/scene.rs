@@ -1,4 +1,4 @@
-//! Edges, validated scenes and the arc-length parameterization (SPEC §1).
+//! Edges, validated scenes and the arc-length parameterization (docs/ALGORITHM.md §1).
 
 use std::fmt;
 
@@ -53,6 +53,15 @@ impl Edge {
         }
     }
 
+    /// The walls of a closed polygon room through `points`, each with `reflectance`: listed
+    /// counter-clockwise, they face inwards.
+    #[must_use]
+    pub fn polygon(points: &[DVec2], reflectance: f64) -> Vec<Edge> {
+        (0..points.len())
+            .map(|i| Edge::surface(points[i], points[(i + 1) % points.len()], reflectance))
+            .collect()
+    }
+
     /// A blocker edge (occludes only; reflectance and emission are 0).
     #[must_use]
     pub const fn blocker(a: DVec2, b: DVec2) -> Edge {
@@ -98,7 +107,7 @@ impl Edge {
         self.a + (self.b - self.a) * u
     }
 
-    /// Checks every rule of SPEC §1 for this edge; `index` names it in the error.
+    /// Checks every rule of docs/ALGORITHM.md §1 for this edge; `index` names it in the error.
     fn validate(&self, index: usize) -> Result<(), GeomError> {
         let coords = [
             ("a.x", self.a.x),
@@ -184,7 +193,7 @@ pub(crate) struct Group {
     pub rank: Option<usize>,
 }
 
-/// A validated Flatland scene (SPEC §1): edges, the arc-length parameterization of its surface
+/// A validated Flatland scene (docs/ALGORITHM.md §1): edges, the arc-length parameterization of its surface
 /// edges, and the parent structure left by [`Scene::subdivide`].
 ///
 /// The only ways to get one are [`Scene::new`], loading/deserializing (which validate) and the

@@ -29,9 +29,7 @@ pub fn rng(seed: u64) -> ChaCha8Rng {
 
 /// A counter-clockwise (inward-facing) closed polygon room with reflectance `rho`.
 pub fn room(points: &[DVec2], rho: f64) -> Vec<Edge> {
-    (0..points.len())
-        .map(|i| Edge::surface(points[i], points[(i + 1) % points.len()], rho))
-        .collect()
+    Edge::polygon(points, rho)
 }
 
 /// The unit-square box room (4 surfaces, the floor emits).
@@ -47,13 +45,9 @@ pub fn unit_box() -> Scene {
     Scene::new(edges).unwrap()
 }
 
-/// The bundled scene `scenes/NAME.ron`.
+/// The bundled scene `NAME`.
 pub fn bundled(name: &str) -> Scene {
-    Scene::load(format!(
-        "{}/../../scenes/{name}.ron",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .unwrap()
+    crate::bundled::scene(name).unwrap()
 }
 
 /// A random point in `[-1, 1]²`.

@@ -1,5 +1,8 @@
-//! The app: persisted settings, the state the UI keeps between frames, and the layout.
-//! Drawing of the plots and the scene lives in [`crate::views`]; the learner in [`crate::worker`].
+//! The app: the state the UI keeps between frames, the top bar and the layout. Settings live in
+//! [`crate::settings`], the controls panel in [`controls`], drawing in [`crate::views`], the
+//! learner in [`crate::worker`].
+
+mod controls;
 
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
@@ -7,78 +10,20 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use egui::{
-    Align2, CentralPanel, Color32, ColorImage, DragValue, FontId, Panel, Pos2, Rect, RichText,
-    ScrollArea, TextureHandle, TextureOptions, UiBuilder, Vec2,
+    CentralPanel, Color32, ColorImage, DragValue, Panel, Pos2, Rect, RichText, ScrollArea,
+    TextureHandle, TextureOptions, UiBuilder, Vec2,
 };
-use flatland_geom::{DVec2, Scene};
-use kernel_fit::{Approximation, FitParams};
-use serde::{Deserialize, Serialize};
-use sgcs::{InsertRule, OutputRule};
+use flatland_geom::{DVec2, Kernel, PairClass, Scene, bundled};
+use kernel_fit::{Approximation, FitParams, LearnedKernel, Preset, StopReason};
 
-use crate::BUNDLED_SCENES;
-use crate::colormap::{Scale, grid_image, samples_image};
-use crate::views::{self, Hover, PlotFrame, SceneDrag};
+use crate::colormap::{grid_image, samples_image};
+use crate::settings::{SETTINGS_KEY, SceneChoice, Settings, live_params};
+use crate::views::{self, Hover, LitPaint, PlotFrame, SceneDrag};
 use crate::worker::{
-    APPROX_RES, Approx, Command, REFERENCE_RES, Status, WorkerHandle, World, error_text,
-    format_errors,
+    APPROX_RES, Approx, Command, Lit, LitState, REFERENCE_RES, Status, WorkerHandle, World,
+    error_text, format_errors,
 };
-
-/// Key of the settings in eframe's storage.
-const SETTINGS_KEY: &str = "flatland-viewer-settings";
-
-/// Which scene to open: a bundled one by name or a file.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub enum SceneChoice {
-    /// One of [`BUNDLED_SCENES`].
-    Bundled(String),
-    /// A scene file (`.ron` or `.json`).
-    File(PathBuf),
-}
-
-/// Everything the viewer remembers between runs (eframe persistence).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct Settings {
-    /// The fit's parameters (SPEC §3–4, target cells, seed, …).
-    pub params: FitParams,
-    /// The scene opened at start.
-    pub scene: SceneChoice,
-    /// Pieces per surface edge (1: the scene as written).
-    pub subdivide: usize,
-    /// Training speed limit, steps per second.
-    pub speed: f64,
-    /// Ignore the speed limit.
-    pub unlimited: bool,
-    /// Steps done by one press of "Step".
-    pub step_size: u64,
-    /// Log colour scale for the heatmaps.
-    pub log_scale: bool,
-    /// Show the cells over the kernel.
-    pub show_cells: bool,
-    /// Show the network's edges between cells.
-    pub show_edges: bool,
-    /// Show the training samples, coloured by set.
-    pub show_samples: bool,
-}
-
-impl Default for Settings {
-    fn default() -> Self {
-        Settings {
-            params: FitParams::default(),
-            scene: SceneChoice::Bundled("fig3".into()),
-            subdivide: 1,
-            // Slow enough to watch: the default learner is exact on fig3 after about 20 000
-            // steps (a few seconds), the paper's network reaches 400 cells in 20 s.
-            speed: 6_000.0,
-            unlimited: false,
-            step_size: 1,
-            log_scale: true,
-            show_cells: true,
-            show_edges: true,
-            show_samples: false,
-        }
-    }
-}
+use kernel_fit::colormap::Scale;
 
 /// How [`crate::run_with`] starts the viewer. The default starts learning at once.
 #[derive(Clone, Debug, Default)]
@@ -155,7 +100,9 @@ impl FpsMeter {
 /// [`ViewerApp::headless`] in tests; [`ViewerApp::show`] draws one frame into a [`egui::Ui`].
 pub struct ViewerApp {
     settings: Settings,
-    /// Parameters last sent to the learner.
+    /// Parameters of the fit the last Reset started.
+    fit_params: FitParams,
+    /// Parameters last sent to the running fit ([`live_params`]).
     sent_params: FitParams,
     worker: WorkerHandle,
     /// The scene as the user sees and edits it (not subdivided).
@@ -164,6 +111,7 @@ pub struct ViewerApp {
     world: Option<Arc<World>>,
     status: Option<Status>,
     approx: Option<Arc<Approx>>,
+    lit: Option<LitState>,
     busy: Option<&'static str>,
     message: Option<(String, bool)>,
     path_input: String,
@@ -184,14 +132,18 @@ impl ViewerApp {
     /// The app inside eframe: settings from eframe's storage (unless `options.fresh_settings`),
     /// the scene from `options.scene`, else the remembered one, else `fig3`.
     pub fn new(cc: &eframe::CreationContext<'_>, options: &Options) -> ViewerApp {
-        let settings: Settings = if options.fresh_settings {
-            Settings::default()
+        let (settings, note) = if options.fresh_settings {
+            (Settings::default(), None)
         } else {
-            cc.storage
-                .and_then(|s| eframe::get_value(s, SETTINGS_KEY))
-                .unwrap_or_default()
+            Settings::load(cc.storage)
         };
-        ViewerApp::with_options(cc.egui_ctx.clone(), settings, options)
+        let mut app = ViewerApp::with_options(cc.egui_ctx.clone(), settings, options);
+        if let Some(note) = note
+            && app.message.is_none()
+        {
+            app.message = Some((note, false));
+        }
+        app
     }
 
     /// The app as [`ViewerApp::new`] starts it, from given settings: the options applied, and
@@ -223,20 +175,21 @@ impl ViewerApp {
             Ok(found) => found,
             Err(e) => {
                 message = Some((format!("{e}; opened fig3 instead"), true));
-                settings.scene = SceneChoice::Bundled("fig3".into());
-                bundled("fig3").expect("fig3 is bundled")
+                settings.scene = SceneChoice::Bundled(bundled::DEFAULT.into());
+                bundled(bundled::DEFAULT).expect("the default scene is bundled")
             }
         };
         if settings.params.validate().is_err() {
             message = Some((
-                "remembered parameters were invalid; defaults restored".into(),
+                "remembered parameters were invalid; the preset's restored".into(),
                 true,
             ));
-            settings.params = FitParams::default();
+            settings.choose_preset(settings.preset);
         }
         let repaint_ctx = ctx.clone();
         let worker = WorkerHandle::spawn(move || repaint_ctx.request_repaint());
         let mut app = ViewerApp {
+            fit_params: settings.params,
             sent_params: settings.params,
             worker,
             scene,
@@ -244,6 +197,7 @@ impl ViewerApp {
             world: None,
             status: None,
             approx: None,
+            lit: None,
             busy: Some("starting…"),
             message,
             path_input: match &settings.scene {
@@ -264,6 +218,7 @@ impl ViewerApp {
             settings,
         };
         app.worker.send(Command::Speed(app.speed()));
+        app.worker.send(Command::Lit(app.settings.lit));
         app.reset();
         app
     }
@@ -325,6 +280,32 @@ impl ViewerApp {
             .and_then(|s| s.summary.as_ref())
             .map(|s| s.errors)
     }
+    /// Why the fit stopped, if it did (newest status).
+    pub fn stopped(&self) -> Option<StopReason> {
+        self.status.as_ref().and_then(|s| s.stopped)
+    }
+    /// The parameters of the fit the learner is running (newest status).
+    pub fn fit_params(&self) -> Option<FitParams> {
+        self.status.as_ref().map(|s| s.params)
+    }
+    /// Faces of the visibility structure that hold a cell (visibility learners, newest status).
+    pub fn occupied_faces(&self) -> Option<usize> {
+        self.status.as_ref().and_then(|s| s.occupied_faces)
+    }
+    /// The newest lit scene: B solved with the learned kernel, its errors, the exact B.
+    pub fn lit(&self) -> Option<&Lit> {
+        match &self.lit {
+            Some(LitState::Ready(lit)) => Some(lit),
+            _ => None,
+        }
+    }
+    /// Why there is no lit scene, when it failed.
+    pub fn lit_failure(&self) -> Option<&str> {
+        match &self.lit {
+            Some(LitState::Failed(why)) => Some(why),
+            _ => None,
+        }
+    }
     /// Whether the newest status was made after the learner handled every command sent so far
     /// (what a test waits for before it asserts on the learner's state).
     pub fn caught_up(&self) -> bool {
@@ -361,6 +342,8 @@ impl ViewerApp {
     pub fn reset(&mut self) {
         self.status = None;
         self.approx = None;
+        self.lit = None;
+        self.fit_params = self.settings.params;
         self.sent_params = self.settings.params;
         self.worker.send(Command::Reset {
             scene: self.scene.clone(),
@@ -368,6 +351,12 @@ impl ViewerApp {
             params: self.settings.params,
         });
         self.busy = Some("computing the reference kernel…");
+    }
+
+    /// Switches to `preset`'s learner (target cells and seed kept) and starts a fresh fit.
+    pub fn choose_preset(&mut self, preset: Preset) {
+        self.settings.choose_preset(preset);
+        self.reset();
     }
 
     /// Switches to a bundled scene (a fresh fit).
@@ -413,7 +402,8 @@ impl ViewerApp {
     }
 
     /// Replaces the scene by an edited one and keeps learning from the current network
-    /// (SPEC §6): the learner recomputes the reference and calls `Fit::set_kernel`.
+    /// (the representation stays adaptive): the learner recomputes the reference and calls
+    /// `Fit::set_kernel`.
     pub fn edit_scene(&mut self, scene: Scene) {
         self.scene = scene;
         if !self.scene_label.ends_with("(edited)") {
@@ -454,6 +444,9 @@ impl ViewerApp {
         if let Some(approx) = mail.approx {
             self.approx = Some(approx);
         }
+        if let Some(lit) = mail.lit {
+            self.lit = Some(lit);
+        }
         if let Some(e) = mail.error {
             self.message = Some((e, true));
         }
@@ -463,13 +456,15 @@ impl ViewerApp {
             .or_else(|| self.world.is_none().then_some("starting…"));
     }
 
-    /// Sends changed parameters (when valid) to the learner.
+    /// Sends changed parameters (when valid) to the running fit: those it can take
+    /// ([`live_params`]); the rest wait for Reset.
     fn sync_params(&mut self) {
-        if self.settings.params != self.sent_params {
+        let live = live_params(&self.settings.params, &self.fit_params);
+        if live != self.sent_params {
             match self.settings.params.validate() {
                 Ok(()) => {
-                    self.sent_params = self.settings.params;
-                    self.worker.send(Command::Params(self.settings.params));
+                    self.sent_params = live;
+                    self.worker.send(Command::Params(live));
                     if self
                         .message
                         .as_ref()
@@ -535,6 +530,42 @@ impl ViewerApp {
         }
     }
 
+    /// The top bar's numbers: the learner, its progress, the held-out error of ζ and (with the
+    /// lit scene) of the solved `B − E`, its speed.
+    fn stats_text(&self, st: &Status, heldout_defined: bool) -> String {
+        let snap = &st.snapshot;
+        let mut parts = vec![
+            learner_name(&st.params),
+            format!("steps {}", snap.steps),
+            format!("rays {}", snap.rays),
+            format!(
+                "cells {}/{}",
+                snap.cells.len(),
+                self.sent_params.target_cells
+            ),
+        ];
+        if let Some(faces) = st.occupied_faces {
+            parts.push(format!("in {faces} faces"));
+        }
+        parts.push(format!(
+            "samples {} in {} sets",
+            snap.samples.len(),
+            snap.sets
+        ));
+        let err = snap.history.last().map_or("–".into(), |h| {
+            error_text(h.rel_l2_heldout, heldout_defined)
+        });
+        parts.push(format!("ζ held out {err}"));
+        if let Some(l) = self.lit() {
+            let err = error_text(l.solve.errors.rel_l2_reflected, true);
+            parts.push(format!("solved B−E {err}"));
+        }
+        if st.steps_per_s > 0.0 {
+            parts.push(format!("{:.0} steps/s", st.steps_per_s));
+        }
+        parts.join("  ")
+    }
+
     fn top_bar(&mut self, ui: &mut egui::Ui) {
         let defined = self.world.as_ref().map_or([true; 2], |w| w.defined);
         ui.horizontal(|ui| {
@@ -545,36 +576,31 @@ impl ViewerApp {
             } else if ui.button("Play").clicked() {
                 self.play();
             }
-            if ui.button("Step").on_hover_text("train `step size` steps, then pause").clicked() {
+            if ui
+                .button("Step")
+                .on_hover_text("train `step size` steps, then pause")
+                .clicked()
+            {
                 self.step();
             }
             let times = ui.label("×");
             ui.add(DragValue::new(&mut self.settings.step_size).range(1..=1_000_000))
                 .labelled_by(times.id)
                 .on_hover_text("step size: steps per press of Step");
-            if ui.button("Reset").on_hover_text("a fresh fit (seed, |S₀|, subdivision apply)").clicked() {
+            if ui
+                .button("Reset")
+                .on_hover_text("a fresh fit (seed, |S₀|, subdivision apply)")
+                .clicked()
+            {
                 self.reset();
             }
             ui.separator();
-            let mut stats = String::new();
-            if let Some(st) = &self.status {
-                let snap = &st.snapshot;
-                let err = snap.history.last().map_or("–".into(), |h| error_text(h.rel_l2_heldout, defined[1]));
-                let per_cell = snap.samples.len() as f64 / snap.cells.len().max(1) as f64;
-                stats = format!(
-                    "steps {}   rays {}   cells {}/{}   samples {} ({:.1}/cell)   sets {}   held-out rel. L2 {}   {:.0} steps/s",
-                    snap.steps,
-                    snap.rays,
-                    snap.cells.len(),
-                    self.sent_params.target_cells,
-                    snap.samples.len(),
-                    per_cell,
-                    snap.sets,
-                    err,
-                    st.steps_per_s
-                );
-            }
-            ui.label(RichText::new(stats).monospace());
+            let stats = self
+                .status
+                .as_ref()
+                .map(|st| self.stats_text(st, defined[1]))
+                .unwrap_or_default();
+            ui.label(RichText::new(stats).monospace().size(11.0));
             ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
                 ui.label(RichText::new(format!("{:.0} fps", self.fps_now)).weak());
             });
@@ -588,14 +614,19 @@ impl ViewerApp {
                 let errs = st
                     .summary
                     .as_ref()
-                    .map(|s| format!(": final rel. L2 {}", format_errors(&s.errors, defined)))
+                    .map(|s| {
+                        format!(
+                            "; final rel. L2 of ζ: {}",
+                            format_errors(&s.errors, defined)
+                        )
+                    })
                     .unwrap_or_default();
-                let hint = if r == kernel_fit::StopReason::TargetCells {
+                let hint = if r == StopReason::TargetCells {
                     "; raise the target cells and press Play to go on"
                 } else {
                     ""
                 };
-                (format!("stopped ({r:?}){errs}{hint}"), false)
+                (format!("stopped: {}{errs}{hint}", stop_text(r)), false)
             })
         } else {
             None
@@ -617,257 +648,6 @@ impl ViewerApp {
         });
     }
 
-    fn controls(&mut self, ui: &mut egui::Ui) {
-        ui.heading("Scene");
-        ui.horizontal_wrapped(|ui| {
-            for (name, _) in BUNDLED_SCENES {
-                let selected = self.settings.scene == SceneChoice::Bundled(name.to_string());
-                if ui.selectable_label(selected, *name).clicked() {
-                    self.open_bundled(name);
-                }
-            }
-        });
-        ui.label(RichText::new(&self.scene_label).strong());
-        ui.horizontal(|ui| {
-            let edit = egui::TextEdit::singleline(&mut self.path_input)
-                .hint_text("scene file (.ron/.json)")
-                .desired_width(170.0);
-            let r = ui.add(edit);
-            let enter = r.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
-            if ui.button("Open").clicked() || enter {
-                let path = PathBuf::from(self.path_input.trim());
-                self.open_file(&path);
-            }
-        });
-        ui.label(
-            RichText::new("or drop a file on the window; drag end points in the scene view")
-                .small()
-                .weak(),
-        );
-        egui::Grid::new("scene-grid").num_columns(3).show(ui, |ui| {
-            let l = ui.label("subdivision");
-            ui.add(DragValue::new(&mut self.settings.subdivide).range(1..=1000))
-                .labelled_by(l.id);
-            ui.label(RichText::new("[1, 1000], on Reset").small().weak());
-            ui.end_row();
-        });
-
-        ui.separator();
-        ui.heading("Run");
-        ui.horizontal(|ui| {
-            ui.spacing_mut().slider_width = 80.0;
-            let r = ui.add_enabled(
-                !self.settings.unlimited,
-                egui::Slider::new(&mut self.settings.speed, 100.0..=1_000_000.0)
-                    .logarithmic(true)
-                    .text("steps/s")
-                    .max_decimals(0),
-            );
-            let u = ui.checkbox(&mut self.settings.unlimited, "max");
-            if r.changed() || u.changed() {
-                self.worker.send(Command::Speed(self.speed()));
-            }
-        });
-
-        let p = &mut self.settings.params;
-        let n = &mut p.network;
-        ui.separator();
-        ui.heading("Network (SPEC §3)");
-        egui::Grid::new("net-grid")
-            .num_columns(3)
-            .striped(true)
-            .show(ui, |ui| {
-                row(
-                    ui,
-                    "ε_b",
-                    "learning rate of the winner",
-                    &mut n.eps_b,
-                    1e-6..=1.0,
-                    "(0, 1]",
-                    1e-4,
-                );
-                row(
-                    ui,
-                    "ε_n",
-                    "learning rate of its neighbours",
-                    &mut n.eps_n,
-                    0.0..=1.0,
-                    "[0, 1]",
-                    1e-5,
-                );
-                row(
-                    ui,
-                    "η",
-                    "output learning rate",
-                    &mut n.eta,
-                    1e-6..=1.999,
-                    "(0, 2)",
-                    1e-3,
-                );
-                row(
-                    ui,
-                    "α",
-                    "resource forgetting factor",
-                    &mut n.alpha,
-                    0.0..=0.999,
-                    "[0, 1)",
-                    1e-3,
-                );
-                row(
-                    ui,
-                    "λ",
-                    "steps between insertions",
-                    &mut n.lambda,
-                    1..=100_000,
-                    "≥ 1",
-                    1.0,
-                );
-                row(
-                    ui,
-                    "cutoff",
-                    "activations below are 0",
-                    &mut n.activation_cutoff,
-                    0.0..=0.5,
-                    "[0, 1)",
-                    1e-9,
-                );
-            });
-        ui.horizontal(|ui| {
-            ui.label("output rule");
-            ui.selectable_value(&mut n.output_rule, OutputRule::Normalized, "NLMS");
-            ui.selectable_value(&mut n.output_rule, OutputRule::Plain, "paper");
-        });
-        ui.horizontal(|ui| {
-            ui.label("new cell's v");
-            ui.selectable_value(&mut n.insert_rule, InsertRule::PreserveOutput, "preserve");
-            ui.selectable_value(&mut n.insert_rule, InsertRule::VolumeWeighted, "volume");
-        });
-
-        ui.separator();
-        ui.heading("Sampling (SPEC §4)");
-        egui::Grid::new("sampling-grid")
-            .num_columns(3)
-            .striped(true)
-            .show(ui, |ui| {
-                row(
-                    ui,
-                    "ω",
-                    "critical: τ > ω · mean τ",
-                    &mut p.omega,
-                    0.0..=100.0,
-                    "≥ 0",
-                    1e-2,
-                );
-                row(
-                    ui,
-                    "φ",
-                    "inside a network: Σ M > φ",
-                    &mut p.phi,
-                    1e-6..=100.0,
-                    "> 0",
-                    1e-2,
-                );
-                row(
-                    ui,
-                    "ψ",
-                    "new set when |A|/|S| > ψ",
-                    &mut p.psi,
-                    1e-4..=1.0,
-                    "(0, 1]",
-                    1e-3,
-                );
-                row(
-                    ui,
-                    "|S₀|",
-                    "initial uniform samples (on Reset)",
-                    &mut p.initial_samples,
-                    3..=1_000_000,
-                    "≥ 3",
-                    10.0,
-                );
-                row(
-                    ui,
-                    "min |S_j|",
-                    "smallest resampled set",
-                    &mut p.min_set_size,
-                    1..=1_000_000,
-                    "≥ 1",
-                    1.0,
-                );
-                row(
-                    ui,
-                    "scan ×",
-                    "θ scans ≤ this × set size",
-                    &mut p.scan_factor,
-                    1..=100_000,
-                    "≥ 1",
-                    1.0,
-                );
-            });
-
-        ui.separator();
-        ui.heading("Fit");
-        egui::Grid::new("fit-grid")
-            .num_columns(3)
-            .striped(true)
-            .show(ui, |ui| {
-                row(
-                    ui,
-                    "target cells",
-                    "growth stops here",
-                    &mut p.target_cells,
-                    3..=20_000,
-                    "≥ 3",
-                    5.0,
-                );
-                row(
-                    ui,
-                    "seed",
-                    "every random choice (on Reset)",
-                    &mut p.seed,
-                    0..=u64::MAX,
-                    "any",
-                    1.0,
-                );
-                row(
-                    ui,
-                    "ridge",
-                    "smallest refit ridge tried (×10⁰…10⁶, best on S₀ kept)",
-                    &mut p.ridge,
-                    1e-12..=1.0,
-                    "> 0",
-                    1e-7,
-                );
-                row(
-                    ui,
-                    "eval every",
-                    "steps between error points",
-                    &mut p.eval_every,
-                    0..=1_000_000,
-                    "≥ 0",
-                    100.0,
-                );
-            });
-        ui.checkbox(&mut p.refit, "least-squares refit at the end");
-
-        ui.separator();
-        ui.heading("View");
-        ui.checkbox(&mut self.settings.log_scale, "log colour scale (4 decades)");
-        ui.checkbox(
-            &mut self.settings.show_cells,
-            "cells (size ~ δ_c, cyan = critical)",
-        );
-        ui.checkbox(&mut self.settings.show_edges, "network edges");
-        ui.checkbox(&mut self.settings.show_samples, "samples, coloured by set");
-        if ui.button("Default parameters").clicked() {
-            let target = self.settings.params.target_cells;
-            self.settings.params = FitParams {
-                target_cells: target,
-                ..FitParams::default()
-            };
-        }
-    }
-
     fn main_area(&mut self, ui: &mut egui::Ui) {
         let full = ui.available_rect_before_wrap();
         let Some(world) = self.world.clone() else {
@@ -876,34 +656,35 @@ impl ViewerApp {
             });
             return;
         };
-        let ctx = ui.ctx().clone();
-        let gap = 8.0;
-        let curves_h = (full.height() * 0.34).clamp(150.0, 300.0);
-        let top_h = full.height() - curves_h - gap;
-        let big = top_h.min(full.width() * 0.46);
-        let small = (big - views::TITLE_H) / 2.0 + views::TITLE_H / 2.0;
-        let kernel_rect = Rect::from_min_size(full.min, Vec2::splat(big));
-        let approx_rect = Rect::from_min_size(
-            kernel_rect.right_top() + Vec2::new(gap, 0.0),
-            Vec2::splat(small),
-        );
-        let error_rect = Rect::from_min_size(
-            approx_rect.left_bottom() + Vec2::new(0.0, big - 2.0 * small),
-            Vec2::splat(small),
-        );
-        let scene_left = approx_rect.right() + gap;
-        let scene_rect = Rect::from_min_max(
-            Pos2::new(scene_left, full.top()),
-            Pos2::new(full.right(), full.top() + top_h * 0.62),
-        );
-        let info_rect = Rect::from_min_max(
-            Pos2::new(scene_left, scene_rect.bottom() + gap),
-            Pos2::new(full.right(), full.top() + top_h),
-        );
-        let curves_rect =
-            Rect::from_min_max(Pos2::new(full.left(), full.top() + top_h + gap), full.max);
+        let layout = Layout::of(full, self.settings.lit);
+        let status = self.status.clone().filter(|s| s.world == world.id);
+        let approx = self.approx.clone().filter(|a| a.world == world.id);
+        self.kernel_panels(ui, &layout, &world, status.as_ref(), approx.as_deref());
 
-        // Colour scale from the reference, shared by all three heatmaps.
+        // The lit scene, when there is one for the scene as it is (not while it is edited).
+        let lit_state = self.lit.clone();
+        let lit = match &lit_state {
+            Some(LitState::Ready(l)) if l.setup.world == world.id && self.scene == world.scene => {
+                Some(l.as_ref())
+            }
+            _ => None,
+        };
+        self.scene_panels(ui, &layout, &world, lit, lit_state.as_ref());
+        ui.scope_builder(UiBuilder::new().max_rect(layout.curves), |ui| {
+            views::curves(ui, status.as_ref().map(|s| s.snapshot.as_ref()), lit);
+        });
+    }
+
+    /// The textures of the three heatmaps and the overlay, re-made only when their data
+    /// changed; one colour scale, fitted to the reference, for all three heatmaps.
+    fn heatmap_textures(
+        &mut self,
+        ctx: &egui::Context,
+        world: &World,
+        status: Option<&Status>,
+        approx: Option<&Approx>,
+        overlay_side: usize,
+    ) -> Heatmaps {
         let log = self.settings.log_scale;
         let scale = match self.scale {
             Some((id, l, s)) if id == world.id && l == log => s,
@@ -914,17 +695,16 @@ impl ViewerApp {
             }
         };
         let key = (world.id, u64::from(log), 0);
-        let kernel_tex = cached_texture(&ctx, &mut self.kernel_tex, "kernel", key, || {
+        let kernel = cached_texture(ctx, &mut self.kernel_tex, "kernel", key, || {
             grid_image(world.reference.grid(), REFERENCE_RES, scale)
         });
-        let approx = self.approx.clone().filter(|a| a.world == world.id);
-        let (approx_tex, error_tex) = match &approx {
+        let (approx_tex, error_tex) = match approx {
             Some(a) => {
                 let key = (world.id, u64::from(log), a.steps + 1);
-                let at = cached_texture(&ctx, &mut self.approx_tex, "approx", key, || {
+                let at = cached_texture(ctx, &mut self.approx_tex, "approx", key, || {
                     grid_image(&a.values, APPROX_RES, scale)
                 });
-                let et = cached_texture(&ctx, &mut self.error_tex, "error", key, || {
+                let et = cached_texture(ctx, &mut self.error_tex, "error", key, || {
                     let err: Vec<f64> = a
                         .values
                         .iter()
@@ -937,78 +717,135 @@ impl ViewerApp {
             }
             None => (None, None),
         };
-        let status = self.status.clone().filter(|s| s.world == world.id);
-        let samples_tex = match (&status, self.settings.show_samples) {
-            (Some(st), true) => {
-                let snap = &st.snapshot;
-                let key = (world.id, snap.samples.len() as u64, snap.sets as u64);
-                Some(cached_texture(
-                    &ctx,
-                    &mut self.samples_tex,
-                    "samples",
-                    key,
-                    || samples_image(&snap.samples, 2 * REFERENCE_RES),
-                ))
-            }
-            _ => None,
-        };
-
-        // Kernel plot with the live overlay.
-        let kernel_frame = PlotFrame::new(kernel_rect, true);
-        let ppp = ui.ctx().pixels_per_point();
-        let side = ((kernel_frame.plot.width() * ppp).round() as usize).clamp(16, 2048);
+        let samples = status.filter(|_| self.settings.show_samples).map(|st| {
+            let snap = &st.snapshot;
+            let key = (world.id, snap.samples.len() as u64, snap.sets as u64);
+            cached_texture(ctx, &mut self.samples_tex, "samples", key, || {
+                samples_image(&snap.samples, 2 * REFERENCE_RES)
+            })
+        });
+        let ppp = ctx.pixels_per_point();
         let (cells, edges) = (self.settings.show_cells, self.settings.show_edges);
-        let cells_tex = status.as_ref().map(|st| {
+        let overlay = status.map(|st| {
             let snap = &st.snapshot;
             let key = (
                 Arc::as_ptr(snap) as u64,
-                side as u64,
+                overlay_side as u64,
                 u64::from(cells) | u64::from(edges) << 1 | u64::from(ppp.to_bits()) << 2,
             );
-            cached_texture(&ctx, &mut self.overlay_tex, "overlay", key, || {
-                views::overlay_image(side, ppp, snap, cells, edges)
+            cached_texture(ctx, &mut self.overlay_tex, "overlay", key, || {
+                views::overlay_image(overlay_side, ppp, snap, cells, edges)
             })
         });
-        let hovered = views::kernel_plot(
-            ui,
-            &kernel_frame,
-            "ζ(s, t) exact, with the cells",
-            Some(kernel_tex),
-            &world.scene,
-            &views::Overlay {
-                cells: cells_tex,
-                samples: samples_tex,
-            },
-            &self.hover,
-        );
-        let approx_frame = PlotFrame::new(approx_rect, false);
-        let h2 = views::kernel_plot(
-            ui,
-            &approx_frame,
-            "learned ζ (SGCS)",
-            approx_tex,
-            &world.scene,
-            &views::Overlay::none(),
-            &self.hover,
-        );
-        let error_frame = PlotFrame::new(error_rect, false);
-        let h3 = views::kernel_plot(
-            ui,
-            &error_frame,
-            "|learned − exact|",
-            error_tex,
-            &world.scene,
-            &views::Overlay::none(),
-            &self.hover,
-        );
-        self.hover.st = hovered.or(h2).or(h3);
+        Heatmaps {
+            scale,
+            kernel,
+            approx: approx_tex,
+            error: error_tex,
+            samples,
+            overlay,
+        }
+    }
 
-        // Scene view: draws the hovered ray, reports hovered s and dragged end points.
+    /// The exact ζ with the cells over it, the learned ζ and the error; the readout of the
+    /// hovered `(s, t)`.
+    fn kernel_panels(
+        &mut self,
+        ui: &mut egui::Ui,
+        layout: &Layout,
+        world: &World,
+        status: Option<&Status>,
+        approx: Option<&Approx>,
+    ) {
+        let ctx = ui.ctx().clone();
+        let mut kernel_frame = PlotFrame::new(layout.kernel, true);
+        let side =
+            ((kernel_frame.plot.width() * ctx.pixels_per_point()).round() as usize).clamp(16, 2048);
+        let textures = self.heatmap_textures(&ctx, world, status, approx, side);
+        kernel_frame.scale = Some(textures.scale);
+        let overlay = views::Overlay {
+            cells: textures.overlay,
+            samples: textures.samples,
+        };
+        let learned_title = match status.map(|s| s.params.target) {
+            Some(kernel_fit::Target::Visibility) => "learned ζ (unoccluded ζ × V)",
+            _ => "learned ζ (SGCS)",
+        };
+        let panels = [
+            (
+                kernel_frame,
+                "ζ(s, t) exact, with the cells",
+                Some(textures.kernel),
+                overlay,
+            ),
+            (
+                PlotFrame::new(layout.approx, false),
+                learned_title,
+                textures.approx,
+                views::Overlay::none(),
+            ),
+            (
+                PlotFrame::new(layout.error, false),
+                "|learned − exact|",
+                textures.error,
+                views::Overlay::none(),
+            ),
+        ];
+        let mut hovered = None;
+        for (frame, title, texture, overlay) in &panels {
+            let st = views::kernel_plot(
+                ui,
+                frame,
+                title,
+                *texture,
+                &world.scene,
+                overlay,
+                &self.hover,
+            );
+            hovered = hovered.or(st);
+        }
+        self.hover.st = hovered;
+        if let Some([s, t]) = self.hover.st
+            && let Some(pointer) = ui.input(|i| i.pointer.hover_pos())
+        {
+            let text = readout_text(&world.kernel, approx.map(|a| &a.model), s, t);
+            views::readout_box(&ctx, pointer, &text);
+        }
+    }
+
+    /// The scene (lit by the learned B when `lit` is given; hovered ray, hovered s, dragged end
+    /// points) and, with the lit view on, the scene lit by the exact kernel.
+    fn scene_panels(
+        &mut self,
+        ui: &mut egui::Ui,
+        layout: &Layout,
+        world: &World,
+        lit: Option<&Lit>,
+        lit_state: Option<&LitState>,
+    ) {
+        let learned_paint = lit.map(|l| LitPaint {
+            mesh: &l.setup.mesh,
+            b: &l.solve.b,
+            top: l.setup.top,
+        });
+        let scene_title = match lit {
+            Some(l) => format!(
+                "lit by the learned kernel: B − E rel. L2 {} ({} el., {:.0} ms)",
+                error_text(l.solve.errors.rel_l2_reflected, true),
+                l.setup.mesh.len(),
+                1e3 * l.solve.solve_s
+            ),
+            None => "scene".to_owned(),
+        };
         let scene_out = views::scene_view(
             ui,
-            scene_rect,
+            &views::SceneFrame {
+                rect: layout.scene,
+                title: &scene_title,
+                world,
+                lit: learned_paint.as_ref(),
+            },
             &self.scene,
-            &world,
             &self.hover,
             &mut self.drag,
         );
@@ -1016,88 +853,180 @@ impl ViewerApp {
         if let Some((from, to)) = scene_out.moved {
             self.move_point(from, to);
         }
-
-        // Read-out under the scene.
-        ui.scope_builder(UiBuilder::new().max_rect(info_rect), |ui| {
-            self.readout(ui, &world, approx.as_deref());
-        });
-
-        // Curves.
-        ui.scope_builder(UiBuilder::new().max_rect(curves_rect), |ui| {
-            views::curves(ui, status.as_ref().map(|s| s.snapshot.as_ref()));
-        });
-    }
-
-    fn readout(&self, ui: &mut egui::Ui, world: &World, approx: Option<&Approx>) {
-        ui.horizontal(|ui| {
-            for (name, color) in views::LEGEND {
-                ui.label(RichText::new(name).color(color).strong());
+        let Some(rect) = layout.exact else {
+            return;
+        };
+        let title = "lit by the exact kernel";
+        match (lit, lit_state) {
+            (Some(l), _) => {
+                let paint = LitPaint {
+                    mesh: &l.setup.mesh,
+                    b: &l.setup.exact,
+                    top: l.setup.top,
+                };
+                views::lit_view(ui, rect, title, &world.scene, &paint);
             }
-            ui.label(RichText::new("ticks: front side").weak());
-        });
-        if let Some([s, t]) = self.hover.st {
-            let k = world.kernel.eval(s, t);
-            let learned = approx.map(|a| a.model.zeta(s, t));
-            let text = format!(
-                "s {s:.4} (edge {}) → t {t:.4} (edge {})\nG {:.4}  V {}  k {:.5}\nζ {:.5}  ζ̃ {}",
-                k.x.edge,
-                k.y.edge,
-                k.geometry,
-                if k.visible {
-                    "1 (visible)"
-                } else {
-                    "0 (blocked)"
-                },
-                k.k,
-                k.zeta,
-                learned.map_or("–".into(), |v| format!("{v:.5}")),
-            );
-            ui.label(RichText::new(text).monospace());
-        } else if let Some(s) = self.hover.scene_s {
-            ui.label(
-                RichText::new(format!(
-                    "scene point at s = t = {s:.4}\n(row and column marked in the plots)"
-                ))
-                .monospace(),
-            );
-        } else {
-            ui.label(RichText::new("hover the kernel plot: the ray from x(s) to y(t)\nhover the scene: the point's s and t").weak());
+            (None, Some(LitState::Failed(why))) => views::placeholder(ui, rect, title, why),
+            (None, Some(LitState::Off)) => {
+                views::placeholder(ui, rect, title, "the lit scene is off (View)");
+            }
+            (None, Some(LitState::Pending(what))) => views::placeholder(ui, rect, title, what),
+            _ => views::placeholder(ui, rect, title, "solving the exact radiosity…"),
         }
-        let _ = ui.painter().text(
-            ui.max_rect().left_bottom(),
-            Align2::LEFT_BOTTOM,
-            format!(
-                "{} edges, L = {:.3}",
-                world.scene.edges().len(),
-                world.scene.total_length()
-            ),
-            FontId::proportional(11.0),
-            ui.visuals().weak_text_color(),
-        );
     }
 }
 
-/// A labelled, range-limited number in a 3-column grid: name (hover: meaning) | value | range.
-fn row<T: egui::emath::Numeric>(
-    ui: &mut egui::Ui,
-    name: &str,
-    meaning: &str,
-    value: &mut T,
-    range: std::ops::RangeInclusive<T>,
-    valid: &str,
-    speed: f64,
-) {
-    let label = ui.label(name).on_hover_text(meaning);
-    ui.add(
-        DragValue::new(value)
-            .range(range)
-            .speed(speed)
-            .max_decimals(9),
-    )
-    .labelled_by(label.id)
-    .on_hover_text(meaning);
-    ui.label(RichText::new(valid).small().weak());
-    ui.end_row();
+/// The textures of one frame's heatmaps and overlays, and the heatmaps' colour scale.
+struct Heatmaps {
+    scale: Scale,
+    kernel: egui::TextureId,
+    approx: Option<egui::TextureId>,
+    error: Option<egui::TextureId>,
+    samples: Option<egui::TextureId>,
+    overlay: Option<egui::TextureId>,
+}
+
+/// Where the panels go: the kernel plot (a big square), ζ̃ and the error beside it, the scene
+/// (and the exact lit scene) on the right, the curves below.
+struct Layout {
+    kernel: Rect,
+    approx: Rect,
+    error: Rect,
+    scene: Rect,
+    exact: Option<Rect>,
+    curves: Rect,
+}
+
+impl Layout {
+    fn of(full: Rect, lit: bool) -> Layout {
+        let gap = 8.0;
+        let curves_h = (full.height() * 0.32).clamp(150.0, 300.0);
+        let top_h = full.height() - curves_h - gap;
+        let big = top_h.min(full.width() * 0.42);
+        let small = (big - views::TITLE_H) / 2.0 + views::TITLE_H / 2.0;
+        let kernel = Rect::from_min_size(full.min, Vec2::splat(big));
+        let approx =
+            Rect::from_min_size(kernel.right_top() + Vec2::new(gap, 0.0), Vec2::splat(small));
+        let error = Rect::from_min_size(
+            approx.left_bottom() + Vec2::new(0.0, big - 2.0 * small),
+            Vec2::splat(small),
+        );
+        let right = Rect::from_min_max(
+            Pos2::new(approx.right() + gap, full.top()),
+            Pos2::new(full.right(), full.top() + top_h),
+        );
+        let (scene, exact) = if !lit {
+            (right, None)
+        } else if right.width() >= 1.6 * right.height() {
+            // Wide: side by side.
+            let mid = right.center().x;
+            (
+                Rect::from_min_max(right.min, Pos2::new(mid - gap / 2.0, right.bottom())),
+                Some(Rect::from_min_max(
+                    Pos2::new(mid + gap / 2.0, right.top()),
+                    right.max,
+                )),
+            )
+        } else {
+            let split = right.top() + right.height() * 0.56;
+            (
+                Rect::from_min_max(right.min, Pos2::new(right.right(), split - gap / 2.0)),
+                Some(Rect::from_min_max(
+                    Pos2::new(right.left(), split + gap / 2.0),
+                    right.max,
+                )),
+            )
+        };
+        let curves = Rect::from_min_max(Pos2::new(full.left(), full.top() + top_h + gap), full.max);
+        Layout {
+            kernel,
+            approx,
+            error,
+            scene,
+            exact,
+            curves,
+        }
+    }
+}
+
+/// What the pointer at `(s, t)` shows: the two points, G, V, k, ζ; the learned ζ̃; for a
+/// visibility model, Ṽ and how it is decided there (geometry, or the cells of the face).
+fn readout_text(kernel: &Kernel, model: Option<&LearnedKernel>, s: f64, t: f64) -> String {
+    let k = kernel.eval(s, t);
+    let mut text = format!(
+        "s {s:.4} (edge {}), t {t:.4} (edge {})\nG {:.4}  V {}  k {:.5}\nζ {:.5}  learned {}",
+        k.x.edge,
+        k.y.edge,
+        k.geometry,
+        if k.visible {
+            "1 (visible)"
+        } else {
+            "0 (blocked)"
+        },
+        k.k,
+        k.zeta,
+        model.map_or("–".into(), |m| format!("{:.5}", m.zeta(s, t))),
+    );
+    let Some(model) = model.filter(|m| m.target() == kernel_fit::Target::Visibility) else {
+        return text;
+    };
+    let u = kernel.unoccluded(s, t);
+    let line = if u.k <= 0.0 {
+        "learned V –: the points do not face each other".to_owned()
+    } else {
+        match kernel.pair_class(u.sender, u.receiver) {
+            PairClass::Zero => "learned V –: no transfer between these edges".to_owned(),
+            PairClass::Visible => "learned V 1: geometry says visible (no cell, no ray)".to_owned(),
+            PairClass::Hidden => "learned V 0: geometry says blocked (no cell, no ray)".to_owned(),
+            PairClass::Varies => {
+                let v = model.zeta(s, t) / u.zeta;
+                match model.face_cells(s, t).map_or(0, |c| c.len()) {
+                    0 => {
+                        format!("learned V {v:.3}: no cell in this face (its pair's cells answer)")
+                    }
+                    1 => format!("learned V {v:.3}: from the 1 cell of this face"),
+                    n => format!("learned V {v:.3}: from the {n} cells of this face"),
+                }
+            }
+        }
+    };
+    text.push('\n');
+    text.push_str(&line);
+    text
+}
+
+/// A stop reason in words.
+#[must_use]
+pub fn stop_text(reason: StopReason) -> &'static str {
+    match reason {
+        StopReason::TargetCells => "target cell count reached",
+        StopReason::TargetError => "target error reached",
+        StopReason::RayBudget => "ray budget spent",
+        StopReason::StepBudget => "step budget spent",
+        StopReason::Interrupted => "interrupted",
+        StopReason::Exact => {
+            "exact: geometry decides every visibility in this scene, there is nothing to learn"
+        }
+        StopReason::Converged => {
+            "converged: every sample is predicted exactly and a θ scan found nothing left to learn"
+        }
+    }
+}
+
+/// The learner a fit runs, in a few words.
+fn learner_name(p: &FitParams) -> String {
+    let preset = Preset::ALL
+        .into_iter()
+        .find(|&preset| crate::settings::with_preset(preset, p) == *p);
+    let target = match p.target {
+        kernel_fit::Target::Visibility => "V",
+        kernel_fit::Target::Zeta => "ζ",
+        kernel_fit::Target::FactoredEmission => "k",
+    };
+    match preset {
+        Some(preset) => format!("{} ({target})", preset.name()),
+        None => format!("custom ({target})"),
+    }
 }
 
 impl eframe::App for ViewerApp {
@@ -1116,11 +1045,7 @@ impl eframe::App for ViewerApp {
 
 /// A bundled scene by name, with its label.
 fn bundled(name: &str) -> Result<(Scene, String), String> {
-    let (_, text) = BUNDLED_SCENES
-        .iter()
-        .find(|(n, _)| *n == name)
-        .ok_or_else(|| format!("no bundled scene named {name:?}"))?;
-    let scene = Scene::from_ron_str(text).map_err(|e| format!("bundled scene {name}: {e}"))?;
+    let scene = bundled::scene(name).map_err(|e| e.to_string())?;
     Ok((scene, name.to_string()))
 }
 

@@ -1,85 +1,16 @@
-//! Value → colour: the heatmap colour map, its scale (linear or log), and the images built
-//! from grids and sample points. Pure functions, so they are cheap to test and run only when
-//! the data they show has changed.
+//! Value → colour on screen: the project's one colour map and scale rule
+//! ([`kernel_fit::colormap`], the same as the CLI's pictures) as egui colours, and the images
+//! built from grids and sample points. Pure functions, so they are cheap to test and run only
+//! when the data they show has changed.
 
 use egui::{Color32, ColorImage};
+use kernel_fit::colormap::{Scale, inferno};
 
-/// Inferno-like control points (dark purple → orange → pale yellow), perceptually ordered, so a
-/// brighter pixel always means a larger value and cells drawn in white/cyan stay visible.
-const INFERNO: [[u8; 3]; 9] = [
-    [0, 0, 4],
-    [31, 12, 72],
-    [85, 15, 109],
-    [136, 34, 106],
-    [186, 54, 85],
-    [227, 89, 51],
-    [249, 140, 10],
-    [249, 201, 50],
-    [252, 255, 164],
-];
-
-/// The colour of `x ∈ [0, 1]` (clamped; NaN is 0).
+/// The colour of `x ∈ [0, 1]` (clamped; NaN is 0): the heatmaps' and the lit scene's.
 #[must_use]
-pub fn colormap(x: f32) -> Color32 {
-    let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
-    let f = x * (INFERNO.len() - 1) as f32;
-    let i = (f.floor() as usize).min(INFERNO.len() - 2);
-    let u = f - i as f32;
-    let [a, b] = [INFERNO[i], INFERNO[i + 1]];
-    let mix = |k: usize| (f32::from(a[k]) + u * (f32::from(b[k]) - f32::from(a[k]))).round() as u8;
-    Color32::from_rgb(mix(0), mix(1), mix(2))
-}
-
-/// How values map to `[0, 1]` before the colour map.
-///
-/// `max` is the 99th percentile of the positive values, not the maximum: the kernel grows like
-/// `1/r` near shared vertices, and a true maximum would paint everything else black.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Scale {
-    /// The value shown at full brightness (and above).
-    pub max: f64,
-    /// Logarithmic (`decades` below `max` to `max`) instead of linear (`0` to `max`).
-    pub log: bool,
-    /// Decades shown by the log scale.
-    pub decades: f64,
-}
-
-impl Scale {
-    /// A scale fitted to `values` (see the type docs).
-    #[must_use]
-    pub fn fit(values: &[f64], log: bool) -> Scale {
-        let mut positive: Vec<f64> = values
-            .iter()
-            .copied()
-            .filter(|v| v.is_finite() && *v > 0.0)
-            .collect();
-        let max = if positive.is_empty() {
-            1.0
-        } else {
-            let k = ((positive.len() - 1) as f64 * 0.99).round() as usize;
-            let (_, v, _) = positive.select_nth_unstable_by(k, f64::total_cmp);
-            *v
-        };
-        Scale {
-            max,
-            log,
-            decades: 4.0,
-        }
-    }
-
-    /// `v` mapped to `[0, 1]`; zero, negative and NaN values are 0.
-    #[must_use]
-    pub fn unit(&self, v: f64) -> f32 {
-        if v.is_nan() || v <= 0.0 {
-            return 0.0;
-        }
-        let x = if self.log {
-            (v / self.max).log10() / self.decades + 1.0
-        } else {
-            v / self.max
-        };
-        x.clamp(0.0, 1.0) as f32
-    }
+pub fn colour(x: f64) -> Color32 {
+    let [r, g, b] = inferno(x);
+    Color32::from_rgb(r, g, b)
 }
 
 /// A `res × res` grid (row-major, row `i` ↔ `s = (i + ½)/res`, column `j` ↔ `t`) as an image
@@ -97,7 +28,7 @@ pub fn grid_image(values: &[f64], res: usize, scale: Scale) -> ColorImage {
         pixels.extend(
             values[row * res..(row + 1) * res]
                 .iter()
-                .map(|&v| colormap(scale.unit(v))),
+                .map(|&v| colour(scale.unit(v))),
         );
     }
     ColorImage::new([res, res], pixels)
@@ -136,31 +67,14 @@ mod tests {
     use super::*;
 
     #[test]
-    fn colormap_is_monotone_in_brightness_and_total() {
-        let luma = |c: Color32| u32::from(c.r()) + u32::from(c.g()) + u32::from(c.b());
-        let mut last = 0;
-        for i in 0..=100 {
-            let l = luma(colormap(i as f32 / 100.0));
-            assert!(l >= last, "brightness drops at {i}: {l} < {last}");
-            last = l;
-        }
-        assert_eq!(colormap(f32::NAN), colormap(0.0));
-        assert_eq!(colormap(2.0), colormap(1.0));
-    }
-
-    #[test]
-    fn scale_ignores_the_singular_tail_and_handles_zeros() {
-        let mut values = vec![1.0; 990];
-        values.extend([1e9; 5]);
-        values.extend([0.0; 5]);
-        let lin = Scale::fit(&values, false);
-        assert_eq!(lin.max, 1.0);
-        assert_eq!(lin.unit(0.5), 0.5);
-        assert_eq!(lin.unit(0.0), 0.0);
-        assert_eq!(lin.unit(f64::NAN), 0.0);
-        let log = Scale::fit(&values, true);
-        assert!((log.unit(1e-2) - 0.5).abs() < 1e-6);
-        assert_eq!(Scale::fit(&[0.0, 0.0], true).max, 1.0);
+    fn colours_are_the_projects_colour_map() {
+        assert_eq!(colour(0.0), Color32::from_rgb(0, 0, 4));
+        assert_eq!(colour(1.0), Color32::from_rgb(252, 255, 164));
+        assert_eq!(colour(f64::NAN), colour(0.0));
+        assert_eq!(colour(0.37), {
+            let [r, g, b] = inferno(0.37);
+            Color32::from_rgb(r, g, b)
+        });
     }
 
     #[test]
@@ -170,13 +84,12 @@ mod tests {
             &[0.0, 1.0, 0.0, 0.0],
             2,
             Scale {
-                max: 1.0,
+                top: 1.0,
                 log: false,
-                decades: 4.0,
             },
         );
-        assert_eq!(img.pixels[2 + 1], colormap(1.0), "bottom-right pixel");
-        assert_eq!(img.pixels[0], colormap(0.0));
+        assert_eq!(img.pixels[2 + 1], colour(1.0), "bottom-right pixel");
+        assert_eq!(img.pixels[0], colour(0.0));
         let s = samples_image(&[([0.1, 0.9], 3)], 2);
         assert_eq!(s.pixels[2 + 1], set_color(3));
         assert_eq!(s.pixels[0], Color32::TRANSPARENT);

@@ -8,14 +8,24 @@
 //!   axes; over it the cells re-projected to the mean `(s, t)` of the samples they won (paper
 //!   Fig. 3c), sized by `δ_c`, cyan when critical, the network's edges, and optionally every
 //!   training sample coloured by the set that produced it.
-//! - **ζ̃ and |ζ̃ − ζ|** beside it, on the same colour scale (paper Fig. 3d).
+//! - **ζ̃ and |ζ̃ − ζ|** beside it, on the same colour scale (paper Fig. 3d). Hovering any of the
+//!   three shows `G`, `V`, `k`, `ζ` and the learned value at the pointer; for the default
+//!   learner also its `Ṽ` and whether the geometry or the cells of that face decide it.
+//! - **Lit scene**: the radiosity `B` solved with the kernel learned so far colours the scene's
+//!   edges, beside the scene lit by the exact kernel, with `B(s)` of both and the error of the
+//!   solved `B − E` as the cells grow ([`lit`]: solved on the learner's thread at most every
+//!   half second and for at most a tenth of its time).
 //! - **Scene view**: emitters, surfaces, blockers, front sides; the ray `x(s) → y(t)` under the
-//!   pointer with `k`, `V` and the learned value; the `s` of a hovered surface point marked in
-//!   the plots. Dragging an end point changes the scene: the reference is recomputed and the
-//!   network keeps learning from where it is (`Fit::set_kernel`, SPEC §6).
-//! - **Curves**: held-out relative L2 against steps and rays, cells and samples.
-//! - **Controls**: play, pause, step, reset, speed, every parameter of SPEC §3–4 with its valid
-//!   range, target cells, seed, subdivision, bundled scenes, scene files. Settings persist.
+//!   pointer; the `s` of a hovered surface point marked in the plots. Dragging an end point
+//!   changes the scene: the references are recomputed and the network keeps learning from
+//!   where it is (`Fit::set_kernel`).
+//! - **Curves**: held-out relative L2 of ζ and of the solved `B − E` against steps and rays,
+//!   cells and samples.
+//! - **Controls**: play, pause, step, reset, speed; the learner preset (the project's default
+//!   or the paper's network) and every parameter of both (docs/ALGORITHM.md §8) with its valid
+//!   range; what only a new fit can change (target, gating, importance, …) waits for Reset.
+//!   Settings persist, with the preset chosen; settings saved by an older viewer load with the
+//!   current learner.
 //!
 //! Training runs on its own thread, which owns the [`kernel_fit::Fit`]; the UI sends commands
 //! and takes published snapshots without ever waiting for the learner. Textures are rebuilt
@@ -34,21 +44,17 @@
 
 mod app;
 mod colormap;
+pub mod lit;
+mod settings;
 mod views;
 mod worker;
 
 use std::path::PathBuf;
 
-pub use app::{Options, SceneChoice, Settings, ViewerApp};
-pub use colormap::{Scale, colormap, grid_image, samples_image, set_color};
-
-/// The scenes shipped with the project, by name, as RON text.
-pub const BUNDLED_SCENES: &[(&str, &str)] = &[
-    ("fig3", include_str!("../../../scenes/fig3.ron")),
-    ("box", include_str!("../../../scenes/box.ron")),
-    ("maze", include_str!("../../../scenes/maze.ron")),
-    ("corners", include_str!("../../../scenes/corners.ron")),
-];
+pub use app::{Options, ViewerApp, stop_text};
+pub use colormap::{colour, grid_image, samples_image, set_color};
+pub use settings::{SceneChoice, Settings, live_params, waiting_for_reset, with_preset};
+pub use worker::{Lit, LitState};
 
 /// Why the viewer could not run.
 #[derive(Debug, thiserror::Error)]
@@ -146,13 +152,6 @@ mod tests {
     fn errors_can_cross_threads_and_into_anyhow() {
         fn check<T: std::error::Error + Send + Sync + 'static>() {}
         check::<ViewerError>();
-    }
-
-    #[test]
-    fn bundled_scenes_load() {
-        for (name, text) in BUNDLED_SCENES {
-            flatland_geom::Scene::from_ron_str(text).unwrap_or_else(|e| panic!("{name}: {e}"));
-        }
     }
 
     #[test]

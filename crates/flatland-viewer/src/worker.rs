@@ -5,8 +5,11 @@
 //! learner has handled, so the UI knows when it has caught up.
 //!
 //! Publishing is throttled: a [`Snapshot`] at most every [`PUBLISH_EVERY`], the learned ζ̃ on
-//! the display grid at most every [`APPROX_EVERY`] (it costs `APPROX_RES²` network evaluations).
+//! the display grid at most every [`APPROX_EVERY`] (it costs `APPROX_RES²` network evaluations),
+//! the lit scene as [`crate::lit`] says. Long work (the lit scene's exact reference and solves)
+//! stops as soon as a command is waiting and is taken up again after it.
 
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender, TryRecvError};
 use std::sync::{Arc, Condvar, Mutex};
 use std::thread::JoinHandle;
@@ -18,6 +21,8 @@ use kernel_fit::{
     StopReason,
 };
 use rayon::prelude::*;
+
+use crate::lit::{LitPoint, LitSetup, LitSolve, solve_interval};
 
 /// Resolution of the reference grid (the kernel heatmap).
 pub const REFERENCE_RES: usize = 256;
@@ -59,6 +64,8 @@ pub enum Command {
     },
     /// Steps per second; `None` trains as fast as possible.
     Speed(Option<f64>),
+    /// Solve the lit scene with the learned kernel while it learns (or stop doing so).
+    Lit(bool),
     /// Nothing but a status: the UI's way to learn that everything before it was handled.
     Sync,
 }
@@ -111,6 +118,38 @@ pub struct Status {
     pub summary: Option<FitSummary>,
     /// Commands handled before this status was made.
     pub handled: u64,
+    /// The running fit's parameters.
+    pub params: FitParams,
+    /// Faces of the visibility structure that hold a cell (visibility learners only).
+    pub occupied_faces: Option<usize>,
+}
+
+/// The lit scene as last published.
+#[derive(Clone, Debug)]
+pub enum LitState {
+    /// Nothing to show yet; what is being done.
+    Pending(&'static str),
+    /// The lit view is switched off.
+    Off,
+    /// The setup or a solve failed; why.
+    Failed(String),
+    /// A solve with the learned kernel.
+    Ready(Arc<Lit>),
+}
+
+/// The scene lit by the learned kernel.
+#[derive(Debug)]
+pub struct Lit {
+    /// The mesh and the exact B (its `world` is the id of the reference it belongs to).
+    pub setup: Arc<LitSetup>,
+    /// Training steps of the model solved.
+    pub steps: u64,
+    /// Its cells.
+    pub cells: usize,
+    /// B and its errors.
+    pub solve: LitSolve,
+    /// The error of every solve of this fit so far.
+    pub history: Vec<LitPoint>,
 }
 
 /// What the learner publishes. Each field holds the newest value; the UI takes them.
@@ -122,6 +161,8 @@ pub struct Mailbox {
     pub status: Option<Status>,
     /// The newest approximation.
     pub approx: Option<Arc<Approx>>,
+    /// The newest lit scene.
+    pub lit: Option<LitState>,
     /// An error to show (a bad parameter, a failed reset).
     pub error: Option<String>,
     /// Work that keeps the learner busy for a noticeable time (e.g. "computing the reference").
@@ -135,6 +176,8 @@ pub struct Mailbox {
 struct Shared {
     mailbox: Mutex<Mailbox>,
     posted: Condvar,
+    /// Commands sent so far: more than the learner has handled means one is waiting.
+    sent: AtomicU64,
 }
 
 /// The UI's end: a command channel and the mailbox. Dropping it stops the thread.
@@ -169,6 +212,7 @@ impl WorkerHandle {
             && tx.send(command).is_ok()
         {
             self.sent += 1;
+            self.shared.sent.store(self.sent, Ordering::Release);
         }
     }
 
@@ -231,6 +275,36 @@ struct Learner {
     /// A command changed something a status shows: publish one as soon as it is due.
     dirty: bool,
     handled: u64,
+    lit: LitWork,
+}
+
+/// The learner's side of the lit scene.
+struct LitWork {
+    enabled: bool,
+    /// The mesh and exact B of the current world, once made.
+    setup: Option<Arc<LitSetup>>,
+    /// The world whose setup failed (not retried until the scene changes).
+    failed: Option<u64>,
+    /// Steps of the model last solved (`None`: solve again whatever the steps).
+    steps: Option<u64>,
+    /// When the last solve ended, and what it cost.
+    last: Instant,
+    cost: Duration,
+    history: Vec<LitPoint>,
+}
+
+impl LitWork {
+    fn new(now: Instant) -> LitWork {
+        LitWork {
+            enabled: true,
+            setup: None,
+            failed: None,
+            steps: None,
+            last: now,
+            cost: Duration::ZERO,
+            history: Vec::new(),
+        }
+    }
 }
 
 impl Learner {
@@ -256,6 +330,7 @@ impl Learner {
             summary: None,
             dirty: false,
             handled: 0,
+            lit: LitWork::new(now),
         }
     }
 
@@ -269,6 +344,13 @@ impl Learner {
         (self.repaint)();
     }
 
+    /// A stop flag for long work: true once a command is waiting.
+    fn command_waiting(&self) -> impl Fn() -> bool + Sync + use<> {
+        let shared = Arc::clone(&self.shared);
+        let handled = self.handled;
+        move || shared.sent.load(Ordering::Acquire) > handled
+    }
+
     fn run(mut self) {
         loop {
             // Read every waiting command; sleep on the channel only when there is nothing to
@@ -277,6 +359,8 @@ impl Learner {
             let first = if !training {
                 let wait = if self.dirty {
                     PUBLISH_EVERY.saturating_sub(self.last_publish.elapsed())
+                } else if self.lit_pending() {
+                    Duration::ZERO
                 } else {
                     Duration::from_millis(200)
                 };
@@ -304,6 +388,7 @@ impl Learner {
             }
             self.train_slice();
             self.publish(false);
+            self.update_lit();
         }
     }
 
@@ -329,18 +414,36 @@ impl Learner {
                 subdivide,
                 params,
             } => self.reset(scene, subdivide, params),
-            Command::Params(params) => {
-                if let Some(fit) = &mut self.fit {
-                    match fit.set_params(params) {
-                        Ok(()) => self.summary = None,
-                        Err(e) => self.report(e.to_string()),
-                    }
-                }
-            }
+            Command::Params(params) => self.set_params(params),
             Command::Edit { scene, subdivide } => self.edit(scene, subdivide),
+            Command::Lit(on) => {
+                self.lit.enabled = on;
+                self.lit.steps = None;
+                let state = if on {
+                    LitState::Pending("solving the radiosity…")
+                } else {
+                    LitState::Off
+                };
+                self.post(|m| m.lit = Some(state));
+            }
             Command::Sync => {}
         }
         self.dirty = true;
+    }
+
+    fn set_params(&mut self, params: FitParams) {
+        let Some(fit) = &mut self.fit else {
+            return;
+        };
+        // A fit that is exact from the start has no samples to train on: it stays stopped
+        // whatever its parameters (`Fit::set_params` would clear the stop).
+        if fit.stopped() == Some(StopReason::Exact) {
+            return;
+        }
+        match fit.set_params(params) {
+            Ok(()) => self.summary = None,
+            Err(e) => self.report(e.to_string()),
+        }
     }
 
     fn report(&self, message: String) {
@@ -408,6 +511,7 @@ impl Learner {
         ) {
             Ok(fit) => {
                 self.fit = Some(fit);
+                self.lit.history.clear();
                 self.install(world);
             }
             Err(e) => self.report(e.to_string()),
@@ -435,10 +539,20 @@ impl Learner {
         self.summary = None;
         self.published_steps = None;
         self.approx_steps = None;
+        self.lit.setup = None;
+        self.lit.steps = None;
+        let lit = if self.lit.enabled {
+            LitState::Pending("solving the exact radiosity…")
+        } else {
+            LitState::Off
+        };
         self.post(|m| {
             m.world = Some(world);
             m.approx = None;
+            m.lit = Some(lit);
         });
+        // A fit can stop before its first step (nothing to learn: `StopReason::Exact`).
+        self.finish_if_stopped();
         self.publish(true);
     }
 
@@ -464,7 +578,7 @@ impl Learner {
         };
         self.last_tick = now;
         if budget == 0 {
-            if self.running {
+            if self.running && !self.lit_pending() {
                 std::thread::sleep(Duration::from_millis(2));
             }
             return;
@@ -490,23 +604,44 @@ impl Learner {
         } else if self.speed.is_some() {
             self.allowance -= done as f64;
         }
-        if let Some(reason) = stopped {
+        if stopped.is_some() {
             self.running = false;
             self.steps_left = 0;
-            if self.summary.is_none() && reason != StopReason::Interrupted {
-                // Publish the stop first: the refit can take seconds at 1000 cells.
-                self.publish(true);
-                self.set_busy(Some("least-squares refit of the output weights…"));
-                let finished = self.fit.as_mut().map(Fit::finish);
-                self.set_busy(None);
-                match finished {
-                    Some(Ok(summary)) => self.summary = Some(summary),
-                    Some(Err(e)) => self.report(e.to_string()),
-                    None => {}
-                }
-                self.approx_steps = None; // the refit changed ζ̃
-            }
+            // Publish the stop first: the refit can take seconds at 1000 cells.
             self.publish(true);
+            self.finish_if_stopped();
+            self.publish(true);
+        }
+    }
+
+    /// The final errors (after the paper's refit) of a fit that has stopped, once per stop.
+    fn finish_if_stopped(&mut self) {
+        let Some(fit) = &mut self.fit else {
+            return;
+        };
+        let Some(reason) = fit.stopped() else {
+            return;
+        };
+        if self.summary.is_some() || reason == StopReason::Interrupted {
+            return;
+        }
+        let refit = fit.params().refit && fit.params().target != kernel_fit::Target::Visibility;
+        self.set_busy(Some(if refit {
+            "least-squares refit of the output weights…"
+        } else {
+            "final errors…"
+        }));
+        let finished = self.fit.as_mut().map(Fit::finish);
+        self.set_busy(None);
+        match finished {
+            Some(Ok(summary)) => self.summary = Some(summary),
+            Some(Err(e)) => self.report(e.to_string()),
+            None => {}
+        }
+        if refit {
+            // The refit changed ζ̃.
+            self.approx_steps = None;
+            self.lit.steps = None;
         }
     }
 
@@ -535,6 +670,8 @@ impl Learner {
                 steps_per_s: if busy { self.rate.2.max(rate) } else { 0.0 },
                 summary: self.summary.clone(),
                 handled: self.handled,
+                params: *fit.params(),
+                occupied_faces: fit.model().occupied_faces(),
             };
             self.post(|m| m.status = Some(status));
             self.published_steps = Some(steps);
@@ -558,6 +695,78 @@ impl Learner {
             self.approx_steps = Some(steps);
             self.last_approx = Instant::now();
         }
+    }
+
+    /// Whether the lit scene has work that is due now (so the loop must not sleep).
+    fn lit_pending(&self) -> bool {
+        let (Some(fit), Some(world)) = (&self.fit, &self.world) else {
+            return false;
+        };
+        if !self.lit.enabled || self.lit.failed == Some(world.id) {
+            return false;
+        }
+        let training = self.running || self.steps_left > 0;
+        self.lit.setup.as_ref().is_none_or(|s| s.world != world.id)
+            || (self.lit.steps != Some(fit.steps())
+                && (!training || self.lit.last.elapsed() >= solve_interval(self.lit.cost)))
+    }
+
+    /// Makes the lit scene's setup for a new scene, then solves the learned kernel when a
+    /// solve is due. Both give way to any waiting command and are taken up again after it.
+    fn update_lit(&mut self) {
+        if !self.lit_pending() {
+            return;
+        }
+        let (Some(fit), Some(world)) = (&self.fit, &self.world) else {
+            return;
+        };
+        let stop = self.command_waiting();
+        let world_id = world.id;
+        let setup = match &self.lit.setup {
+            Some(s) if s.world == world_id => Arc::clone(s),
+            _ => match LitSetup::build(world_id, &world.kernel, fit.params().target, &stop) {
+                Ok(s) => {
+                    let s = Arc::new(s);
+                    self.lit.setup = Some(Arc::clone(&s));
+                    s
+                }
+                Err(kernel_fit::FitError::Interrupted) => return,
+                Err(e) => {
+                    self.lit.failed = Some(world_id);
+                    let why = format!("no lit scene: {e}");
+                    self.post(|m| m.lit = Some(LitState::Failed(why)));
+                    return;
+                }
+            },
+        };
+        let Some(fit) = &self.fit else { return };
+        let (steps, rays, cells) = (fit.steps(), fit.rays(), fit.network().len());
+        let started = Instant::now();
+        let solved = setup.solve(fit.model(), &stop);
+        self.lit.last = Instant::now();
+        self.lit.cost = started.elapsed();
+        let state = match solved {
+            Err(kernel_fit::FitError::Interrupted) => return,
+            Err(e) => LitState::Failed(format!("the learned kernel did not solve: {e}")),
+            Ok(solve) => {
+                if self.lit.history.last().is_none_or(|p| p.steps != steps) {
+                    self.lit.history.push(LitPoint {
+                        steps,
+                        rays,
+                        rel_l2_reflected: solve.errors.rel_l2_reflected,
+                    });
+                }
+                LitState::Ready(Arc::new(Lit {
+                    setup,
+                    steps,
+                    cells,
+                    solve,
+                    history: self.lit.history.clone(),
+                }))
+            }
+        };
+        self.lit.steps = Some(steps);
+        self.post(|m| m.lit = Some(state));
     }
 }
 

@@ -14,6 +14,8 @@ use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use flatland_geom::DVec2;
 use flatland_viewer::{Options, Settings, ViewerApp};
+use kernel_fit::{Gating, Preset, StopReason, Target};
+use sgcs::Insertion;
 
 /// Longest wait for one condition; reached only if something is broken.
 const DEADLINE: Duration = Duration::from_secs(120);
@@ -139,7 +141,7 @@ fn a_parameter_changed_in_the_panel_reaches_the_learner() {
     });
     // The refit runs after the stop; the line says so once its errors are in.
     wait_until(&mut h, "the final errors in the status line", |h| {
-        h.query_by_label_contains("stopped (TargetCells): final rel. L2")
+        h.query_by_label_contains("stopped: target cell count reached; final rel. L2")
             .is_some()
     });
     assert!(h.state().final_errors().is_some());
@@ -172,7 +174,7 @@ fn errors_against_a_dark_scene_read_undefined() {
     wait_for(&mut h, "the dark scene's reference", ready);
     h.get_by_label("Play").click();
     wait_until(&mut h, "the final errors", |h| {
-        h.query_by_label_contains("final rel. L2 grid undefined, held out undefined")
+        h.query_by_label_contains("final rel. L2 of ζ: grid undefined, held out undefined")
             .is_some()
     });
 }
@@ -192,7 +194,7 @@ fn picking_another_scene_starts_a_fresh_fit_on_it() {
     });
     let app = h.state();
     assert_eq!(app.scene_label(), "maze");
-    let maze = flatland_geom::Scene::from_ron_str(flatland_viewer::BUNDLED_SCENES[2].1).unwrap();
+    let maze = flatland_geom::bundled::scene("maze").unwrap();
     assert_eq!(app.reference_scene().unwrap().edges(), maze.edges());
     wait_for(&mut h, "a fresh snapshot", |a| {
         a.steps() == 0 && a.cells() == 3
@@ -251,4 +253,171 @@ fn moving_the_blocker_keeps_learning_from_the_current_network() {
 
     h.get_by_label("Step").click();
     wait_for(&mut h, "more steps", |a| a.steps() == 6000);
+}
+
+#[test]
+fn switching_presets_starts_a_new_fit_with_that_learner() {
+    let mut h = harness(quick_settings());
+    wait_for(&mut h, "the reference", ready);
+    settled(&mut h);
+    let fit = h.state().fit_params().expect("a running fit");
+    assert_eq!(fit.target, Target::Visibility, "the default learner");
+    assert_eq!(h.state().settings().preset, Preset::Default);
+    let default_world = h.state().world_id();
+
+    h.get_by_label("Paper").click();
+    wait_for(&mut h, "a fresh fit of the paper's network", |a| {
+        a.world_id() > default_world
+            && a.caught_up()
+            && a.fit_params().is_some_and(|p| p.target == Target::Zeta)
+    });
+    let app = h.state();
+    assert_eq!(app.settings().preset, Preset::Paper);
+    let fit = app.fit_params().unwrap();
+    assert_eq!(fit.gating, Gating::Off);
+    assert_eq!(fit.network, sgcs::Params::default(), "the paper's network");
+    assert_eq!(fit.target_cells, 60, "the run's target cells are kept");
+    assert_eq!((app.steps(), app.occupied_faces()), (0, None));
+    // Its lit scene: the quadrature operator on fewer elements.
+    wait_for(&mut h, "the paper network's lit scene", |a| {
+        a.lit().is_some_and(|l| {
+            l.setup.world == a.world_id()
+                && l.setup.mesh.len() == flatland_viewer::lit::NETWORK_ELEMENTS
+        })
+    });
+
+    let paper_world = h.state().world_id();
+    h.get_by_label("Default").click();
+    wait_for(&mut h, "a fresh fit of the default learner", |a| {
+        a.world_id() > paper_world
+            && a.caught_up()
+            && a.fit_params()
+                .is_some_and(|p| p.target == Target::Visibility && p.gating == Gating::Faces)
+    });
+    assert_eq!(h.state().settings().preset, Preset::Default);
+    assert!(h.state().settings().is_preset());
+}
+
+#[test]
+fn network_options_reach_the_running_fit_and_the_target_waits_for_reset() {
+    let mut h = harness(quick_settings());
+    wait_for(&mut h, "the reference", ready);
+    settled(&mut h);
+    let world = h.state().world_id();
+
+    // A network option applies to the running fit at once.
+    h.get_by_label("midpoint").click();
+    wait_for(&mut h, "midpoint insertion in the running fit", |a| {
+        a.caught_up()
+            && a.fit_params()
+                .is_some_and(|p| p.network.insertion == Insertion::Midpoint)
+    });
+    assert_eq!(
+        h.state().world_id(),
+        world,
+        "no new fit for a network option"
+    );
+    h.get_by_label("(changed)");
+
+    // What the network learns needs a new fit: it waits, and says so.
+    h.get_by_label("ζ").click();
+    h.get_by_role_and_label(Role::SpinButton, "importance")
+        .set_value_accesskit(0.3);
+    h.run_steps(2);
+    h.get_by_label_contains("target, importance: apply on Reset");
+    settled(&mut h);
+    let fit = h.state().fit_params().unwrap();
+    assert_eq!(
+        (fit.target, fit.importance),
+        (Target::Visibility, 0.7),
+        "the running fit keeps its target"
+    );
+    assert_eq!(h.state().world_id(), world);
+    assert!(
+        h.state().message().is_none(),
+        "no error for a waiting change"
+    );
+
+    h.get_by_label("Start a new fit").click();
+    wait_for(&mut h, "a new fit learning ζ", |a| {
+        a.world_id() > world
+            && a.caught_up()
+            && a.fit_params().is_some_and(|p| p.target == Target::Zeta)
+    });
+    let fit = h.state().fit_params().unwrap();
+    assert_eq!(fit.importance, 0.3);
+    assert_eq!(fit.network.insertion, Insertion::Midpoint, "kept");
+    assert!(h.query_by_label_contains("apply on Reset").is_none());
+}
+
+#[test]
+fn the_lit_scene_publishes_b_and_its_error_while_the_cells_grow() {
+    let mut h = harness(quick_settings());
+    wait_for(&mut h, "the reference", ready);
+    wait_for(&mut h, "the lit scene of the first cells", |a| {
+        a.lit().is_some_and(|l| l.setup.world == a.world_id())
+    });
+    let first = h.state().lit().unwrap();
+    let (elements, start_error) = (first.setup.mesh.len(), first.solve.errors.rel_l2_reflected);
+    assert_eq!(first.solve.b.len(), elements);
+    assert_eq!(first.setup.exact.len(), elements);
+    assert!(first.solve.b.iter().all(|b| b.is_finite()));
+    assert!(
+        start_error.is_finite() && start_error > 0.05,
+        "three cells do not know the shadows yet: {start_error}"
+    );
+
+    // fig3: the default learner finds every face it needs and stops, converged; the lit
+    // scene follows it to the exact solution (up to the mesh: 512 elements against 2048).
+    h.get_by_label("Play").click();
+    wait_for(&mut h, "convergence", |a| {
+        a.stopped() == Some(StopReason::Converged)
+    });
+    wait_for(&mut h, "the converged model's lit scene", |a| {
+        a.lit().is_some_and(|l| l.steps == a.steps())
+    });
+    let app = h.state();
+    let last = app.lit().unwrap();
+    assert!(
+        last.solve.errors.rel_l2_reflected < 1e-3,
+        "{:?}",
+        last.solve.errors
+    );
+    assert!(last.history.len() >= 2, "{:?}", last.history);
+    assert_eq!(last.history[0].rel_l2_reflected, start_error);
+    assert!(app.occupied_faces().is_some_and(|f| f > 0));
+    h.get_by_label_contains(" faces  samples");
+    h.get_by_label_contains("solved B−E");
+    wait_until(&mut h, "the stop in words", |h| {
+        h.query_by_label_contains("stopped: converged").is_some()
+    });
+}
+
+#[test]
+fn a_scene_without_occluders_is_exact_at_once() {
+    let mut settings = quick_settings();
+    settings.scene = flatland_viewer::SceneChoice::Bundled("box".into());
+    let mut h = harness(settings);
+    wait_for(&mut h, "the reference", ready);
+    wait_for(&mut h, "the stop before any step", |a| {
+        a.stopped() == Some(StopReason::Exact) && a.final_errors().is_some()
+    });
+    let errors = h.state().final_errors().unwrap();
+    assert!(errors.grid < 1e-12 && errors.heldout < 1e-12, "{errors:?}");
+    wait_until(&mut h, "the stop in words", |h| {
+        h.query_by_label_contains("stopped: exact").is_some()
+    });
+    // Play changes nothing, and a parameter change does not wake it.
+    h.get_by_role_and_label(Role::SpinButton, "target cells")
+        .set_value_accesskit(30.0);
+    h.get_by_label("Play").click();
+    assert_eq!(settled(&mut h).0, 0);
+    assert_eq!(h.state().stopped(), Some(StopReason::Exact));
+    wait_for(&mut h, "the lit scene", |a| a.lit().is_some());
+    let lit = h.state().lit().unwrap();
+    assert!(
+        lit.solve.errors.rel_l2_reflected < 1e-3,
+        "{:?}",
+        lit.solve.errors
+    );
 }

@@ -396,11 +396,10 @@ fn paper_rows(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use flatland_geom::Scene;
 
     #[test]
     fn every_method_reports_errors_that_recompute() {
-        let scene = Scene::from_ron_str(include_str!("../../../scenes/fig3.ron")).unwrap();
+        let scene = flatland_geom::bundled::scene("fig3").unwrap();
         let kernel = Arc::new(Kernel::new(scene));
         let reference = Arc::new(Reference::new(&kernel, 48, 512, 3));
         let mut plan = BenchPlan::new(Method::ALL.to_vec(), vec![30, 60], 2);

@@ -14,6 +14,16 @@ pub enum FitError {
         /// The valid range in words.
         valid: &'static str,
     },
+    /// A parameter of a schema ([`sgcs::schema`]) is outside its range.
+    #[error("parameter `{name}` is {value}, but must be in {range}")]
+    OutOfRange {
+        /// The parameter's name as the CLI and files spell it.
+        name: &'static str,
+        /// The rejected value, as text.
+        value: String,
+        /// The valid range, in interval notation.
+        range: String,
+    },
     /// The geometry layer refused something.
     #[error(transparent)]
     Geom(#[from] flatland_geom::GeomError),

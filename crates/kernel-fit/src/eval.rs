@@ -1,6 +1,6 @@
 //! Error measures against references the learner never trained on.
 //!
-//! Relative L2 of ζ over the unit square (SPEC §5):
+//! Relative L2 of ζ over the unit square (docs/ALGORITHM.md §5):
 //! `sqrt(∫∫ (ζ̃ − ζ)² ds dt / ∫∫ ζ² ds dt)`, estimated two independent ways:
 //! on the midpoint grid `s = (i + ½)/R, t = (j + ½)/R` (the convention of `flatland kernel`) and on
 //! held-out uniform random `(s, t)` drawn from a seed stream that training never uses.

@@ -1132,7 +1132,7 @@ impl Fit {
         }
     }
 
-    /// Continues learning on a changed scene (SPEC §6: the representation stays adaptive).
+    /// Continues learning on a changed scene (the representation stays adaptive: a changed scene is learned on, not from scratch).
     ///
     /// The network keeps its cells, weights and counters and the input frame stays put (so the
     /// cells keep their meaning); the old samples describe the old scene and are dropped, and a
@@ -1503,9 +1503,9 @@ mod tests {
     use super::*;
     use crate::{Preset, density_ratio, discontinuity_mask};
 
-    const FIG3: &str = include_str!("../../../scenes/fig3.ron");
-    const MAZE: &str = include_str!("../../../scenes/maze.ron");
-    const BOX: &str = include_str!("../../../scenes/box.ron");
+    const FIG3: &str = flatland_geom::bundled::SCENES[0].2;
+    const MAZE: &str = flatland_geom::bundled::SCENES[2].2;
+    const BOX: &str = flatland_geom::bundled::SCENES[1].2;
 
     fn fig3() -> Arc<Kernel> {
         Arc::new(Kernel::new(Scene::from_ron_str(FIG3).unwrap()))

@@ -61,6 +61,7 @@
 pub mod ablation;
 pub mod baselines;
 pub mod bench;
+pub mod colormap;
 mod error;
 mod eval;
 mod fit;
@@ -83,5 +84,6 @@ pub use fit::{
 };
 pub use limits::REFERENCE_SEED;
 pub use model::{MODEL_FORMAT, MODEL_VERSION, ModelFile, fingerprint_hex};
-pub use params::{FitParams, Gating, Preset, Resampling, Target};
+pub use params::{FitParams, Gating, Preset, Resampling, Target, parameter_table};
 pub use sampling::InputFrame;
+pub use sgcs::schema::{self, Schema, Spec};

@@ -10,7 +10,7 @@ pub enum SgcsError {
         /// The parameter's field name in [`crate::Params`].
         name: &'static str,
         /// The valid range, in interval notation.
-        range: &'static str,
+        range: String,
         /// The rejected value.
         value: String,
     },

@@ -14,7 +14,7 @@
 //! 4. moves `s` by `ε_b (ξ − w_s)` and its neighbours by `ε_n (ξ − w_b)`,
 //! 5. every `λ` steps inserts a cell (below).
 //!
-//! # Conventions and choices (SPEC §3, and where it leaves room)
+//! # Conventions and choices (docs/ALGORITHM.md §3, and where the paper leaves room)
 //! - **Counters.** The paper keeps `τ_err` and `τ_cnt` and multiplies both by `1 − α` every step,
 //!   for every cell: `O(|A|)` work per step, and after 20 000 idle steps both are `0.95^20000`,
 //!   i.e. 0 or subnormal, and `τ_err / τ_cnt` is `0/0`. Only the ratio matters, and it is a
@@ -33,7 +33,7 @@
 //!   stored as `mean_r = τ_r / |F_r|` with weight `Σ_c max(0, 1 − |F_c|new/|F_c|old) · τ_cnt,c`.
 //! - **New output weight** ([`InsertRule`]): by default `v_r` keeps `κ(w_r)` unchanged by the
 //!   insertion (`v_r = κ_before(w_r) − κ_after(w_r)` with `v_r = 0`, as `M_r(w_r) = 1`). The
-//!   volume-weighted mean SPEC suggests ([`InsertRule::VolumeWeighted`], kept as an option) adds
+//!   volume-weighted mean the paper's text suggests ([`InsertRule::VolumeWeighted`], kept as an option) adds
 //!   `≈ v̄` on top of an output already built by several overlapping cells (`D_A` is 3 to 12
 //!   inside a grown network), a jump the delta rule must then unlearn. Measured on the
 //!   bump-and-ridge test, 400 cells: held-out relative L2 0.213 vs 0.231 (λ = 300), 0.256 vs
@@ -109,6 +109,7 @@ mod index;
 mod network;
 mod params;
 mod refit;
+pub mod schema;
 #[cfg(test)]
 mod test_support;
 

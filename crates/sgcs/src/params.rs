@@ -3,6 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::SgcsError;
+use crate::schema::{Bound, Range, Schema, Spec};
 
 /// How the output weights `v_c` follow the error (the supervised layer's update rule).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -35,7 +36,7 @@ pub enum InsertRule {
     /// adds capacity.
     PreserveOutput,
     /// The mean of the new cell's neighbours' output weights, each weighted by the Voronoi volume
-    /// `|F_c|` it loses to the new cell (the rule SPEC §3 suggests, consistent with the counters).
+    /// `|F_c|` it loses to the new cell (the rule of docs/ALGORITHM.md §3, consistent with the counters).
     /// Falls back to the plain mean of the split edge's two ends when no neighbour loses volume.
     VolumeWeighted,
     /// The target of the sample the cell is put at ([`Insertion::WorstSample`]); the
@@ -146,40 +147,96 @@ impl Default for Params {
     }
 }
 
-fn check(ok: bool, name: &'static str, range: &'static str, value: f64) -> Result<(), SgcsError> {
-    if ok {
-        Ok(())
-    } else {
-        Err(SgcsError::InvalidParam {
-            name,
-            range,
-            value: value.to_string(),
+impl Schema for Params {
+    fn specs() -> Vec<Spec> {
+        use Bound::{Closed, Open};
+        let real = Range::real;
+        vec![
+            Spec {
+                name: "eps_b",
+                symbol: "ε_b",
+                range: real(Open(0.0), Closed(1.0)),
+                help: "learning rate of the best matching unit's position",
+            },
+            Spec {
+                name: "eps_n",
+                symbol: "ε_n",
+                range: real(Closed(0.0), Closed(1.0)),
+                help: "learning rate of the best matching unit's neighbours' positions",
+            },
+            Spec {
+                name: "eta",
+                symbol: "η",
+                range: real(Open(0.0), Open(2.0)),
+                help: "learning rate of the output weights",
+            },
+            Spec {
+                name: "alpha",
+                symbol: "α",
+                range: real(Closed(0.0), Open(1.0)),
+                help: "forgetting factor of the resource counters, per step",
+            },
+            Spec {
+                name: "lambda",
+                symbol: "λ",
+                range: Range::integer(1.0, None),
+                help: "steps between two insertions",
+            },
+            Spec {
+                name: "max_cells",
+                symbol: "N_max",
+                range: Range::integer(3.0, None),
+                help: "the network stops growing at this many cells (set from the fit's target_cells)",
+            },
+            Spec {
+                name: "activation_cutoff",
+                symbol: "M_min",
+                range: real(Closed(0.0), Open(1.0)),
+                help: "activations below this count as 0 (0: every cell is visited)",
+            },
+        ]
+    }
+
+    fn get(&self, name: &str) -> Option<f64> {
+        Some(match name {
+            "eps_b" => self.eps_b,
+            "eps_n" => self.eps_n,
+            "eta" => self.eta,
+            "alpha" => self.alpha,
+            "lambda" => f64::from(self.lambda),
+            "max_cells" => self.max_cells as f64,
+            "activation_cutoff" => self.activation_cutoff,
+            _ => return None,
         })
+    }
+
+    fn set(&mut self, name: &str, value: f64) -> bool {
+        match name {
+            "eps_b" => self.eps_b = value,
+            "eps_n" => self.eps_n = value,
+            "eta" => self.eta = value,
+            "alpha" => self.alpha = value,
+            "lambda" => self.lambda = value as u32,
+            "max_cells" => self.max_cells = value as usize,
+            "activation_cutoff" => self.activation_cutoff = value,
+            _ => return false,
+        }
+        true
     }
 }
 
 impl Params {
-    /// Checks every parameter; the error names the first invalid one and its valid range.
+    /// Checks every parameter against [`Params::specs`]; the error names the first invalid one
+    /// and its valid range.
     pub fn validate(&self) -> Result<(), SgcsError> {
-        let p = self;
-        check(p.eps_b > 0.0 && p.eps_b <= 1.0, "eps_b", "(0, 1]", p.eps_b)?;
-        check(p.eps_n >= 0.0 && p.eps_n <= 1.0, "eps_n", "[0, 1]", p.eps_n)?;
-        check(p.eta > 0.0 && p.eta < 2.0, "eta", "(0, 2)", p.eta)?;
-        check(p.alpha >= 0.0 && p.alpha < 1.0, "alpha", "[0, 1)", p.alpha)?;
-        check(p.lambda >= 1, "lambda", "[1, 2^32)", f64::from(p.lambda))?;
-        check(
-            p.max_cells >= 3,
-            "max_cells",
-            "[3, usize::MAX]",
-            p.max_cells as f64,
-        )?;
-        check(
-            p.activation_cutoff >= 0.0 && p.activation_cutoff < 1.0,
-            "activation_cutoff",
-            "[0, 1)",
-            p.activation_cutoff,
-        )?;
-        Ok(())
+        match self.invalid() {
+            None => Ok(()),
+            Some((spec, value)) => Err(SgcsError::InvalidParam {
+                name: spec.name,
+                range: spec.range.to_string(),
+                value: value.to_string(),
+            }),
+        }
     }
 
     /// `ln(1/cutoff)`: a cell is active when `|ξ − w_c|² ≤ this · δ_c²` (infinite without cutoff).

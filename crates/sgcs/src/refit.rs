@@ -848,7 +848,7 @@ fn check_ridge(ridge: f64) -> Result<(), SgcsError> {
     } else {
         Err(SgcsError::InvalidParam {
             name: "ridge",
-            range: "(0, inf)",
+            range: "(0, ∞)".to_owned(),
             value: ridge.to_string(),
         })
     }

@@ -1,7 +1,7 @@
 //! Baselines the SGCS fit is compared against: a uniform grid and hierarchical radiosity.
 //!
 //! Both approximate the same target as the network, ζ(s, t) over `[0, 1)²` (s = sender,
-//! t = receiver, SPEC §2), and both implement [`Approximation`], so
+//! t = receiver, docs/ALGORITHM.md §1), and both implement [`Approximation`], so
 //! [`Reference::errors`](crate::Reference::errors) measures them exactly as it measures SGCS.
 //!
 //! - [`UniformGrid`]: a g × g piecewise-constant grid over (s, t); each block holds the mean ζ

@@ -19,37 +19,17 @@ fn bad(field: &str, what: impl std::fmt::Display) -> Bad {
     format!("`{field}` {what}")
 }
 
-/// The parameters a file holds: their own ranges, plus upper bounds on the counts that size an
-/// allocation (a hand-edited 10¹⁵ must not abort the process).
+/// The parameters a file holds, against the parameter schema (whose ranges also bound the
+/// counts that size an allocation: a hand-edited 10¹⁵ must not abort the process).
 pub(crate) fn params(p: &FitParams) -> Result<(), Bad> {
-    p.validate().map_err(|e| e.to_string())?;
-    let counts = [
-        (
-            "params.initial_samples",
-            p.initial_samples,
-            limits::MAX_SET_SIZE,
-        ),
-        ("params.min_set_size", p.min_set_size, limits::MAX_SET_SIZE),
-        ("params.target_cells", p.target_cells, limits::MAX_CELLS),
-        ("params.heldout", p.heldout, *limits::HELDOUT.end()),
-    ];
-    for (field, value, max) in counts {
-        if value > max {
-            return Err(bad(field, format!("is {value}, but must be at most {max}")));
-        }
+    match p.validate() {
+        Ok(()) => Ok(()),
+        Err(crate::FitError::OutOfRange { name, value, range }) => Err(bad(
+            &format!("params.{name}"),
+            format!("is {value}, but must be in {range}"),
+        )),
+        Err(other) => Err(other.to_string()),
     }
-    // The refit tries ridge × 10⁰ … 10⁶: every candidate must be a valid (positive, finite)
-    // ridge.
-    if p.ridge > 1e100 || (p.refit && p.ridge <= 0.0) {
-        return Err(bad(
-            "params.ridge",
-            format!(
-                "is {}, but must be in (0, 1e100] ([0, 1e100] without the refit)",
-                p.ridge
-            ),
-        ));
-    }
-    Ok(())
 }
 
 /// A learned kernel: the network's shape, the input frame, the output scale and the emission
@@ -310,7 +290,7 @@ mod tests {
 
     use crate::{Fit, FitParams, ModelFile, Reference, Target};
 
-    const FIG3: &str = include_str!("../../../../scenes/fig3.ron");
+    const FIG3: &str = flatland_geom::bundled::SCENES[0].2;
 
     /// A small finished fit of fig3 learning `target`.
     fn small_fit(target: Target) -> Fit {
@@ -411,7 +391,7 @@ mod tests {
             (
                 &zeta,
                 Box::new(|v| v["params"]["heldout"] = json!(1u64 << 40)),
-                &["params.heldout", "at most"],
+                &["params.heldout", "must be in"],
             ),
             (
                 &zeta,

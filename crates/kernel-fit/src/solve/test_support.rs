@@ -2,19 +2,16 @@
 
 use flatland_geom::{DVec2, Edge, Scene};
 
-/// The bundled scene `scenes/NAME.ron`.
+/// The bundled scene `NAME`.
 pub fn bundled(name: &str) -> Scene {
-    Scene::load(format!(
-        "{}/../../scenes/{name}.ron",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .expect("bundled scene")
+    flatland_geom::bundled::scene(name).expect("bundled scene")
 }
 
 /// A closed polygon room listed counter-clockwise (facing in), every wall with `rho` and `e`.
 pub fn room(points: &[DVec2], rho: f64, e: f64) -> Scene {
-    let edges = (0..points.len())
-        .map(|i| Edge::surface(points[i], points[(i + 1) % points.len()], rho).with_emission(e))
+    let edges = Edge::polygon(points, rho)
+        .into_iter()
+        .map(|edge| edge.with_emission(e))
         .collect();
     Scene::new(edges).expect("valid room")
 }

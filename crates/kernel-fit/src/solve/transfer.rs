@@ -188,7 +188,7 @@ mod tests {
         }
     }
 
-    /// `∫ G V` along the sender by Gauss–Legendre, the integrand of SPEC §2 written out with
+    /// `∫ G V` along the sender by Gauss–Legendre, the integrand of docs/ALGORITHM.md §2 written out with
     /// its own occlusion test, the sender split wherever the integrand can jump or kink: where
     /// it crosses the receiver's line, an occluder's line, or the line from `y` through an
     /// occluder's end point. Between those cuts the integrand is smooth.

@@ -1,0 +1,535 @@
+//! The controls panel: scene, run, learner (preset and what the network learns), network,
+//! sampling, fit, view. Every parameter with its valid range and a hover text; what only a
+//! new fit can change says so and waits for Reset.
+
+use std::path::PathBuf;
+
+use egui::{Color32, DragValue, RichText};
+use kernel_fit::Schema;
+use kernel_fit::schema::{Bound, Range};
+use kernel_fit::{Gating, Preset, Resampling, Target};
+use sgcs::{InsertRule, Insertion, OutputMode, OutputRule, Resource};
+
+use super::ViewerApp;
+use crate::settings::{SceneChoice, waiting_for_reset, with_preset};
+use crate::worker::Command;
+
+/// Colour of a notice that something waits for the user (a reset).
+const PENDING: Color32 = Color32::from_rgb(255, 190, 90);
+
+impl ViewerApp {
+    pub(super) fn controls(&mut self, ui: &mut egui::Ui) {
+        self.scene_controls(ui);
+        ui.separator();
+        self.run_controls(ui);
+        ui.separator();
+        self.learner_controls(ui);
+        ui.separator();
+        self.network_controls(ui);
+        ui.separator();
+        self.sampling_controls(ui);
+        ui.separator();
+        self.fit_controls(ui);
+        ui.separator();
+        self.view_controls(ui);
+    }
+
+    fn scene_controls(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Scene");
+        ui.horizontal_wrapped(|ui| {
+            for (name, about, _) in flatland_geom::bundled::SCENES {
+                let selected = self.settings.scene == SceneChoice::Bundled(name.to_string());
+                if ui
+                    .selectable_label(selected, name)
+                    .on_hover_text(about)
+                    .clicked()
+                {
+                    self.open_bundled(name);
+                }
+            }
+        });
+        ui.label(RichText::new(&self.scene_label).strong());
+        ui.horizontal(|ui| {
+            let edit = egui::TextEdit::singleline(&mut self.path_input)
+                .hint_text("scene file (.ron/.json)")
+                .desired_width(170.0);
+            let r = ui.add(edit);
+            let enter = r.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
+            if ui.button("Open").clicked() || enter {
+                let path = PathBuf::from(self.path_input.trim());
+                self.open_file(&path);
+            }
+        });
+        ui.label(
+            RichText::new("or drop a file on the window; drag end points in the scene view")
+                .small()
+                .weak(),
+        );
+        egui::Grid::new("scene-grid").num_columns(3).show(ui, |ui| {
+            let l = ui.label("subdivision");
+            ui.add(DragValue::new(&mut self.settings.subdivide).range(1..=1000))
+                .labelled_by(l.id);
+            ui.label(RichText::new("[1, 1000], on Reset").small().weak());
+            ui.end_row();
+        });
+    }
+
+    fn run_controls(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Run");
+        ui.horizontal(|ui| {
+            ui.spacing_mut().slider_width = 80.0;
+            let r = ui.add_enabled(
+                !self.settings.unlimited,
+                egui::Slider::new(&mut self.settings.speed, 100.0..=1_000_000.0)
+                    .logarithmic(true)
+                    .text("steps/s")
+                    .max_decimals(0),
+            );
+            let u = ui.checkbox(&mut self.settings.unlimited, "max");
+            if r.changed() || u.changed() {
+                self.worker.send(Command::Speed(self.speed()));
+            }
+        });
+    }
+
+    /// The preset and what the network learns (ALGORITHM.md §4).
+    fn learner_controls(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Learner");
+        self.preset_selector(ui);
+        let waiting = waiting_for_reset(&self.settings.params, &self.fit_params);
+        let p = &mut self.settings.params;
+        choice(
+            ui,
+            "target",
+            "what the network learns (a new fit: applies on Reset)",
+            &mut p.target,
+            &[
+                (
+                    Target::Visibility,
+                    "V",
+                    "the visibility only, on pairs of surface edges where geometry cannot \
+                     decide it: learned ζ = exact unoccluded ζ × learned V (the default)",
+                ),
+                (Target::Zeta, "ζ", "ζ itself, everywhere (the paper)"),
+                (
+                    Target::FactoredEmission,
+                    "k",
+                    "k = ζ / E', the emission factored out exactly",
+                ),
+            ],
+        );
+        let visibility = p.target == Target::Visibility;
+        ui.add_enabled_ui(visibility, |ui| {
+            choice(
+                ui,
+                "gating",
+                "which known discontinuities no cell may straddle (target V only; applies on \
+                 Reset)",
+                &mut p.gating,
+                &[
+                    (Gating::Off, "off", "every cell responds everywhere"),
+                    (
+                        Gating::Pairs,
+                        "pairs",
+                        "a cell responds only to rays between the same two surface edges as \
+                         its centre ray",
+                    ),
+                    (
+                        Gating::Faces,
+                        "faces",
+                        "and only to rays of its own face of the visibility structure, where V \
+                         is constant (the default)",
+                    ),
+                ],
+            );
+            egui::Grid::new("learner-grid")
+                .num_columns(3)
+                .striped(true)
+                .show(ui, |ui| {
+                    schema_row(ui, p, "importance", "importance", 0.0..=0.99, 1e-2);
+                });
+            ui.checkbox(&mut p.weighted, "weighted errors")
+                .on_hover_text(
+                    "each sample's error counts with its importance weight p/q, so growth follows \
+                 the error of ζ, not of V (target V only; applies on Reset)",
+                );
+        });
+        if !waiting.is_empty() {
+            ui.horizontal_wrapped(|ui| {
+                ui.label(
+                    RichText::new(format!("{}: apply on Reset", waiting.join(", "))).color(PENDING),
+                );
+                if ui
+                    .button("Start a new fit")
+                    .on_hover_text("Reset: a fresh fit with these parameters")
+                    .clicked()
+                {
+                    self.reset();
+                }
+            });
+        }
+    }
+
+    /// Default or Paper: choosing one starts a new fit with that learner.
+    fn preset_selector(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            ui.label("preset").on_hover_text(
+                "the parameters of a learner; choosing one starts a new fit (target cells and \
+                 seed are kept)",
+            );
+            let presets = [
+                (
+                    Preset::Default,
+                    "Default",
+                    "learns only the visibility V, where geometry cannot decide it, in cells \
+                     that never straddle a shadow boundary (ALGORITHM.md §4)",
+                ),
+                (
+                    Preset::Paper,
+                    "Paper",
+                    "the paper's network: learns ζ everywhere from γ(s, t), with least-squares \
+                     refit (ALGORITHM.md §3)",
+                ),
+            ];
+            for (preset, name, hover) in presets {
+                let selected = self.settings.preset == preset;
+                if ui
+                    .selectable_label(selected, name)
+                    .on_hover_text(hover)
+                    .clicked()
+                {
+                    self.choose_preset(preset);
+                }
+            }
+            if !self.settings.is_preset() {
+                ui.label(RichText::new("(changed)").weak())
+                    .on_hover_text("parameters differ from the preset's");
+            }
+        });
+    }
+
+    /// `sgcs::Params` (ALGORITHM.md §3, §8).
+    fn network_controls(&mut self, ui: &mut egui::Ui) {
+        let n = &mut self.settings.params.network;
+        ui.heading("Network");
+        network_rates(ui, n);
+        network_rules(ui, n);
+    }
+
+    /// Sets and θ (ALGORITHM.md §3).
+    fn sampling_controls(&mut self, ui: &mut egui::Ui) {
+        let p = &mut self.settings.params;
+        ui.heading("Sampling");
+        egui::Grid::new("sampling-grid")
+            .num_columns(3)
+            .striped(true)
+            .show(ui, |ui| {
+                schema_row(ui, p, "omega", "ω", 0.0..=100.0, 1e-2);
+                schema_row(ui, p, "phi", "φ", 1e-6..=100.0, 1e-2);
+                schema_row(ui, p, "psi", "ψ", 1e-4..=1.0, 1e-3);
+                schema_row(ui, p, "initial_samples", "|S₀|", 3.0..=1_000_000.0, 10.0);
+                schema_row(ui, p, "min_set_size", "min |S_j|", 1.0..=1_000_000.0, 1.0);
+                schema_row(ui, p, "scan_factor", "scan ×", 1.0..=100_000.0, 1.0);
+            });
+        choice(
+            ui,
+            "new sets",
+            "how the sets S₁, S₂, … are chosen",
+            &mut p.resampling,
+            &[
+                (
+                    Resampling::Theta,
+                    "θ",
+                    "rays only in critical zones or outside the network (the paper)",
+                ),
+                (
+                    Resampling::Uniform,
+                    "uniform",
+                    "uniform random: the control that shows what θ earns",
+                ),
+            ],
+        );
+    }
+
+    fn fit_controls(&mut self, ui: &mut egui::Ui) {
+        let p = &mut self.settings.params;
+        ui.heading("Fit");
+        egui::Grid::new("fit-grid")
+            .num_columns(3)
+            .striped(true)
+            .show(ui, |ui| {
+                schema_row(ui, p, "target_cells", "target cells", 3.0..=20_000.0, 5.0);
+                row(
+                    ui,
+                    "seed",
+                    "every random choice (applies on Reset)",
+                    &mut p.seed,
+                    0..=u64::MAX,
+                    "any",
+                    1.0,
+                );
+                schema_row(ui, p, "ridge", "ridge", 1e-12..=1.0, 1e-7);
+                schema_row(ui, p, "eval_every", "eval every", 0.0..=1_000_000.0, 100.0);
+            });
+        let learns_zeta = p.target != Target::Visibility;
+        ui.add_enabled(
+            learns_zeta,
+            egui::Checkbox::new(&mut p.refit, "least-squares refit at the end"),
+        )
+        .on_hover_text("refit every output weight (targets ζ and k; V needs none)");
+    }
+
+    fn view_controls(&mut self, ui: &mut egui::Ui) {
+        ui.heading("View");
+        ui.checkbox(
+            &mut self.settings.log_scale,
+            format!(
+                "log colour scale ({} decades)",
+                kernel_fit::colormap::LOG_DECADES
+            ),
+        );
+        ui.checkbox(
+            &mut self.settings.show_cells,
+            "cells (size ~ δ_c, cyan = critical)",
+        );
+        ui.checkbox(&mut self.settings.show_edges, "network edges");
+        ui.checkbox(&mut self.settings.show_samples, "samples, coloured by set");
+        let lit = ui
+            .checkbox(&mut self.settings.lit, "lit scene (solve B while learning)")
+            .on_hover_text(
+                "solve the radiosity with the kernel learned so far, on the learner's thread, \
+                 at most every 0.5 s and ≤ 10 % of its time",
+            );
+        if lit.changed() {
+            self.worker.send(Command::Lit(self.settings.lit));
+        }
+        if ui
+            .button("Restore preset")
+            .on_hover_text("the preset's parameters (target cells, seed kept)")
+            .clicked()
+        {
+            self.settings.params = with_preset(self.settings.preset, &self.settings.params);
+        }
+    }
+}
+
+/// The network's rates and counts, one row each.
+fn network_rates(ui: &mut egui::Ui, n: &mut sgcs::Params) {
+    egui::Grid::new("net-grid")
+        .num_columns(3)
+        .striped(true)
+        .show(ui, |ui| {
+            schema_row(ui, n, "eps_b", "ε_b", 1e-6..=1.0, 1e-4);
+            schema_row(ui, n, "eps_n", "ε_n", 0.0..=1.0, 1e-5);
+            schema_row(ui, n, "eta", "η", 1e-6..=1.999, 1e-3);
+            schema_row(ui, n, "alpha", "α", 0.0..=0.999, 1e-3);
+            schema_row(ui, n, "lambda", "λ", 1.0..=100_000.0, 1.0);
+            schema_row(ui, n, "activation_cutoff", "cutoff", 0.0..=0.5, 1e-9);
+        });
+}
+
+/// How the network's output is made, learned and grown.
+fn network_rules(ui: &mut egui::Ui, n: &mut sgcs::Params) {
+    choice(
+        ui,
+        "output",
+        "how the cells' outputs combine",
+        &mut n.output_mode,
+        &[
+            (OutputMode::Sum, "Σ v·M", "the paper's radial-basis sum"),
+            (
+                OutputMode::Normalized,
+                "Σ v·M / Σ M",
+                "normalised: a face with one cell anywhere has that cell's value (the \
+                 default)",
+            ),
+        ],
+    );
+    choice(
+        ui,
+        "output rule",
+        "how the output weights follow the error",
+        &mut n.output_rule,
+        &[
+            (
+                OutputRule::Normalized,
+                "NLMS",
+                "the delta rule with its step shortened where cells overlap: cannot \
+                 diverge (the paper's preset)",
+            ),
+            (
+                OutputRule::Plain,
+                "delta",
+                "the paper's printed rule; diverges where many cells overlap",
+            ),
+            (
+                OutputRule::Local,
+                "local",
+                "only the winner learns, towards the target itself: exact where the target \
+                 is constant on a face (the default)",
+            ),
+        ],
+    );
+    choice(
+        ui,
+        "insertion",
+        "where a new cell goes",
+        &mut n.insertion,
+        &[
+            (
+                Insertion::Midpoint,
+                "midpoint",
+                "the midpoint of the worst cell's longest edge (the paper)",
+            ),
+            (
+                Insertion::WorstSample,
+                "worst sample",
+                "the worst cell's worst recent sample, where the error is (the default)",
+            ),
+        ],
+    );
+    choice(
+        ui,
+        "new cell's v",
+        "the output weight of a new cell",
+        &mut n.insert_rule,
+        &[
+            (
+                InsertRule::PreserveOutput,
+                "preserve",
+                "the output at the new centre is unchanged (the paper's preset)",
+            ),
+            (
+                InsertRule::VolumeWeighted,
+                "volume",
+                "the neighbours' weights, weighted by the volume each loses",
+            ),
+            (
+                InsertRule::SampleTarget,
+                "its sample's",
+                "the target of the sample it is put at (the default)",
+            ),
+        ],
+    );
+    choice(
+        ui,
+        "resource",
+        "what a cell's resource τ measures (growth, critical cells)",
+        &mut n.resource,
+        &[
+            (
+                Resource::MeanTimesVolume,
+                "mean × |F|",
+                "mean squared error times the Voronoi volume (the paper)",
+            ),
+            (
+                Resource::ErrorSum,
+                "error sum",
+                "decayed sum of the weighted squared errors (the default)",
+            ),
+        ],
+    );
+}
+
+/// One value among a few, as selectable labels with hover texts, after its name.
+fn choice<T: PartialEq + Copy>(
+    ui: &mut egui::Ui,
+    name: &str,
+    meaning: &str,
+    value: &mut T,
+    options: &[(T, &str, &str)],
+) {
+    ui.horizontal_wrapped(|ui| {
+        ui.label(name).on_hover_text(meaning);
+        for &(option, text, hover) in options {
+            // Not `labelled_by`: each option is found by its own text.
+            ui.selectable_value(value, option, text)
+                .on_hover_text(hover);
+        }
+    });
+}
+
+/// A parameter of the schema in a 3-column grid: label (hover: the schema's help) | value |
+/// the schema's range. The value is kept inside the range (and inside `shown`, a practical
+/// window for dragging), so the learner never sees an invalid value.
+fn schema_row<S: Schema>(
+    ui: &mut egui::Ui,
+    params: &mut S,
+    name: &str,
+    label: &str,
+    shown: std::ops::RangeInclusive<f64>,
+    speed: f64,
+) {
+    let Some(spec) = S::spec(name) else {
+        return;
+    };
+    let (lo, hi) = valid_window(spec.range, shown);
+    let Some(mut value) = params.get(name) else {
+        return;
+    };
+    let meaning = spec.help;
+    let label = ui.label(label).on_hover_text(meaning);
+    let mut drag = DragValue::new(&mut value).range(lo..=hi).speed(speed);
+    drag = if spec.range.integer {
+        drag.fixed_decimals(0)
+    } else {
+        drag.max_decimals(9)
+    };
+    if ui
+        .add(drag)
+        .labelled_by(label.id)
+        .on_hover_text(meaning)
+        .changed()
+    {
+        let value = if spec.range.integer {
+            value.round()
+        } else {
+            value
+        };
+        if spec.range.contains(value) {
+            params.set(name, value);
+        }
+    }
+    ui.label(RichText::new(spec.range.to_string()).small().weak());
+    ui.end_row();
+}
+
+/// The closed window a drag value may take: the valid range (open ends moved one step in)
+/// within `shown`.
+fn valid_window(range: Range, shown: std::ops::RangeInclusive<f64>) -> (f64, f64) {
+    let lo = match range.lo {
+        Bound::Closed(v) => v,
+        Bound::Open(v) => v.next_up(),
+        Bound::None => f64::MIN,
+    };
+    let hi = match range.hi {
+        Bound::Closed(v) => v,
+        Bound::Open(v) if range.integer => v - 1.0,
+        Bound::Open(v) => v.next_down(),
+        Bound::None => f64::MAX,
+    };
+    (lo.max(*shown.start()), hi.min(*shown.end()))
+}
+
+/// A labelled, range-limited number in a 3-column grid: name (hover: meaning) | value | range.
+fn row<T: egui::emath::Numeric>(
+    ui: &mut egui::Ui,
+    name: &str,
+    meaning: &str,
+    value: &mut T,
+    range: std::ops::RangeInclusive<T>,
+    valid: &str,
+    speed: f64,
+) {
+    let label = ui.label(name).on_hover_text(meaning);
+    ui.add(
+        DragValue::new(value)
+            .range(range)
+            .speed(speed)
+            .max_decimals(9),
+    )
+    .labelled_by(label.id)
+    .on_hover_text(meaning);
+    ui.label(RichText::new(valid).small().weak());
+    ui.end_row();
+}

@@ -1,0 +1,231 @@
+//! The lit scene: the radiosity `B` solved with the kernel as learned so far, beside the
+//! exact `B`, made on the learner's thread (`worker`) and drawn by `views`.
+//!
+//! Per scene, once: a [`Mesh`] and an [`ExactReference`] (the exact kernel solved on a mesh four
+//! times finer), whose `B` at the mesh's collocation points is what every learned solve is
+//! measured against ([`LitSetup`]). While the network learns, the learned kernel is solved on
+//! that mesh again at most every [`LIT_EVERY`], and never for more than [`LIT_SHARE`] of the
+//! learner's time ([`solve_interval`]): a visibility model integrates its own kernel exactly in
+//! 5–40 ms at 512 elements; the paper's network needs quadrature of ζ̃ (two network
+//! evaluations per element pair), so it is solved on [`NETWORK_ELEMENTS`] elements.
+
+use std::time::Duration;
+
+use flatland_geom::Kernel;
+use kernel_fit::solve::{
+    ExactReference, MAX_ELEMENTS, Mesh, SolveErrors, SolveParams, Stop, solve_against,
+};
+use kernel_fit::{FitError, LearnedKernel, Target};
+
+/// Shortest time between two solves while the network learns.
+pub const LIT_EVERY: Duration = Duration::from_millis(500);
+/// Largest share of the learner's time the solves may take: a solve that took `c` waits at
+/// least `c / LIT_SHARE` for the next.
+pub const LIT_SHARE: f64 = 0.1;
+/// Elements for a network that learns ζ or k (the paper's), whose operator is quadrature:
+/// measured at 400 cells ≈ 150 ms for 128 elements, ≈ 600 ms for 256.
+pub const NETWORK_ELEMENTS: usize = 128;
+
+/// Elements the lit view solves `kernel`'s scene on for a learner of `target`: the solver's
+/// default for a visibility model, [`NETWORK_ELEMENTS`] for a network of ζ or k; never fewer
+/// than the scene's sections.
+#[must_use]
+pub fn lit_elements(kernel: &Kernel, target: Target) -> usize {
+    let scene = kernel.scene();
+    match target {
+        Target::Visibility => Mesh::default_elements(scene),
+        Target::Zeta | Target::FactoredEmission => NETWORK_ELEMENTS
+            .max(Mesh::min_elements(scene))
+            .min(MAX_ELEMENTS),
+    }
+}
+
+/// How long to wait after a solve that took `cost` before the next one.
+#[must_use]
+pub fn solve_interval(cost: Duration) -> Duration {
+    LIT_EVERY.max(cost.div_f64(LIT_SHARE))
+}
+
+/// What the lit view needs of one scene, made once per scene (after a reset or an edit).
+#[derive(Debug)]
+pub struct LitSetup {
+    /// The id of the reference (the worker's `World`) it belongs to.
+    pub world: u64,
+    /// The elements the learned kernel is solved on.
+    pub mesh: Mesh,
+    /// The exact `B` at the mesh's collocation points.
+    pub exact: Vec<f64>,
+    /// The exact kernel solved on a finer mesh (for the `B(s)` curve).
+    pub reference: ExactReference,
+    /// The top of the colour scale: the brightest non-emitting element of the exact `B`
+    /// (emitters are drawn above the scale).
+    pub top: f64,
+    /// Seconds it took to make.
+    pub build_s: f64,
+}
+
+impl LitSetup {
+    /// The mesh for a learner of `target` on `kernel`'s scene and the exact `B` on it.
+    /// `stop` is polled in the long loops ([`FitError::Interrupted`]).
+    pub fn build(
+        world: u64,
+        kernel: &Kernel,
+        target: Target,
+        stop: &Stop,
+    ) -> Result<LitSetup, FitError> {
+        let started = std::time::Instant::now();
+        let mesh = Mesh::new(kernel, lit_elements(kernel, target))?;
+        let fine = ExactReference::default_elements(mesh.len());
+        let reference = ExactReference::new(kernel, fine, &SolveParams::default(), stop)?;
+        let exact = reference.radiosity_on(&mesh, stop)?;
+        let top = colour_top(&mesh, &exact);
+        Ok(LitSetup {
+            world,
+            mesh,
+            exact,
+            reference,
+            top,
+            build_s: started.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// Solves `model` on the mesh and measures it against the exact `B`.
+    pub fn solve(&self, model: &LearnedKernel, stop: &Stop) -> Result<LitSolve, FitError> {
+        let started = std::time::Instant::now();
+        let c = solve_against(
+            model,
+            &self.mesh,
+            &self.exact,
+            &SolveParams::default(),
+            stop,
+        )?;
+        Ok(LitSolve {
+            b: c.solution.radiosity,
+            errors: c.errors,
+            solve_s: started.elapsed().as_secs_f64(),
+        })
+    }
+}
+
+/// One solve with the learned kernel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LitSolve {
+    /// `B` per element of [`LitSetup::mesh`].
+    pub b: Vec<f64>,
+    /// Its errors against [`LitSetup::exact`].
+    pub errors: SolveErrors,
+    /// Seconds the solve took (operator and linear solve).
+    pub solve_s: f64,
+}
+
+/// A point of the lit error's curve.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LitPoint {
+    /// Training steps of the model solved.
+    pub steps: u64,
+    /// Rays cast by then.
+    pub rays: u64,
+    /// Relative L2 error of the reflected part `B − E`.
+    pub rel_l2_reflected: f64,
+}
+
+/// The brightest element of `b` that does not emit (emitters are 10–100× brighter than what
+/// they light and would leave the rest dark); the brightest of all when everything emits or
+/// nothing is lit; never 0.
+#[must_use]
+pub fn colour_top(mesh: &Mesh, b: &[f64]) -> f64 {
+    let finite_max =
+        |it: &mut dyn Iterator<Item = f64>| it.filter(|v| v.is_finite()).fold(0.0_f64, f64::max);
+    let lit = finite_max(
+        &mut (0..mesh.len())
+            .filter(|&i| mesh.edge_of(i).emission == 0.0)
+            .map(|i| b[i]),
+    );
+    if lit > 0.0 {
+        lit
+    } else {
+        finite_max(&mut b.iter().copied()).max(f64::MIN_POSITIVE)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Arc;
+
+    use kernel_fit::solve::never;
+    use kernel_fit::{Fit, FitParams, Reference, StopReason};
+
+    use super::*;
+
+    fn kernel(name: &str) -> Kernel {
+        Kernel::new(flatland_geom::bundled::scene(name).unwrap())
+    }
+
+    #[test]
+    fn solves_are_spaced_by_time_and_by_their_cost() {
+        assert_eq!(solve_interval(Duration::ZERO), LIT_EVERY);
+        assert_eq!(solve_interval(Duration::from_millis(20)), LIT_EVERY);
+        assert_eq!(
+            solve_interval(Duration::from_millis(150)),
+            Duration::from_millis(1500)
+        );
+    }
+
+    #[test]
+    fn the_paper_network_is_solved_on_fewer_elements() {
+        let k = kernel("fig3");
+        assert_eq!(
+            lit_elements(&k, Target::Visibility),
+            Mesh::default_elements(k.scene())
+        );
+        assert_eq!(lit_elements(&k, Target::Zeta), NETWORK_ELEMENTS);
+        assert!(lit_elements(&k, Target::Zeta) < lit_elements(&k, Target::Visibility));
+    }
+
+    #[test]
+    fn the_colour_scale_tops_at_the_brightest_lit_surface() {
+        let k = kernel("fig3");
+        let mesh = Mesh::new(&k, 64).unwrap();
+        let emission = mesh.emission();
+        assert!(emission.iter().any(|e| *e > 0.0));
+        let b: Vec<f64> = (0..mesh.len())
+            .map(|i| emission[i] * 100.0 + i as f64)
+            .collect();
+        let brightest_lit = (0..mesh.len())
+            .filter(|&i| emission[i] == 0.0)
+            .map(|i| i as f64)
+            .fold(0.0, f64::max);
+        assert_eq!(colour_top(&mesh, &b), brightest_lit);
+        let dark = vec![0.0; mesh.len()];
+        assert!(colour_top(&mesh, &dark) > 0.0);
+        let mut nan = b.clone();
+        nan[0] = f64::NAN;
+        assert!(colour_top(&mesh, &nan).is_finite());
+    }
+
+    #[test]
+    fn an_exact_default_model_solves_to_the_exact_b() {
+        // The default learner on fig3 converges to the exact kernel; its solve then matches the
+        // exact B up to the mesh's discretisation (512 elements against 2048: ≈ 1e-4).
+        let k = Arc::new(kernel("fig3"));
+        let setup = LitSetup::build(1, &k, Target::Visibility, &never).unwrap();
+        assert_eq!(setup.mesh.len(), setup.exact.len());
+        assert!(setup.top > 0.0 && setup.top.is_finite());
+        let reference = Arc::new(Reference::new(&k, 32, 64, 1));
+        let mut fit = Fit::new(Arc::clone(&k), reference, FitParams::default()).unwrap();
+        let first = setup.solve(fit.model(), &never).unwrap();
+        assert_eq!(first.b.len(), setup.mesh.len());
+        assert!(first.errors.rel_l2_reflected > 0.05, "{:?}", first.errors);
+        let stop = loop {
+            if let Some(reason) = fit.step() {
+                break reason;
+            }
+        };
+        assert_eq!(stop, StopReason::Converged);
+        let last = setup.solve(fit.model(), &never).unwrap();
+        assert!(last.errors.rel_l2_reflected < 1e-3, "{:?}", last.errors);
+        // Interrupted on request.
+        let err = setup.solve(fit.model(), &|| true).unwrap_err();
+        assert!(matches!(err, FitError::Interrupted), "{err}");
+    }
+}

@@ -1,0 +1,416 @@
+//! What the viewer remembers between runs, the two learner presets, and which parameters a
+//! running fit can take.
+//!
+//! Settings are stored by eframe (RON). They carry the preset the user chose and that preset's
+//! parameters as the build that saved them defined it, so a later build whose preset differs
+//! (the project's default learner changed) replaces the saved learner instead of running an
+//! older learner under the name "Default". Settings that do not decode at all load as defaults.
+
+use std::path::PathBuf;
+
+use kernel_fit::{FitParams, Preset};
+use serde::{Deserialize, Serialize};
+
+/// Key of the settings in eframe's storage.
+pub const SETTINGS_KEY: &str = "flatland-viewer-settings";
+
+/// Which scene to open: a bundled one by name or a file.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum SceneChoice {
+    /// One of `flatland_geom::bundled::SCENES`.
+    Bundled(String),
+    /// A scene file (`.ron` or `.json`).
+    File(PathBuf),
+}
+
+/// Everything the viewer remembers between runs (eframe persistence).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Settings {
+    /// The learner the parameters started from ([`Preset::Default`] or [`Preset::Paper`]).
+    pub preset: Preset,
+    /// The fit's parameters (the preset's, possibly changed in the panel).
+    pub params: FitParams,
+    /// `preset`'s parameters as the build that saved these settings defined them; `None` in
+    /// settings saved before presets existed. See [`Settings::upgraded`].
+    #[serde(default)]
+    learner_defaults: Option<FitParams>,
+    /// The scene opened at start.
+    pub scene: SceneChoice,
+    /// Pieces per surface edge (1: the scene as written).
+    pub subdivide: usize,
+    /// Training speed limit, steps per second.
+    pub speed: f64,
+    /// Ignore the speed limit.
+    pub unlimited: bool,
+    /// Steps done by one press of "Step".
+    pub step_size: u64,
+    /// Log colour scale for the heatmaps.
+    pub log_scale: bool,
+    /// Show the cells over the kernel.
+    pub show_cells: bool,
+    /// Show the network's edges between cells.
+    pub show_edges: bool,
+    /// Show the training samples, coloured by set.
+    pub show_samples: bool,
+    /// Solve the radiosity with the learned kernel while it learns, and colour the scene by it.
+    pub lit: bool,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            preset: Preset::Default,
+            params: FitParams::default(),
+            learner_defaults: Some(Preset::Default.params()),
+            scene: SceneChoice::Bundled(flatland_geom::bundled::DEFAULT.into()),
+            subdivide: 1,
+            // Slow enough to watch: the default learner is exact on fig3 after about 20 000
+            // steps (a few seconds), the paper's network reaches 400 cells in 20 s.
+            speed: 6_000.0,
+            unlimited: false,
+            step_size: 1,
+            log_scale: true,
+            show_cells: true,
+            show_edges: true,
+            show_samples: false,
+            lit: true,
+        }
+    }
+}
+
+impl Settings {
+    /// The settings saved in `storage` (key `SETTINGS_KEY`), [`upgraded`](Settings::upgraded),
+    /// with a note for the message line when something saved was not kept. Nothing saved, or
+    /// settings that no longer decode, give the defaults.
+    #[must_use]
+    pub fn load(storage: Option<&dyn eframe::Storage>) -> (Settings, Option<String>) {
+        let Some(storage) = storage else {
+            return (Settings::default(), None);
+        };
+        if storage.get_string(SETTINGS_KEY).is_none() {
+            return (Settings::default(), None);
+        }
+        match eframe::get_value::<Settings>(storage, SETTINGS_KEY) {
+            Some(saved) => saved.upgraded(),
+            None => (
+                Settings::default(),
+                Some("saved settings could not be read (older format): defaults restored".into()),
+            ),
+        }
+    }
+
+    /// These settings with the learner brought up to date: when the saved preset's parameters
+    /// differ from what this build's preset is, they were saved by a build with another
+    /// learner under that name, and the learner parameters are replaced by this build's
+    /// preset ([`with_preset`]; target cells, seed and budgets are kept). Returns a note when
+    /// that happened.
+    #[must_use]
+    pub fn upgraded(mut self) -> (Settings, Option<String>) {
+        let current = self.preset.params();
+        if self.learner_defaults == Some(current) {
+            return (self, None);
+        }
+        let note = match self.learner_defaults {
+            None => format!(
+                "settings from an older viewer: learner reset to the {} preset",
+                self.preset.name()
+            ),
+            Some(_) => format!(
+                "the {} learner changed since these settings were saved: its parameters were reset",
+                self.preset.name()
+            ),
+        };
+        self.choose_preset(self.preset);
+        (self, Some(note))
+    }
+
+    /// Switches to `preset`: its learner, with target cells, seed and budgets kept.
+    pub fn choose_preset(&mut self, preset: Preset) {
+        self.preset = preset;
+        self.params = with_preset(preset, &self.params);
+        self.learner_defaults = Some(preset.params());
+    }
+
+    /// Whether the parameters are the preset's (apart from target cells, seed and budgets).
+    #[must_use]
+    pub fn is_preset(&self) -> bool {
+        with_preset(self.preset, &self.params) == self.params
+    }
+}
+
+/// `preset`'s learner with the run's length and bookkeeping taken from `run`: target cells,
+/// seed, step and ray budgets, target error, held-out points and evaluation interval.
+#[must_use]
+pub fn with_preset(preset: Preset, run: &FitParams) -> FitParams {
+    FitParams {
+        target_cells: run.target_cells,
+        seed: run.seed,
+        max_steps: run.max_steps,
+        ray_budget: run.ray_budget,
+        target_error: run.target_error,
+        heldout: run.heldout,
+        eval_every: run.eval_every,
+        ..preset.params()
+    }
+}
+
+/// The parameters a running fit can take: `wanted`, with everything only a new fit can
+/// change kept at the running fit's values (see [`waiting_for_reset`]).
+#[must_use]
+pub fn live_params(wanted: &FitParams, running: &FitParams) -> FitParams {
+    FitParams {
+        // `Fit::set_params` refuses another target or gating: the network learns another thing.
+        target: running.target,
+        gating: running.gating,
+        // Used when a fit starts: the sampler's mixture, every sample's weight, S₀, the seed
+        // streams and the held-out reference are made once.
+        importance: running.importance,
+        weighted: running.weighted,
+        initial_samples: running.initial_samples,
+        seed: running.seed,
+        heldout: running.heldout,
+        ..*wanted
+    }
+}
+
+/// Names of the parameters in `wanted` that differ from the running fit's and wait for a new
+/// fit (Reset); empty exactly when [`live_params`] gives `wanted` back.
+#[must_use]
+pub fn waiting_for_reset(wanted: &FitParams, running: &FitParams) -> Vec<&'static str> {
+    let checks = [
+        ("target", wanted.target != running.target),
+        ("gating", wanted.gating != running.gating),
+        ("importance", wanted.importance != running.importance),
+        ("weighted", wanted.weighted != running.weighted),
+        ("|S₀|", wanted.initial_samples != running.initial_samples),
+        ("seed", wanted.seed != running.seed),
+        ("held-out points", wanted.heldout != running.heldout),
+    ];
+    checks
+        .into_iter()
+        .filter_map(|(name, differs)| differs.then_some(name))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use std::collections::HashMap;
+
+    use eframe::Storage as _;
+    use kernel_fit::{Gating, Target};
+    use sgcs::Insertion;
+
+    use super::*;
+
+    /// eframe's storage in memory: the same RON encoding as on disk.
+    #[derive(Default)]
+    struct Memory(HashMap<String, String>);
+
+    impl eframe::Storage for Memory {
+        fn get_string(&self, key: &str) -> Option<String> {
+            self.0.get(key).cloned()
+        }
+        fn set_string(&mut self, key: &str, value: String) {
+            self.0.insert(key.to_owned(), value);
+        }
+        fn remove_string(&mut self, key: &str) {
+            self.0.remove(key);
+        }
+        fn flush(&mut self) {}
+    }
+
+    #[test]
+    fn settings_round_trip_through_eframe_storage_unchanged() {
+        let mut settings = Settings::default();
+        settings.choose_preset(Preset::Paper);
+        settings.params.target_cells = 77;
+        settings.params.network.eta = 0.25;
+        settings.lit = false;
+        let mut storage = Memory::default();
+        eframe::set_value(&mut storage, SETTINGS_KEY, &settings);
+        let (loaded, note) = Settings::load(Some(&storage));
+        assert_eq!(loaded, settings);
+        assert_eq!(note, None);
+        assert!(!loaded.is_preset(), "η was changed");
+        assert_eq!(Settings::load(None), (Settings::default(), None));
+        assert_eq!(
+            Settings::load(Some(&Memory::default())),
+            (Settings::default(), None)
+        );
+    }
+
+    /// The settings as the viewer saved them before presets existed: the paper's learner was
+    /// the only default.
+    #[derive(Serialize)]
+    struct OldSettings {
+        params: FitParams,
+        scene: SceneChoice,
+        subdivide: usize,
+        speed: f64,
+        unlimited: bool,
+        step_size: u64,
+        log_scale: bool,
+        show_cells: bool,
+        show_edges: bool,
+        show_samples: bool,
+    }
+
+    #[test]
+    fn settings_saved_before_presets_load_with_the_current_default_learner() {
+        let old = OldSettings {
+            params: FitParams {
+                target_cells: 123,
+                seed: 9,
+                ..FitParams::paper()
+            },
+            scene: SceneChoice::Bundled("maze".into()),
+            subdivide: 3,
+            speed: 500.0,
+            unlimited: true,
+            step_size: 10,
+            log_scale: false,
+            show_cells: false,
+            show_edges: true,
+            show_samples: true,
+        };
+        let mut storage = Memory::default();
+        eframe::set_value(&mut storage, SETTINGS_KEY, &old);
+        let (loaded, note) = Settings::load(Some(&storage));
+        assert!(note.unwrap().contains("older viewer"));
+        assert_eq!(loaded.preset, Preset::Default);
+        assert_eq!(loaded.params.target, Target::Visibility);
+        assert_eq!(loaded.params.gating, Gating::Faces);
+        assert_eq!(loaded.params.network.insertion, Insertion::WorstSample);
+        assert_eq!(loaded.params.phi, FitParams::default().phi);
+        assert!(loaded.is_preset());
+        // What is not the learner is kept.
+        assert_eq!((loaded.params.target_cells, loaded.params.seed), (123, 9));
+        assert_eq!(loaded.scene, SceneChoice::Bundled("maze".into()));
+        assert_eq!((loaded.subdivide, loaded.step_size), (3, 10));
+        assert!(loaded.unlimited && loaded.show_samples && !loaded.show_cells);
+        // Saved again, it loads as it is.
+        eframe::set_value(&mut storage, SETTINGS_KEY, &loaded);
+        assert_eq!(Settings::load(Some(&storage)), (loaded, None));
+    }
+
+    #[test]
+    fn a_preset_that_changed_since_saving_is_replaced_and_undecodable_settings_give_defaults() {
+        // As if an older build's default learner had another φ.
+        let mut settings = Settings {
+            learner_defaults: Some(FitParams {
+                phi: 0.5,
+                ..FitParams::default()
+            }),
+            ..Settings::default()
+        };
+        settings.params.phi = 0.5;
+        settings.params.target_cells = 42;
+        let (upgraded, note) = settings.upgraded();
+        assert!(note.unwrap().contains("changed since"));
+        assert_eq!(upgraded.params.phi, FitParams::default().phi);
+        assert_eq!(upgraded.params.target_cells, 42);
+
+        let mut storage = Memory::default();
+        storage.set_string(SETTINGS_KEY, "(params: (target: \"no such target\"".into());
+        let (loaded, note) = Settings::load(Some(&storage));
+        assert_eq!(loaded, Settings::default());
+        assert!(note.unwrap().contains("could not be read"));
+    }
+
+    #[test]
+    fn choosing_a_preset_takes_its_learner_and_keeps_the_run() {
+        let mut settings = Settings::default();
+        settings.params.target_cells = 50;
+        settings.params.seed = 4;
+        settings.params.eval_every = 500;
+        settings.params.network.eta = 0.3;
+        settings.choose_preset(Preset::Paper);
+        assert_eq!(settings.params.target, Target::Zeta);
+        assert_eq!(settings.params.network, sgcs::Params::default());
+        assert_eq!(
+            (
+                settings.params.target_cells,
+                settings.params.seed,
+                settings.params.eval_every
+            ),
+            (50, 4, 500)
+        );
+        assert!(settings.is_preset());
+        settings.choose_preset(Preset::Default);
+        assert_eq!(
+            settings.params,
+            FitParams {
+                target_cells: 50,
+                seed: 4,
+                eval_every: 500,
+                ..FitParams::default()
+            }
+        );
+    }
+
+    #[test]
+    fn live_parameters_keep_exactly_what_waits_for_reset() {
+        let running = FitParams::default();
+        let paper = FitParams::paper();
+        // Each parameter that differs between the presets, alone.
+        let variants = [
+            FitParams {
+                target: paper.target,
+                ..running
+            },
+            FitParams {
+                gating: paper.gating,
+                ..running
+            },
+            FitParams {
+                importance: 0.2,
+                ..running
+            },
+            FitParams {
+                weighted: false,
+                ..running
+            },
+            FitParams {
+                initial_samples: 99,
+                ..running
+            },
+            FitParams {
+                seed: 17,
+                ..running
+            },
+            FitParams {
+                heldout: 64,
+                ..running
+            },
+            FitParams {
+                phi: 0.5,
+                ..running
+            },
+            FitParams {
+                network: paper.network,
+                ..running
+            },
+            FitParams {
+                target_cells: 9,
+                ..running
+            },
+            paper,
+        ];
+        for wanted in variants {
+            let live = live_params(&wanted, &running);
+            let waiting = waiting_for_reset(&wanted, &running);
+            assert_eq!(waiting.is_empty(), live == wanted, "{waiting:?}");
+            assert!(waiting_for_reset(&live, &running).is_empty());
+            assert_eq!((live.target, live.gating), (running.target, running.gating));
+        }
+        let all = waiting_for_reset(&paper, &running);
+        assert!(
+            all.contains(&"target") && all.contains(&"gating"),
+            "{all:?}"
+        );
+        let live = live_params(&paper, &running);
+        assert_eq!(live.network, paper.network, "network options apply live");
+        assert_eq!(live.phi, paper.phi);
+    }
+}

@@ -1,0 +1,5 @@
+//! Renderers shared by several subcommands, so no subcommand calls another's `run`.
+
+pub mod bench;
+pub mod figure;
+pub mod grid;
