@@ -1,7 +1,6 @@
 //! `flatland figure`: the paper's Fig. 3 panels as PNGs — geometry, kernel, cells, approximation
 //! and error.
 
-use std::ops::ControlFlow;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -60,15 +59,7 @@ pub fn run(args: &Args) -> Result<()> {
         "figure of {label}: fitting {} cells (Ctrl-C stops; nothing is written before the fit ends)",
         args.cells
     );
-    fit.train(1000, |_| {
-        if interrupt::requested() {
-            ControlFlow::Break(())
-        } else {
-            ControlFlow::Continue(())
-        }
-    });
-    interrupt::check()?;
-    let summary = fit.finish()?;
+    let summary = super::train_to_end(&mut fit)?;
     interrupt::check()?;
 
     let pictures = panels(&fit, &reference, &label, args.log)?;

@@ -185,6 +185,20 @@ pub fn progress_bar(len: u64, unit: &str) -> ProgressBar {
     bar
 }
 
+/// Trains `fit` to its end and finishes it (the refit, the final errors), stopping within a
+/// progress period on Ctrl-C.
+pub fn train_to_end(fit: &mut kernel_fit::Fit) -> Result<kernel_fit::FitSummary> {
+    fit.train(1000, |_| {
+        if crate::interrupt::requested() {
+            std::ops::ControlFlow::Break(())
+        } else {
+            std::ops::ControlFlow::Continue(())
+        }
+    });
+    crate::interrupt::check()?;
+    Ok(fit.finish()?)
+}
+
 /// What `cargo run --release` does with no arguments: the viewer on the bundled scene, or,
 /// without a display, the headless fit and its summary.
 pub fn default_job() -> Result<()> {

@@ -134,18 +134,7 @@ pub struct LitPoint {
 /// nothing is lit; never 0.
 #[must_use]
 pub fn colour_top(mesh: &Mesh, b: &[f64]) -> f64 {
-    let finite_max =
-        |it: &mut dyn Iterator<Item = f64>| it.filter(|v| v.is_finite()).fold(0.0_f64, f64::max);
-    let lit = finite_max(
-        &mut (0..mesh.len())
-            .filter(|&i| mesh.edge_of(i).emission == 0.0)
-            .map(|i| b[i]),
-    );
-    if lit > 0.0 {
-        lit
-    } else {
-        finite_max(&mut b.iter().copied()).max(f64::MIN_POSITIVE)
-    }
+    kernel_fit::colormap::radiosity_top(mesh, b)
 }
 
 #[cfg(test)]

@@ -101,6 +101,26 @@ impl Scale {
     }
 }
 
+/// The top of a lit scene's colour scale: the brightest finite B of a non-emitting element
+/// (emitters are 10–100× brighter than what they light and would leave the rest dark; they are
+/// drawn above the scale), the brightest of all when everything emits or nothing is lit; never
+/// 0.
+#[must_use]
+pub fn radiosity_top(mesh: &crate::solve::Mesh, b: &[f64]) -> f64 {
+    let finite_max =
+        |it: &mut dyn Iterator<Item = f64>| it.filter(|v| v.is_finite()).fold(0.0_f64, f64::max);
+    let lit = finite_max(
+        &mut (0..mesh.len())
+            .filter(|&i| mesh.edge_of(i).emission == 0.0)
+            .map(|i| b[i]),
+    );
+    if lit > 0.0 {
+        lit
+    } else {
+        finite_max(&mut b.iter().copied()).max(f64::MIN_POSITIVE)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,7 +1,6 @@
 //! The experiments behind RESULTS.md. Each returns data; [`super::render`] turns it into the
 //! document. Nothing here formats text.
 
-use std::ops::ControlFlow;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -45,15 +44,7 @@ pub struct Fitted {
 /// Fits `params` to `kernel`, stopping promptly on Ctrl-C.
 pub fn fit(kernel: &Arc<Kernel>, reference: &Arc<Reference>, params: FitParams) -> Result<Fitted> {
     let mut fit = Fit::new(Arc::clone(kernel), Arc::clone(reference), params)?;
-    fit.train(1000, |_| {
-        if interrupt::requested() {
-            ControlFlow::Break(())
-        } else {
-            ControlFlow::Continue(())
-        }
-    });
-    interrupt::check()?;
-    let summary = fit.finish()?;
+    let summary = crate::cmd::train_to_end(&mut fit)?;
     let cells = fit.cell_st().into_iter().flatten().collect();
     Ok(Fitted {
         summary,
