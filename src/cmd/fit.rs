@@ -154,19 +154,7 @@ pub fn run(args: &Args) -> Result<()> {
     super::check_res(args.res)?;
     super::check_cells("--cells", args.cells)?;
     anyhow::ensure!(args.every >= 1, "--every must be at least 1, but is 0");
-    let scene_input: Vec<&Path> = args.scene.path().into_iter().collect();
-    if let Some(out) = &args.out {
-        let mut inputs = scene_input.clone();
-        inputs.extend(args.resume.as_deref());
-        output::file(out, &inputs)?;
-    }
-    if let Some(checkpoint) = &args.checkpoint {
-        // The checkpoint may be the one resumed from: it is the fit's state, kept up to date.
-        output::file(checkpoint, &scene_input)?;
-        if let Some(out) = &args.out {
-            output::distinct(out, checkpoint, "is both --out and --checkpoint")?;
-        }
-    }
+    check_outputs(args)?;
     let (mut fit, label) = match &args.resume {
         Some(path) => {
             let fit = Fit::resume(path, KernelParams::default())?;
@@ -233,6 +221,28 @@ pub fn run(args: &Args) -> Result<()> {
     } else {
         eprintln!("final errors");
     }
+    let summary = finish(&mut fit)?;
+    interrupt::check()?;
+    let defined = super::Defined::of(fit.reference());
+    if let Some(out) = &args.out {
+        interrupt::writing(|| {
+            ModelFile::new(fit.model().clone(), params, Some(summary.clone())).save(out)
+        })
+        .with_context(|| format!("writing the model to {}", out.display()))?;
+    }
+    if args.json {
+        println!("{}", summary_json(&summary, &label, defined));
+    } else {
+        print_summary(&summary, &label, defined);
+        if let Some(out) = &args.out {
+            println!("model written to {}", out.display());
+        }
+    }
+    Ok(())
+}
+
+/// The refit (with a progress bar on a terminal) and the final errors; Ctrl-C stops it.
+fn finish(fit: &mut Fit) -> Result<kernel_fit::FitSummary> {
     let refit_bar = super::progress_bar(0, "");
     let summary = match fit.finish_with(|p| {
         let unit = match p.stage {
@@ -252,20 +262,22 @@ pub fn run(args: &Args) -> Result<()> {
         other => other?,
     };
     refit_bar.finish_and_clear();
-    interrupt::check()?;
-    let defined = super::Defined::of(fit.reference());
+    Ok(summary)
+}
+
+/// The outputs asked for are writable and never an input, before any work.
+fn check_outputs(args: &Args) -> Result<()> {
+    let scene_input: Vec<&Path> = args.scene.path().into_iter().collect();
     if let Some(out) = &args.out {
-        interrupt::writing(|| {
-            ModelFile::new(fit.model().clone(), params, Some(summary.clone())).save(out)
-        })
-        .with_context(|| format!("writing the model to {}", out.display()))?;
+        let mut inputs = scene_input.clone();
+        inputs.extend(args.resume.as_deref());
+        output::file(out, &inputs)?;
     }
-    if args.json {
-        println!("{}", summary_json(&summary, &label, defined));
-    } else {
-        print_summary(&summary, &label, defined);
+    if let Some(checkpoint) = &args.checkpoint {
+        // The checkpoint may be the one resumed from: it is the fit's state, kept up to date.
+        output::file(checkpoint, &scene_input)?;
         if let Some(out) = &args.out {
-            println!("model written to {}", out.display());
+            output::distinct(out, checkpoint, "is both --out and --checkpoint")?;
         }
     }
     Ok(())

@@ -71,6 +71,7 @@ mod params;
 pub mod rooms;
 mod sampling;
 pub mod solve;
+mod versioned;
 mod visibility;
 
 pub use error::FitError;

@@ -459,27 +459,8 @@ impl Network {
             error_sq += sc.kappa[j] * sc.kappa[j];
         }
 
-        if covered && self.params.output_rule == OutputRule::Local {
-            let v = &mut self.out[s * m..(s + 1) * m];
-            for j in 0..m {
-                v[j] += self.params.eta * (zeta[j] - v[j]);
-            }
-        } else if covered {
-            // Output weights (delta rule; normalised by default).
-            let gain = match (self.params.output_mode, self.params.output_rule) {
-                // φ_c = M_c / Σ M sums to 1, so Σ φ² ≤ 1 and NLMS is the plain rule.
-                (OutputMode::Normalized, _) if sum_m > 0.0 => self.params.eta / sum_m,
-                (OutputMode::Normalized, _) => 0.0,
-                (OutputMode::Sum, OutputRule::Normalized) => self.params.eta / sum_m2.max(1.0),
-                (OutputMode::Sum, OutputRule::Plain) => self.params.eta,
-                (OutputMode::Sum, OutputRule::Local) => unreachable!("handled above"),
-            };
-            for &(c, a) in &sc.found {
-                let v = &mut self.out[c as usize * m..(c as usize + 1) * m];
-                for j in 0..m {
-                    v[j] += gain * sc.kappa[j] * a;
-                }
-            }
+        if covered {
+            self.learn_outputs(s, zeta, &sc.found, &sc.kappa, sum_m, sum_m2);
         }
 
         // Resource counters of the BMU (everyone else decays lazily).
@@ -494,29 +475,7 @@ impl Network {
         sc.touched.clear();
         self.moved.clear();
         if covered {
-            self.move_cell(s, xi, self.params.eps_b);
-            self.moved.push(s);
-            sc.touched.push(s);
-            // Every neighbour's width depends on s; a neighbour that moves also changes its own
-            // neighbours' widths.
-            sc.touched.extend_from_slice(&self.nbrs[s]);
-            for i in 0..self.nbrs[s].len() {
-                let b = self.nbrs[s][i];
-                if !gate.admits(b) {
-                    continue;
-                }
-                self.move_cell(b, xi, self.params.eps_n);
-                if self.params.eps_n > 0.0 {
-                    self.moved.push(b);
-                }
-                sc.touched.extend_from_slice(&self.nbrs[b]);
-            }
-            self.moved.sort_unstable();
-            sc.touched.sort_unstable();
-            sc.touched.dedup();
-            for &c in &sc.touched {
-                self.refresh_width(c);
-            }
+            self.move_winners(s, xi, gate, &mut sc.touched);
         }
         self.changed.clear();
         self.changed.extend_from_slice(&sc.touched);
@@ -533,6 +492,76 @@ impl Network {
             inserted,
             covered,
         })
+    }
+
+    /// The output weights' update after a covered step: the winner towards the target
+    /// ([`OutputRule::Local`]), or every active cell by the delta rule (normalised by default).
+    /// `error` is ζ − κ.
+    fn learn_outputs(
+        &mut self,
+        s: CellId,
+        zeta: &[f64],
+        found: &[(u32, f64)],
+        error: &[f64],
+        sum_m: f64,
+        sum_m2: f64,
+    ) {
+        let m = self.m;
+        if self.params.output_rule == OutputRule::Local {
+            let v = &mut self.out[s * m..(s + 1) * m];
+            for j in 0..m {
+                v[j] += self.params.eta * (zeta[j] - v[j]);
+            }
+            return;
+        }
+        let gain = match (self.params.output_mode, self.params.output_rule) {
+            // φ_c = M_c / Σ M sums to 1, so Σ φ² ≤ 1 and NLMS is the plain rule.
+            (OutputMode::Normalized, _) if sum_m > 0.0 => self.params.eta / sum_m,
+            (OutputMode::Normalized, _) => 0.0,
+            (OutputMode::Sum, OutputRule::Normalized) => self.params.eta / sum_m2.max(1.0),
+            (OutputMode::Sum, OutputRule::Plain) => self.params.eta,
+            (OutputMode::Sum, OutputRule::Local) => unreachable!("handled above"),
+        };
+        for &(c, a) in found {
+            let v = &mut self.out[c as usize * m..(c as usize + 1) * m];
+            for j in 0..m {
+                v[j] += gain * error[j] * a;
+            }
+        }
+    }
+
+    /// Moves the winner `s` and its admitted neighbours towards `xi`, and refreshes the widths
+    /// of every cell whose width depends on them (listed in `touched`, sorted).
+    fn move_winners<G: Gate>(
+        &mut self,
+        s: CellId,
+        xi: &[f64],
+        gate: &G,
+        touched: &mut Vec<CellId>,
+    ) {
+        self.move_cell(s, xi, self.params.eps_b);
+        self.moved.push(s);
+        touched.push(s);
+        // Every neighbour's width depends on s; a neighbour that moves also changes its own
+        // neighbours' widths.
+        touched.extend_from_slice(&self.nbrs[s]);
+        for i in 0..self.nbrs[s].len() {
+            let b = self.nbrs[s][i];
+            if !gate.admits(b) {
+                continue;
+            }
+            self.move_cell(b, xi, self.params.eps_n);
+            if self.params.eps_n > 0.0 {
+                self.moved.push(b);
+            }
+            touched.extend_from_slice(&self.nbrs[b]);
+        }
+        self.moved.sort_unstable();
+        touched.sort_unstable();
+        touched.dedup();
+        for &c in touched.iter() {
+            self.refresh_width(c);
+        }
     }
 
     /// The cell of `list` nearest to `xi` (lowest id on ties), if any.

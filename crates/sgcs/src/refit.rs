@@ -402,28 +402,7 @@ impl Network {
         progress: &mut dyn FnMut(RefitProgress) -> ControlFlow<()>,
     ) -> Result<RefitSystem, SgcsError> {
         let (n, m, len) = (self.input_dim(), self.output_dim(), self.len());
-        if !inputs.len().is_multiple_of(n) || inputs.is_empty() {
-            return Err(SgcsError::Refit(format!(
-                "inputs has length {}, not a positive multiple of input_dim {n}",
-                inputs.len()
-            )));
-        }
-        let samples = inputs.len() / n;
-        if targets.len() != samples * m {
-            return Err(SgcsError::Refit(format!(
-                "targets has length {}, expected {samples} samples x output_dim {m}",
-                targets.len()
-            )));
-        }
-        if !held_back.is_empty() && held_back.len() != samples {
-            return Err(SgcsError::Refit(format!(
-                "held_back has length {}, expected 0 or {samples}",
-                held_back.len()
-            )));
-        }
-        if let Some(x) = inputs.iter().chain(targets).find(|x| !x.is_finite()) {
-            return Err(SgcsError::Refit(format!("non-finite sample value {x}")));
-        }
+        let samples = self.refit_samples(inputs, targets, held_back)?;
         let is_held = |i: usize| held_back.get(i).copied().unwrap_or(false);
 
         let order = morton_order(inputs, n);
@@ -533,6 +512,40 @@ impl Network {
             held_targets,
             symbolic,
         })
+    }
+
+    /// The number of samples in `inputs`, after checking that the refit's inputs agree in
+    /// length and are finite.
+    fn refit_samples(
+        &self,
+        inputs: &[f64],
+        targets: &[f64],
+        held_back: &[bool],
+    ) -> Result<usize, SgcsError> {
+        let (n, m) = (self.input_dim(), self.output_dim());
+        if !inputs.len().is_multiple_of(n) || inputs.is_empty() {
+            return Err(SgcsError::Refit(format!(
+                "inputs has length {}, not a positive multiple of input_dim {n}",
+                inputs.len()
+            )));
+        }
+        let samples = inputs.len() / n;
+        if targets.len() != samples * m {
+            return Err(SgcsError::Refit(format!(
+                "targets has length {}, expected {samples} samples x output_dim {m}",
+                targets.len()
+            )));
+        }
+        if !held_back.is_empty() && held_back.len() != samples {
+            return Err(SgcsError::Refit(format!(
+                "held_back has length {}, expected 0 or {samples}",
+                held_back.len()
+            )));
+        }
+        if let Some(x) = inputs.iter().chain(targets).find(|x| !x.is_finite()) {
+            return Err(SgcsError::Refit(format!("non-finite sample value {x}")));
+        }
+        Ok(samples)
     }
 
     /// The rows of the samples `chunk` and their share of the lower triangle of `ΦᵀΦ`, as one

@@ -1,4 +1,7 @@
-//! Model files: scene fingerprint, parameters and network in one versioned JSON, written atomically.
+//! The learned model: [`LearnedKernel`] (in `learned`), and model files — scene fingerprint,
+//! parameters and network in one versioned JSON, written atomically.
+
+pub(crate) mod learned;
 
 use std::path::Path;
 
@@ -11,14 +14,6 @@ use crate::{Approximation, FitError, FitParams, FitSummary, LearnedKernel};
 pub const MODEL_FORMAT: &str = "flatland-model";
 /// The model file version this build reads and writes.
 pub const MODEL_VERSION: u32 = 1;
-
-/// Only the header, read first so a file of another kind or version is refused with a clear
-/// message instead of a confusing field error.
-#[derive(Deserialize)]
-struct Header {
-    format: Option<String>,
-    version: Option<u32>,
-}
 
 /// What a model file holds.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -71,35 +66,16 @@ impl ModelFile {
             path: path.to_owned(),
             reason,
         };
-        let header: Header = serde_json::from_str(&text).map_err(|e| {
-            bad(format!(
-                "not a flatland model (line {}, column {}: {e})",
-                e.line(),
-                e.column()
-            ))
-        })?;
-        if header.format.as_deref() != Some(MODEL_FORMAT) {
-            return Err(bad(format!(
-                "not a flatland model: `format` must be \"{MODEL_FORMAT}\""
-            )));
-        }
-        match header.version {
-            Some(MODEL_VERSION) => {}
-            Some(v) => {
-                return Err(bad(format!(
-                    "model file version {v}, but this build reads version {MODEL_VERSION}; \
-                     refit the model with this build"
-                )));
-            }
-            None => return Err(bad("model file has no `version`".to_owned())),
-        }
-        let file: ModelFile = serde_json::from_str(&text).map_err(|e| {
-            bad(format!(
-                "malformed model (line {}, column {}): {e}",
-                e.line(),
-                e.column()
-            ))
-        })?;
+        let file: ModelFile = crate::versioned::read(
+            text.as_bytes(),
+            &crate::versioned::Kind {
+                format: MODEL_FORMAT,
+                version: MODEL_VERSION,
+                noun: "model",
+                remedy: "refit the model with this build",
+            },
+        )
+        .map_err(bad)?;
         let actual = fingerprint_hex(file.model.scene());
         if actual != file.scene_fingerprint {
             return Err(bad(format!(
