@@ -59,15 +59,12 @@ pub struct Reference {
     build_s: f64,
 }
 
-/// Seed-stream offset for held-out points, so they never coincide with a training stream.
-const HELDOUT_STREAM: u64 = 0x9e37_79b9_7f4a_7c15;
-
 impl Reference {
     /// Evaluates ζ on a `res × res` grid and at `heldout` random points (seeded), in parallel.
     pub fn new(kernel: &Kernel, res: usize, heldout: usize, seed: u64) -> Reference {
         let started = std::time::Instant::now();
         let grid = kernel.grid(res, true);
-        let mut rng = ChaCha8Rng::seed_from_u64(seed ^ HELDOUT_STREAM);
+        let mut rng = crate::seeds::heldout(seed);
         let heldout_points: Vec<[f64; 2]> = (0..heldout)
             .map(|_| [rng.random::<f64>(), rng.random::<f64>()])
             .collect();

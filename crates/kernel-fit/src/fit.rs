@@ -5,12 +5,13 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use flatland_geom::{Kernel, Scene};
-use rand::{RngExt, SeedableRng};
+use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use sgcs::Network;
 
+use crate::seeds;
 use crate::visibility::{FaceId, FaceKey, Faces, Labeller, Sampler};
 use crate::{
     Approximation, Errors, FitError, FitParams, Gating, InputFrame, Reference, Resampling, Target,
@@ -155,11 +156,6 @@ pub struct FitSummary {
     pub stop: StopReason,
 }
 
-/// Seed streams, so adding draws to one never shifts another.
-const STREAM_INITIAL: u64 = 1;
-const STREAM_RESAMPLE: u64 = 2;
-const STREAM_TRAIN: u64 = 3;
-
 /// Growth periods (λ steps) without an insertion, each with a θ scan, after which a fit that
 /// grows at its worst samples has converged (see [`StopReason::Converged`]).
 const STALL_PERIODS: u64 = 20;
@@ -233,7 +229,7 @@ impl Fit {
         params.validate()?;
         let scene = kernel.scene().clone();
         let frame = InputFrame::of(&scene);
-        let mut initial_rng = stream(params.seed, STREAM_INITIAL);
+        let mut initial_rng = seeds::stream(params.seed, seeds::FIT_INITIAL);
         let visibility = params.target == Target::Visibility;
         let sampler = if visibility {
             Sampler::new(&kernel, params.importance, &mut initial_rng)
@@ -309,8 +305,8 @@ impl Fit {
                 rays,
                 steps_at_last_growth: 0,
                 resample_not_before: 0,
-                train_rng: stream(params.seed, STREAM_TRAIN),
-                resample_rng: stream(params.seed, STREAM_RESAMPLE),
+                train_rng: seeds::stream(params.seed, seeds::FIT_TRAIN),
+                resample_rng: seeds::stream(params.seed, seeds::FIT_RESAMPLE),
                 sampler,
                 history: Vec::new(),
                 stop,
@@ -1051,7 +1047,7 @@ mod tests {
             "{summary:?}"
         );
         // Exactly the kernel, also between grid points and on pairs learned or known.
-        let mut r = stream(99, 0);
+        let mut r = crate::seeds::stream(99, 0);
         for _ in 0..2000 {
             let (s, t) = (r.random::<f64>(), r.random::<f64>());
             assert_eq!(fit.model().zeta(s, t), kernel.zeta(s, t), "({s}, {t})");
@@ -1112,7 +1108,7 @@ mod tests {
         let loaded = crate::ModelFile::load(&path).unwrap();
         std::fs::remove_dir_all(&dir).unwrap();
         loaded.model.check_invariants().unwrap();
-        let mut r = stream(5, 0);
+        let mut r = crate::seeds::stream(5, 0);
         for _ in 0..3000 {
             let (s, t) = (r.random::<f64>(), r.random::<f64>());
             assert_eq!(

@@ -70,6 +70,7 @@ mod model;
 mod params;
 pub mod rooms;
 mod sampling;
+pub mod seeds;
 pub mod solve;
 mod versioned;
 mod visibility;

@@ -8,13 +8,11 @@
 //! standing on the floor. The same seed gives the same room.
 
 use flatland_geom::{DVec2, Edge, GeomError, Scene};
-use rand::{RngExt, SeedableRng};
-use rand_chacha::ChaCha8Rng;
+use rand::RngExt;
 
 /// The random room of `seed` (see the module docs).
 pub fn random_room(seed: u64) -> Result<Scene, GeomError> {
-    let mut r = ChaCha8Rng::seed_from_u64(seed);
-    r.set_stream(ROOM_STREAM);
+    let mut r = crate::seeds::stream(seed, crate::seeds::ROOMS);
     let v = DVec2::new;
     let (w, h) = (r.random_range(2.0..8.0), r.random_range(2.0..5.0));
     let kind = r.random_range(0..3);
@@ -95,9 +93,6 @@ pub fn random_room(seed: u64) -> Result<Scene, GeomError> {
     }
     Scene::new(edges)
 }
-
-/// The seed stream of the rooms (so a room seed never shares a stream with a fit seed).
-const ROOM_STREAM: u64 = 0x5ce7e;
 
 #[cfg(test)]
 mod tests {

@@ -44,7 +44,8 @@
 //! the receiver among the sender's linked edges, then a descent of that pair's refinement tree
 //! (depth ≤ 2 log₂(edge length / min length)).
 
-use super::{BaselineRun, mix_seed};
+use super::BaselineRun;
+use crate::seeds;
 use crate::{Approximation, FitError};
 use flatland_geom::{Kernel, PairClass};
 use glam::DVec2;
@@ -660,7 +661,7 @@ impl HierarchicalRadiosity {
         let values: Vec<(f64, u64)> = pending
             .par_iter()
             .enumerate()
-            .map(|(k, link)| estimate(kernel, &surfaces, link, params, mix_seed(seed, k as u64)))
+            .map(|(k, link)| estimate(kernel, &surfaces, link, params, seeds::item(seed, k as u64)))
             .collect();
         let mut rays = 0;
         let mut zero_links = 0;

@@ -72,17 +72,6 @@ impl<A: Approximation> BaselineRun<A> {
     }
 }
 
-/// SplitMix64 finaliser: decorrelates per-item seeds derived from one run seed.
-fn mix_seed(seed: u64, item: u64) -> u64 {
-    let mut z = seed
-        ^ item
-            .wrapping_mul(0x9e37_79b9_7f4a_7c15)
-            .wrapping_add(0x632b_e59b_d9b4_e019);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
-}
-
 /// Shared by the tests of both baselines: small scenes built in code, seeded.
 #[cfg(test)]
 pub(crate) mod test_support {

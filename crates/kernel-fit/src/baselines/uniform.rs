@@ -6,7 +6,8 @@
 //! boundaries and shadow edges alike, which is what makes it the floor every adaptive method must
 //! beat.
 
-use super::{BaselineRun, mix_seed};
+use super::BaselineRun;
+use crate::seeds;
 use crate::{Approximation, FitError};
 use flatland_geom::Kernel;
 use rand::{RngExt, SeedableRng};
@@ -170,7 +171,7 @@ fn exact_grid(kernel: &Kernel, g: usize, block_value: BlockValue) -> UniformGrid
 /// The `m` sample points of every block, block by block in row-major order: the ray plan of
 /// [`UniformGrid::build`], exposed to tests so they can recompute the block means independently.
 fn sample_points(g: usize, m: usize, seed: u64) -> Vec<[f64; 2]> {
-    let mut rng = ChaCha8Rng::seed_from_u64(mix_seed(seed, 0x756e_6966));
+    let mut rng = ChaCha8Rng::seed_from_u64(seeds::item(seed, 0x756e_6966));
     let inv = 1.0 / g as f64;
     let mut points = Vec::with_capacity(g * g * m);
     for i in 0..g {

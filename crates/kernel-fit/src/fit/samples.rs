@@ -2,12 +2,6 @@
 
 use super::*;
 
-pub(super) fn stream(seed: u64, stream: u64) -> ChaCha8Rng {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    rng.set_stream(stream);
-    rng
-}
-
 /// The rays the samples cost: those whose visibility geometry could not decide
 /// ([`Kernel::casts_ray`]; every sample of a visibility model).
 pub(super) fn rays_of(kernel: &Kernel, samples: &[Sample]) -> u64 {
