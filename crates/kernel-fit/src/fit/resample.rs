@@ -1,0 +1,109 @@
+//! θ-resampling: new sample sets where the network is poor (critical cells) or absent.
+
+use super::*;
+
+impl Fit {
+    /// A new sample set chosen by θ(ξ) = ρ_ACC(ξ) ∨ ¬ρ_A(ξ) (the printed ∧ is an erratum: a
+    /// sample is wanted in a critical zone *or* outside the network): candidates are scanned in
+    /// parallel without casting a ray; only accepted ones cost a ray. A visibility model draws
+    /// its candidates where visibility varies and measures θ with its gated activations, so a
+    /// face no cell covers counts as outside the network.
+    pub(super) fn resample(&mut self) {
+        let started = Instant::now();
+        self.resample_inner();
+        self.state.resample_s += started.elapsed().as_secs_f64();
+    }
+
+    fn resample_inner(&mut self) {
+        let p = self.state.params;
+        let cells = self.state.model.network.len() as f64;
+        let wanted = ((cells / p.psi).ceil() as usize)
+            .saturating_sub(self.state.samples.len())
+            .max(p.min_set_size);
+        let wanted =
+            wanted.min(usize::try_from(p.ray_budget - self.state.rays).unwrap_or(usize::MAX));
+        let critical = self.state.model.network.critical_cells(p.omega);
+        let scan_limit = wanted.saturating_mul(p.scan_factor);
+        let chunk = (wanted * 4).clamp(256, 1 << 16);
+        let mut accepted: Vec<Candidate> = Vec::with_capacity(wanted);
+        let mut scanned = 0;
+        while accepted.len() < wanted && scanned < scan_limit {
+            let n = chunk.min(scan_limit - scanned);
+            let candidates = self.candidates(n);
+            scanned += n;
+            if p.resampling == Resampling::Uniform {
+                accepted.extend(candidates);
+                continue;
+            }
+            let model = &self.state.model;
+            let keep: Vec<bool> = candidates
+                .par_iter()
+                .map(|c| {
+                    let [s, t] = c.st;
+                    let xi = model.input(s, t);
+                    let key = model
+                        .geometry
+                        .as_ref()
+                        .and_then(|g| FaceKey::at(&g.kernel, &g.kernel.unoccluded(s, t)));
+                    let gate = key.as_ref().and_then(|key| model.gate(key));
+                    let (d_a, d_acc) = match &gate {
+                        Some(gate) => model.network.activation_sums_gated(&xi, &critical, gate),
+                        None => model.network.activation_sums(&xi, &critical),
+                    };
+                    d_acc > p.phi || d_a <= p.phi
+                })
+                .collect();
+            accepted.extend(
+                candidates
+                    .into_iter()
+                    .zip(keep)
+                    .filter(|(_, k)| *k)
+                    .map(|(c, _)| c),
+            );
+        }
+        accepted.truncate(wanted);
+        if accepted.len() < wanted {
+            // θ found too few places worth a ray; do not rescan every step.
+            self.state.resample_not_before = self.steps() + u64::from(p.network.lambda);
+        }
+        if accepted.is_empty() {
+            return;
+        }
+        let new = if self.state.sampler.is_some() {
+            visibility_samples(
+                &self.kernel,
+                self.state.model.frame,
+                &self.state.params,
+                &accepted,
+            )
+        } else {
+            let points: Vec<[f64; 2]> = accepted.iter().map(|c| c.st).collect();
+            make_samples(
+                &self.kernel,
+                &self.state.model.scene,
+                self.state.model.frame,
+                p.target,
+                self.state.model.output_scale,
+                &points,
+            )
+        };
+        self.state.rays += rays_of(&self.kernel, &new);
+        self.state.set_starts.push(self.state.samples.len());
+        self.state.samples.extend(new);
+        self.index_sample_faces();
+    }
+
+    /// `n` θ candidates: uniform `(s, t)`, or a visibility model's sampler draws.
+    fn candidates(&mut self, n: usize) -> Vec<Candidate> {
+        let rng = &mut self.state.resample_rng;
+        match &self.state.sampler {
+            Some(sampler) => draw_points(sampler, &self.kernel, n, rng),
+            None => (0..n)
+                .map(|_| Candidate {
+                    st: [rng.random::<f64>(), rng.random::<f64>()],
+                    weight: 1.0,
+                })
+                .collect(),
+        }
+    }
+}
