@@ -142,11 +142,7 @@ pub fn grid_point(res: usize, k: usize) -> (f64, f64) {
 pub fn relative_l2(approx: &[f64], exact: &[f64]) -> f64 {
     assert_eq!(approx.len(), exact.len(), "relative_l2: length mismatch");
     // Scale by the largest magnitude first so squares neither overflow nor underflow.
-    let scale =
-        exact.iter().chain(approx).fold(
-            0.0_f64,
-            |m, v| if v.is_finite() { m.max(v.abs()) } else { m },
-        );
+    let scale = largest_finite(approx, exact);
     if scale == 0.0 {
         return 0.0;
     }
@@ -162,15 +158,20 @@ pub fn relative_l2(approx: &[f64], exact: &[f64]) -> f64 {
     (num / den).sqrt()
 }
 
+/// The largest finite magnitude in `a` and `b` (0 if none): what the relative errors divide by
+/// first, so squares neither overflow nor underflow.
+pub(crate) fn largest_finite(a: &[f64], b: &[f64]) -> f64 {
+    b.iter().chain(a).fold(
+        0.0_f64,
+        |m, v| if v.is_finite() { m.max(v.abs()) } else { m },
+    )
+}
+
 /// `Σ |a − b| / Σ |b|`: the relative L1 error, scale-free; the absolute mean error when the
 /// reference is identically zero (like [`relative_l2`]).
 pub fn relative_l1(approx: &[f64], exact: &[f64]) -> f64 {
     assert_eq!(approx.len(), exact.len(), "relative_l1: length mismatch");
-    let scale =
-        exact.iter().chain(approx).fold(
-            0.0_f64,
-            |m, v| if v.is_finite() { m.max(v.abs()) } else { m },
-        );
+    let scale = largest_finite(approx, exact);
     if scale == 0.0 {
         return 0.0;
     }
@@ -193,11 +194,7 @@ pub fn bootstrap_l2(approx: &[f64], exact: &[f64]) -> [f64; 2] {
     if n == 0 {
         return [0.0; 2];
     }
-    let scale =
-        exact.iter().chain(approx).fold(
-            0.0_f64,
-            |m, v| if v.is_finite() { m.max(v.abs()) } else { m },
-        );
+    let scale = largest_finite(approx, exact);
     if scale == 0.0 {
         return [0.0; 2];
     }

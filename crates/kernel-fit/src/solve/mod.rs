@@ -240,11 +240,7 @@ pub fn solve_errors(mesh: &Mesh, b: &[f64], exact: &[f64]) -> SolveErrors {
 }
 
 fn weighted_relative_l2(approx: &[f64], exact: &[f64], weights: &[f64]) -> f64 {
-    let scale =
-        exact.iter().chain(approx).fold(
-            0.0_f64,
-            |m, v| if v.is_finite() { m.max(v.abs()) } else { m },
-        );
+    let scale = crate::eval::largest_finite(approx, exact);
     if scale == 0.0 {
         return 0.0;
     }
