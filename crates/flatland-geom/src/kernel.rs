@@ -428,7 +428,7 @@ impl Kernel {
         if self.roughly_on(x, gx) && self.roughly_on(y, gy) {
             self.visible_parents(x, gx, y, gy)
         } else {
-            !self.bvh.any_hit(&self.segments, x, y, gx, gy)
+            !self.bvh.any_hit(x, y, gx, gy)
         }
     }
 
@@ -650,13 +650,13 @@ impl Kernel {
                             let s = self.segments[i as usize];
                             open_segment_hits(x, y, s.a, s.b)
                         }),
-                        _ => !self.bvh.any_hit(&self.segments, x, y, gx, gy),
+                        _ => !self.bvh.any_hit(x, y, gx, gy),
                     },
-                    Shaft::NoFacing => !self.bvh.any_hit(&self.segments, x, y, gx, gy),
+                    Shaft::NoFacing => !self.bvh.any_hit(x, y, gx, gy),
                 };
             }
         }
-        !self.bvh.any_hit(&self.segments, x, y, gx, gy)
+        !self.bvh.any_hit(x, y, gx, gy)
     }
 
     /// [`Side::faces`], with a floating-point filter first: the signed distance of `p` from the
