@@ -453,19 +453,28 @@ impl Kernel {
     /// `k` for many `(s, t)` in parallel (rayon); the result does not depend on the thread count.
     #[must_use]
     pub fn k_batch(&self, st: &[[f64; 2]]) -> Vec<f64> {
-        st.par_iter()
-            .with_min_len(1024)
-            .map(|&[s, t]| self.k(s, t))
-            .collect()
+        self.batch(st, |s, t| self.k(s, t))
     }
 
     /// `ζ` for many `(s, t)` in parallel (rayon); deterministic.
     #[must_use]
     pub fn zeta_batch(&self, st: &[[f64; 2]]) -> Vec<f64> {
-        st.par_iter()
-            .with_min_len(1024)
-            .map(|&[s, t]| self.zeta(s, t))
-            .collect()
+        self.batch(st, |s, t| self.zeta(s, t))
+    }
+
+    /// `f` over `st` in chunks, each a plain loop: a per-item rayon closure kept the kernel
+    /// from being inlined, 14 % slower per sample on one thread than a loop over [`Kernel::k`].
+    fn batch(&self, st: &[[f64; 2]], f: impl Fn(f64, f64) -> f64 + Sync) -> Vec<f64> {
+        const CHUNK: usize = 1024;
+        let mut out = vec![0.0; st.len()];
+        out.par_chunks_mut(CHUNK)
+            .zip(st.par_chunks(CHUNK))
+            .for_each(|(out, st)| {
+                for (o, &[s, t]) in out.iter_mut().zip(st) {
+                    *o = f(s, t);
+                }
+            });
+        out
     }
 
     /// `k` (or `ζ` if `weighted`) on a `res × res` grid of cell centres, row-major: row `i` is
@@ -578,7 +587,7 @@ impl Kernel {
     }
 
     /// `G(x, y)`, finite and ≥ 0.
-    #[inline]
+    #[inline(always)]
     fn geometry(&self, gx: usize, x: DVec2, gy: usize, y: DVec2) -> f64 {
         let (px, py) = (&self.parents[gx], &self.parents[gy]);
         let d = y - x;
@@ -615,7 +624,7 @@ impl Kernel {
         if g.is_finite() && g > 0.0 { g } else { 0.0 }
     }
 
-    #[inline]
+    #[inline(always)]
     fn k_parents(&self, gx: usize, ux: f64, gy: usize, uy: f64) -> f64 {
         if gx == gy {
             return 0.0;
@@ -631,7 +640,7 @@ impl Kernel {
     }
 
     /// `V` between parents `gx`, `gy` (`usize::MAX` = none).
-    #[inline]
+    #[inline(always)]
     fn visible_parents(&self, x: DVec2, gx: usize, y: DVec2, gy: usize) -> bool {
         if let Some(shaft) = self.shaft(gx, gy) {
             // Canonical order keeps V symmetric: the same shaft and the same tests either way.
@@ -690,7 +699,7 @@ impl Kernel {
     }
 
     /// The cached shaft of two distinct surface parents, computed on first use.
-    #[inline]
+    #[inline(always)]
     fn shaft(&self, gx: usize, gy: usize) -> Option<&Shaft> {
         if self.shafts.is_empty() || gx == gy || gx == usize::MAX || gy == usize::MAX {
             return None;

@@ -38,7 +38,7 @@ fn strictly_same_side(o1: f64, o2: f64) -> bool {
 }
 
 /// Whether the open segment `(x, y)` meets the closed segment `[p, q]` (the grazing rule above).
-#[inline]
+#[inline(always)]
 pub(crate) fn open_segment_hits(x: DVec2, y: DVec2, p: DVec2, q: DVec2) -> bool {
     let o1 = orient(x, y, p);
     let o2 = orient(x, y, q);
