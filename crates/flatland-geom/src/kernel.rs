@@ -129,6 +129,10 @@ struct Parent {
 /// BVH directly (still about `log n` per ray).
 const MAX_CACHED_SURFACES: usize = 512;
 
+/// Evaluations per rayon task in the batch and grid paths: a plain loop over a chunk keeps the
+/// kernel inlined, and 1024 evaluations outweigh a task's overhead.
+const BATCH_CHUNK: usize = 1024;
+
 /// The exact kernel of one scene, with its acceleration structures. `Send + Sync`: share it
 /// between threads by reference.
 ///
@@ -465,10 +469,9 @@ impl Kernel {
     /// `f` over `st` in chunks, each a plain loop: a per-item rayon closure kept the kernel
     /// from being inlined, 14 % slower per sample on one thread than a loop over [`Kernel::k`].
     fn batch(&self, st: &[[f64; 2]], f: impl Fn(f64, f64) -> f64 + Sync) -> Vec<f64> {
-        const CHUNK: usize = 1024;
         let mut out = vec![0.0; st.len()];
-        out.par_chunks_mut(CHUNK)
-            .zip(st.par_chunks(CHUNK))
+        out.par_chunks_mut(BATCH_CHUNK)
+            .zip(st.par_chunks(BATCH_CHUNK))
             .for_each(|(out, st)| {
                 for (o, &[s, t]) in out.iter_mut().zip(st) {
                     *o = f(s, t);
@@ -482,19 +485,25 @@ impl Kernel {
     #[must_use]
     pub fn grid(&self, res: usize, weighted: bool) -> Vec<f64> {
         let n = res as f64;
-        (0..res * res)
-            .into_par_iter()
-            .with_min_len(1024)
-            .map(|idx| {
-                let s = ((idx / res) as f64 + 0.5) / n;
-                let t = ((idx % res) as f64 + 0.5) / n;
-                if weighted {
-                    self.zeta(s, t)
-                } else {
-                    self.k(s, t)
+        let point = |idx: usize| {
+            let s = ((idx / res) as f64 + 0.5) / n;
+            let t = ((idx % res) as f64 + 0.5) / n;
+            (s, t)
+        };
+        let mut out = vec![0.0; res * res];
+        out.par_chunks_mut(BATCH_CHUNK)
+            .enumerate()
+            .for_each(|(chunk, out)| {
+                for (j, o) in out.iter_mut().enumerate() {
+                    let (s, t) = point(chunk * BATCH_CHUNK + j);
+                    *o = if weighted {
+                        self.zeta(s, t)
+                    } else {
+                        self.k(s, t)
+                    };
                 }
-            })
-            .collect()
+            });
+        out
     }
 
     /// [`Kernel::k`] the naive way: no shaft cache, no BVH, every ray tested against every
