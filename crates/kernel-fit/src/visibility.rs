@@ -8,7 +8,7 @@
 //! ray, and a [`FaceGate`] lets only the cells of a query ray's face respond: no cell straddles
 //! a known discontinuity, and a face with one cell anywhere in it has that cell's value.
 
-use std::collections::HashMap;
+use foldhash::HashMap;
 
 use flatland_geom::{DVec2, Kernel, PairClass, PairEvents, Unoccluded};
 use rand::{Rng, RngExt};

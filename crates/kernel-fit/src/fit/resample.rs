@@ -36,8 +36,10 @@ impl Fit {
                 continue;
             }
             let model = &self.state.model;
+            // A θ test takes a few µs: tasks of 64 keep rayon's overhead off the scan.
             let keep: Vec<bool> = candidates
                 .par_iter()
+                .with_min_len(64)
                 .map(|c| {
                     let [s, t] = c.st;
                     let xi = model.input(s, t);
