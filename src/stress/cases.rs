@@ -171,11 +171,7 @@ pub fn reflectance_cases(suite: &mut Suite) {
         let kernel = Kernel::new(scene.clone());
         check_kernel(row, &kernel, &random_pairs(4000, 5));
         check_energy(row, &kernel, 2000, 8);
-        let energy = row.error;
-        let (summary, fit) = small_fit(&scene, FitParams::default())?;
-        inspect_fit(row, &summary, &fit);
-        row.error = energy;
-        Ok(())
+        inspect_fit_keeping_error(row, &scene)
     });
 }
 
@@ -204,11 +200,7 @@ pub fn geometry_cases(suite: &mut Suite) {
             }
             check_kernel(row, &kernel, &pairs);
             check_energy(row, &kernel, per_edge, 12);
-            let energy = row.error;
-            let (summary, fit) = small_fit(&scene, FitParams::default())?;
-            inspect_fit(row, &summary, &fit);
-            row.error = energy;
-            Ok(())
+            inspect_fit_keeping_error(row, &scene)
         },
     );
     suite.case(
@@ -227,11 +219,7 @@ pub fn geometry_cases(suite: &mut Suite) {
             let kernel = Kernel::new(scene.clone());
             check_kernel(row, &kernel, &random_pairs(10_000, 23));
             check_energy(row, &kernel, per_edge, 3);
-            let energy = row.error;
-            let (summary, fit) = small_fit(&scene, FitParams::default())?;
-            inspect_fit(row, &summary, &fit);
-            row.error = energy;
-            Ok(())
+            inspect_fit_keeping_error(row, &scene)
         },
     );
     suite.case(
@@ -274,11 +262,7 @@ pub fn geometry_cases(suite: &mut Suite) {
             }
             check_kernel(row, &kernel, &pairs);
             check_energy(row, &kernel, per_edge / 2, 8);
-            let energy = row.error;
-            let (summary, fit) = small_fit(&scene, FitParams::default())?;
-            inspect_fit(row, &summary, &fit);
-            row.error = energy;
-            Ok(())
+            inspect_fit_keeping_error(row, &scene)
         },
     );
 }

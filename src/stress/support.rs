@@ -92,6 +92,16 @@ pub fn inspect_fit(row: &mut Row, summary: &FitSummary, fit: &Fit) {
     });
 }
 
+/// Runs the small fit on `scene` and inspects it, keeping the row's error (the case's own
+/// measure, set before: the energy balance of a geometry case).
+pub fn inspect_fit_keeping_error(row: &mut Row, scene: &Scene) -> Result<()> {
+    let error = row.error;
+    let (summary, fit) = small_fit(scene, FitParams::default())?;
+    inspect_fit(row, &summary, &fit);
+    row.error = error;
+    Ok(())
+}
+
 /// Every number a network holds must be finite, and its counters meaningful: non-negative and
 /// never subnormal.
 pub fn inspect_network(row: &mut Row, net: &Network) {
