@@ -448,16 +448,9 @@ impl LitPaint<'_> {
     }
 }
 
-/// The heatmaps' colour bar, right of `frame`'s plot: the scale's values at its ticks (each
-/// decade of a log scale; 0, half and the top of a linear one). The learned and error panels
-/// share the scale.
-fn scale_bar(painter: &Painter, frame: &PlotFrame, scale: Scale, text: Color32) {
-    let plot = frame.plot;
-    let bar = Rect::from_min_max(
-        pos2(plot.right() + 8.0, plot.top() + 14.0),
-        pos2(plot.right() + 20.0, plot.bottom()),
-    );
-    let steps = 64;
+/// The colour map drawn upwards in `bar` (0 at the bottom, 1 at the top) in `steps` slices,
+/// outlined in `text`.
+fn gradient(painter: &Painter, bar: Rect, steps: usize, text: Color32) {
     for k in 0..steps {
         let (u0, u1) = (k as f32 / steps as f32, (k + 1) as f32 / steps as f32);
         let slice = Rect::from_min_max(
@@ -467,6 +460,18 @@ fn scale_bar(painter: &Painter, frame: &PlotFrame, scale: Scale, text: Color32) 
         painter.rect_filled(slice, 0.0, colour(f64::from((u0 + u1) / 2.0)));
     }
     painter.rect_stroke(bar, 0.0, Stroke::new(1.0, text), egui::StrokeKind::Outside);
+}
+
+/// The heatmaps' colour bar, right of `frame`'s plot: the scale's values at its ticks (each
+/// decade of a log scale; 0, half and the top of a linear one). The learned and error panels
+/// share the scale.
+fn scale_bar(painter: &Painter, frame: &PlotFrame, scale: Scale, text: Color32) {
+    let plot = frame.plot;
+    let bar = Rect::from_min_max(
+        pos2(plot.right() + 8.0, plot.top() + 14.0),
+        pos2(plot.right() + 20.0, plot.bottom()),
+    );
+    gradient(painter, bar, 64, text);
     painter.text(
         bar.center_top() - vec2(0.0, 2.0),
         Align2::CENTER_BOTTOM,
@@ -840,16 +845,7 @@ fn colour_bar(painter: &Painter, rect: Rect, top: f64, text: Color32) {
     if bar.height() < 20.0 {
         return;
     }
-    let steps = 48;
-    for k in 0..steps {
-        let (u0, u1) = (k as f32 / steps as f32, (k + 1) as f32 / steps as f32);
-        let slice = Rect::from_min_max(
-            pos2(bar.left(), bar.bottom() - u1 * bar.height()),
-            pos2(bar.right(), bar.bottom() - u0 * bar.height() + 0.5),
-        );
-        painter.rect_filled(slice, 0.0, colour(f64::from((u0 + u1) / 2.0)));
-    }
-    painter.rect_stroke(bar, 0.0, Stroke::new(1.0, text), egui::StrokeKind::Outside);
+    gradient(painter, bar, 48, text);
     let font = FontId::proportional(10.0);
     painter.text(
         bar.center_top() - vec2(0.0, 3.0),
