@@ -235,41 +235,36 @@ impl RefitSystem {
     }
 
     /// The lower triangle of the held-back samples' `Φ_hᵀΦ_h`, subtracted from `values`
-    /// (permuted, as `values`), and their `Φ_hᵀ z_h` from `rhs`.
+    /// (permuted, as `values`), and their `Φ_hᵀ z_h` from `rhs`. Straight into place, sample by
+    /// sample: each entry sees its samples in order, and nothing the size of `Φ_hᵀΦ_h` is held
+    /// (collecting the entries first took 70 MB at 4000 cells).
     fn remove_held_back(&self, values: &mut [f64], rhs: &mut [f64]) {
         let (len, m) = (self.len, self.m);
-        let mut columns: Vec<Vec<(u32, f64)>> = vec![Vec::new(); len];
+        let mut row: Vec<(u32, f64)> = Vec::new();
         for h in 0..self.held_back() {
-            let row: Vec<(u32, f64)> = self
-                .held_row(h)
-                .iter()
-                .map(|&(c, a)| (self.position[c as usize], a))
-                .collect();
-            for &(p, a) in &row {
-                for &(q, b) in &row {
-                    if q >= p {
-                        columns[p as usize].push((q, a * b));
-                    }
+            row.clear();
+            row.extend(
+                self.held_row(h)
+                    .iter()
+                    .map(|&(c, a)| (self.position[c as usize], a)),
+            );
+            row.sort_unstable_by_key(|e| e.0);
+            for (i, &(p, a)) in row.iter().enumerate() {
+                let column =
+                    self.col_ptr[p as usize] as usize..self.col_ptr[p as usize + 1] as usize;
+                let mut k = column.start;
+                // The rows at and after `p` are this column's entries of the sample, ascending.
+                for &(q, b) in &row[i..] {
+                    k += self.row_idx[k..column.end].partition_point(|&r| r < q);
+                    debug_assert!(
+                        k < column.end && self.row_idx[k] == q,
+                        "held-back pattern is in the system"
+                    );
+                    values[k] -= a * b;
                 }
                 for j in 0..m {
                     rhs[j * len + p as usize] -= a * self.held_targets[h * m + j];
                 }
-            }
-        }
-        for (c, mut entries) in columns.into_iter().enumerate() {
-            // Stable: equal rows keep the samples' order, so the sums are reproducible.
-            entries.sort_by_key(|e| e.0);
-            let (a, b) = (self.col_ptr[c] as usize, self.col_ptr[c + 1] as usize);
-            let mut k = a;
-            for (d, v) in entries {
-                while k < b && self.row_idx[k] < d {
-                    k += 1;
-                }
-                debug_assert!(
-                    k < b && self.row_idx[k] == d,
-                    "held-back pattern is in the system"
-                );
-                values[k] -= v;
             }
         }
     }
