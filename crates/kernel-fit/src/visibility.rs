@@ -499,7 +499,11 @@ impl Sampler {
                 .min(self.ranges.len() - 1)
         };
         let (a, b) = (rank(s) as u32, rank(t) as u32);
-        let k = self.pairs.iter().position(|p| (p.0, p.1) == (a, b))?;
+        // Pairs are listed in (sender, receiver) order.
+        let k = self
+            .pairs
+            .binary_search_by_key(&(a, b), |p| (p.0, p.1))
+            .ok()?;
         let (ra, rb) = (self.ranges[a as usize], self.ranges[b as usize]);
         let cell = |x: f64, r: (f64, f64)| {
             (((x - r.0) / (r.1 - r.0) * TILES as f64) as usize).min(TILES - 1)
