@@ -430,17 +430,20 @@ impl Network {
                     self.region_weights(xi, region, &mut sc.found);
                     (c, true)
                 }
-                None => {
-                    match gate.fallback().filter(|f| !f.is_empty()) {
-                        Some(list) => self.region_weights(xi, list, &mut sc.found),
-                        None => self.collect_active(xi, &mut sc.stack, &mut sc.ids, &mut sc.found),
+                None => match gate.fallback().filter(|f| !f.is_empty()) {
+                    Some(list) => {
+                        self.region_weights(xi, list, &mut sc.found);
+                        (self.index.nearest(xi, &self.pos, &mut sc.stack), false)
                     }
-                    (self.index.nearest(xi, &self.pos, &mut sc.stack), false)
-                }
+                    None => {
+                        let (stack, ids, found) = (&mut sc.stack, &mut sc.ids, &mut sc.found);
+                        (self.active_and_nearest(xi, stack, ids, found), false)
+                    }
+                },
             }
         } else if gate.is_open() {
-            self.collect_active(xi, &mut sc.stack, &mut sc.ids, &mut sc.found);
-            (self.index.nearest(xi, &self.pos, &mut sc.stack), true)
+            let (stack, ids, found) = (&mut sc.stack, &mut sc.ids, &mut sc.found);
+            (self.active_and_nearest(xi, stack, ids, found), true)
         } else {
             self.collect_active(xi, &mut sc.stack, &mut sc.ids, &mut sc.found);
             sc.admitted.clear();
@@ -731,6 +734,23 @@ impl Network {
         }
     }
 
+    /// [`collect_active`](Self::collect_active), and returns the nearest cell (the lowest id
+    /// on ties): in a small network one scan finds both.
+    fn active_and_nearest(
+        &self,
+        xi: &[f64],
+        stack: &mut Vec<u32>,
+        ids: &mut Vec<u32>,
+        found: &mut Vec<(u32, f64)>,
+    ) -> CellId {
+        if self.len() <= SCAN_MAX_CELLS {
+            self.scan_active(xi, found)
+        } else {
+            self.tree_active(xi, stack, ids, found);
+            self.index.nearest(xi, &self.pos, stack)
+        }
+    }
+
     /// [`collect_active`](Self::collect_active) through the spatial index.
     fn tree_active(
         &self,
@@ -776,17 +796,23 @@ impl Network {
         }));
     }
 
-    /// [`collect_active`](Self::collect_active) by visiting every cell, in id order.
-    fn scan_active(&self, xi: &[f64], found: &mut Vec<(u32, f64)>) {
+    /// [`collect_active`](Self::collect_active) by visiting every cell, in id order; returns
+    /// the nearest cell (the lowest id on ties), as the index's nearest-cell search does.
+    fn scan_active(&self, xi: &[f64], found: &mut Vec<(u32, f64)>) -> CellId {
         found.clear();
         let reach_sq = self.params.reach_sq();
         let n = self.n;
+        let mut nearest = (f64::INFINITY, usize::MAX);
         for c in 0..self.len() {
             let d2 = dist_sq(&self.pos[c * n..(c + 1) * n], xi);
+            if d2 < nearest.0 {
+                nearest = (d2, c);
+            }
             if crate::index::is_active(d2, self.width[c], reach_sq) {
                 found.push((c as u32, activation(d2, self.width[c])));
             }
         }
+        nearest.1
     }
 
     fn active(&self, xi: &[f64]) -> Vec<(u32, f64)> {
@@ -1567,8 +1593,9 @@ mod tests {
                     net.check_invariants().map_err(proptest::test_runner::TestCaseError::fail)?;
                 }
                 net.tree_active(&xi, &mut stack, &mut ids, &mut fast);
-                net.scan_active(&xi, &mut brute);
+                let nearest = net.scan_active(&xi, &mut brute);
                 proptest::prop_assert_eq!(&fast, &brute);
+                proptest::prop_assert_eq!(nearest, net.index.nearest(&xi, &net.pos, &mut stack));
             }
         }
     }
