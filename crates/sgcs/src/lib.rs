@@ -54,10 +54,12 @@
 //!   activation balls `|ξ − w_c| ≤ δ_c sqrt(ln(1/cutoff))` (a "reach box" and the largest width),
 //!   so cells of very different widths are pruned correctly. The tree is updated conservatively
 //!   (boxes only grow) as cells move, widen or are inserted, and rebuilt after enough growth or
-//!   drift. A step touches the active cells (about 170 at 4000 cells for inputs on a 2D surface in
-//!   R⁴), not all cells, and its cost grows only with the local overlap, not with `len()`.
-//!   Measured (`benches/sgcs_step.rs`, n = 4, m = 1, 2 cores shared with other builds): a step
-//!   takes 4–5 µs at 100 cells, 14–16 µs at 400 and 21 µs at 4000 (1.3–1.5× the 400-cell step).
+//!   drift. A step touches the active cells (about 140 at 4000 cells for inputs on a 2D surface in
+//!   R⁴), not all cells, and its cost grows only with the local overlap, not with `len()`. A
+//!   network of up to 1024 cells scans them all instead: its supports are wide, so a tree query
+//!   would visit most leaves anyway. Measured (`benches/sgcs_step.rs`, n = 4, m = 1, a shared
+//!   2-core machine): with [`Params::default`] a step takes 2.2 µs at 100 cells, 6.0 µs at 400
+//!   and 12.8 µs at 4000; configured like kernel-fit's default learner, 0.44, 0.69 and 1.7 µs.
 //!   Widths are cached and refreshed for the cells whose edges moved.
 //! - **Numbers.** Inputs and targets must be finite and at most `1e100` in magnitude
 //!   ([`Network::try_step`] rejects others); widths are floored at `1e-100`. No value becomes NaN
