@@ -1021,7 +1021,8 @@ mod tests {
     proptest! {
         /// Grazing everywhere: segments and rays on a coarse grid, so rays pass exactly through
         /// end points, run along segments and along box boundaries, at scales from 1e-150 to
-        /// 1e150 (beyond, the exact predicate's products leave the range of `f64`). The BVH's float culling must never lose a hit the exact scan finds.
+        /// 1e150 (beyond, the exact predicate's products leave the range of `f64`). The BVH's
+        /// float culling must never lose a hit the exact scan finds.
         #[test]
         fn bvh_matches_the_linear_scan_on_grazing_rays(seed in any::<u64>(), n in 1usize..300) {
             let mut r = rng(seed);

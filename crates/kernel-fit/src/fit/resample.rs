@@ -6,9 +6,9 @@ impl Fit {
     /// A new sample set chosen by θ(ξ) = ρ_ACC(ξ) ∨ ¬ρ_A(ξ) (the printed ∧ is an erratum: a
     /// sample is wanted in a critical zone *or* outside the network): candidates are scanned in
     /// parallel without casting a ray, the next chunk drawn while one is tested; only accepted
-    /// ones cost a ray. A visibility model draws
-    /// its candidates where visibility varies and measures θ with its gated activations, so a
-    /// face no cell covers counts as outside the network.
+    /// ones cost a ray. A visibility model draws its candidates where visibility varies and
+    /// measures θ with its gated activations, so a face no cell covers counts as outside the
+    /// network.
     pub(super) fn resample(&mut self) {
         let started = Instant::now();
         self.resample_inner();
