@@ -626,7 +626,7 @@ impl Network {
         if rms_after.is_nan() || rms_after > rms_before {
             rms_after = rms_before;
         } else {
-            *self.out_flat_mut() = weights;
+            self.outputs_mut().copy_from_slice(&weights);
         }
         Ok(RefitReport {
             samples: system.samples(),
@@ -658,7 +658,7 @@ impl Network {
                 value,
             });
         }
-        self.out_flat_mut().copy_from_slice(weights);
+        self.outputs_mut().copy_from_slice(weights);
         Ok(())
     }
 
@@ -867,8 +867,8 @@ mod tests {
     use rand::RngExt;
 
     use super::*;
-    use crate::Params;
     use crate::test_support::{assert_close, bump_ridge, relative_l2, rng, unit_square_points};
+    use crate::{OutputMode, Params};
 
     fn grown(cells: usize, seed: u64) -> Network {
         let p = Params {
@@ -1086,5 +1086,28 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(err.contains("ridge"), "{err}");
+    }
+
+    /// The refit of a normalised network fits the normalised output.
+    #[test]
+    fn refit_of_a_normalized_network_lowers_its_training_error() {
+        let params = Params {
+            output_mode: OutputMode::Normalized,
+            lambda: 50,
+            ..Params::default()
+        };
+        let mut net = crate::test_support::grown(params, 10_000, 8, bump_ridge);
+        let points = unit_square_points(9, 3_000);
+        let inputs: Vec<f64> = points.iter().flatten().copied().collect();
+        let targets: Vec<f64> = points.iter().map(|p| bump_ridge(p[0], p[1])).collect();
+        let report = net.refit_outputs(&inputs, &targets, 1e-6).unwrap();
+        assert!(report.rms_after < 0.9 * report.rms_before, "{report:?}");
+        let rms: f64 = (points
+            .iter()
+            .map(|p| (net.predict1(p) - bump_ridge(p[0], p[1])).powi(2))
+            .sum::<f64>()
+            / points.len() as f64)
+            .sqrt();
+        assert_close!(rms, report.rms_after, 1e-9);
     }
 }

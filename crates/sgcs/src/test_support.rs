@@ -1,7 +1,11 @@
-//! Shared test helpers: the one seeded generator and `assert_close!`.
+//! Shared test helpers: the one seeded generator, `assert_close!`, test functions and networks.
 
-use rand::SeedableRng;
+use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+
+use crate::{
+    CellId, Gate, InsertRule, Insertion, Network, OutputMode, OutputRule, Params, Resource,
+};
 
 /// The seeded generator every test uses.
 pub(crate) fn rng(seed: u64) -> ChaCha8Rng {
@@ -46,7 +50,6 @@ pub(crate) fn bump_distance(x: f64, y: f64) -> f64 {
 
 /// `n` uniform points in the unit square.
 pub(crate) fn unit_square_points(seed: u64, n: usize) -> Vec<[f64; 2]> {
-    use rand::RngExt;
     let mut r = rng(seed);
     (0..n)
         .map(|_| [r.random::<f64>(), r.random::<f64>()])
@@ -66,4 +69,84 @@ pub(crate) fn relative_l2(
         z += v * v;
     }
     (e / z).sqrt()
+}
+
+/// The corners of the unit right triangle: the first simplex of most test networks.
+pub(crate) fn unit_triangle() -> Vec<Vec<f64>> {
+    vec![vec![0.0, 0.0], vec![1.0, 0.0], vec![0.0, 1.0]]
+}
+
+/// A network grown on uniform samples of `f` over the unit square.
+pub(crate) fn grown(
+    params: Params,
+    steps: usize,
+    seed: u64,
+    f: impl Fn(f64, f64) -> f64,
+) -> Network {
+    let mut net = Network::new(params, 2, 1, &unit_triangle()).unwrap();
+    let mut r = rng(seed);
+    for _ in 0..steps {
+        let (x, y) = (r.random::<f64>(), r.random::<f64>());
+        net.step(&[x, y], &[f(x, y)]);
+    }
+    net
+}
+
+/// Parameters for the gated tests: local rule, normalised output, insertion at the worst
+/// sample with its target, the error-sum resource.
+pub(crate) fn gated_params() -> Params {
+    Params {
+        lambda: 20,
+        output_rule: OutputRule::Local,
+        output_mode: OutputMode::Normalized,
+        insertion: Insertion::WorstSample,
+        insert_rule: InsertRule::SampleTarget,
+        resource: Resource::ErrorSum,
+        ..Params::default()
+    }
+}
+
+/// What a caller that knows where its target jumps keeps: the side of `x = 0.5` of every
+/// cell, and the cells of each side (ascending).
+#[derive(Default)]
+pub(crate) struct Halves {
+    of: Vec<bool>,
+    sides: [Vec<CellId>; 2],
+}
+
+impl Halves {
+    pub(crate) fn update(&mut self, net: &Network) {
+        self.of = (0..net.len()).map(|c| net.position(c)[0] > 0.5).collect();
+        for side in 0..2 {
+            self.sides[side] = (0..net.len())
+                .filter(|&c| usize::from(self.of[c]) == side)
+                .collect();
+        }
+    }
+
+    /// The gate of an input at `x`: the cells on its side.
+    pub(crate) fn gate(&self, x: f64) -> HalfGate<'_> {
+        let right = x > 0.5;
+        HalfGate {
+            of: &self.of,
+            right,
+            cells: &self.sides[usize::from(right)],
+        }
+    }
+}
+
+/// The gate [`Halves::gate`] gives: a region, one side of `x = 0.5`.
+pub(crate) struct HalfGate<'a> {
+    of: &'a [bool],
+    right: bool,
+    cells: &'a [CellId],
+}
+
+impl Gate for HalfGate<'_> {
+    fn admits(&self, c: CellId) -> bool {
+        self.of[c] == self.right
+    }
+    fn region(&self) -> Option<&[CellId]> {
+        Some(self.cells)
+    }
 }
