@@ -71,6 +71,14 @@ pub(crate) fn relative_l2(
     (e / z).sqrt()
 }
 
+/// `count` uniform samples of [`bump_ridge`]: inputs (flat, two a sample) and targets.
+pub(crate) fn bump_ridge_samples(seed: u64, count: usize) -> (Vec<f64>, Vec<f64>) {
+    let pts = unit_square_points(seed, count);
+    let inputs = pts.iter().flatten().copied().collect();
+    let targets = pts.iter().map(|p| bump_ridge(p[0], p[1])).collect();
+    (inputs, targets)
+}
+
 /// The corners of the unit right triangle: the first simplex of most test networks.
 pub(crate) fn unit_triangle() -> Vec<Vec<f64>> {
     vec![vec![0.0, 0.0], vec![1.0, 0.0], vec![0.0, 1.0]]
@@ -88,6 +96,22 @@ pub(crate) fn grown(
     for _ in 0..steps {
         let (x, y) = (r.random::<f64>(), r.random::<f64>());
         net.step(&[x, y], &[f(x, y)]);
+    }
+    net
+}
+
+/// A network of `cells` cells (λ = 100) grown on uniform samples of [`bump_ridge`].
+pub(crate) fn grown_bump_ridge(cells: usize, seed: u64) -> Network {
+    let p = Params {
+        lambda: 100,
+        max_cells: cells,
+        ..Params::default()
+    };
+    let mut net = Network::new(p, 2, 1, &unit_triangle()).unwrap();
+    let mut r = rng(seed);
+    while net.len() < cells {
+        let (x, y) = (r.random::<f64>(), r.random::<f64>());
+        net.step(&[x, y], &[bump_ridge(x, y)]);
     }
     net
 }
