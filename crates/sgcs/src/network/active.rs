@@ -1,5 +1,4 @@
-//! The cells an input reaches: its active cells and its nearest cell, by a scan in a small
-//! network, else through the spatial index (both give the same lists).
+//! The cells an input reaches (active and nearest), by a scan or through the spatial index.
 
 use super::{CellId, Network};
 use crate::OutputMode;

@@ -1,5 +1,4 @@
-//! Resource counters: each cell's lazily decayed mean error and count, its worst sample, and
-//! the resource `τ_c` they give.
+//! Resource counters: each cell's lazily decayed error and count, worst sample, and `τ_c`.
 
 use super::{CellId, Network, SIMPLEX_DIM};
 use crate::Resource;

@@ -1,5 +1,4 @@
-//! Growth: a new cell on the longest edge of the cell with the largest resource, the edge's
-//! triangles split, and the counters and output weight handed to the new cell.
+//! Growth: a new cell on the longest edge of the cell with the largest resource.
 
 use super::counters::flush;
 use super::{CellId, Network};
@@ -21,7 +20,9 @@ struct BeforeSplit {
 }
 
 impl Network {
-    /// Inserts a cell on the longest edge of the cell with the largest resource.
+    /// Inserts a cell on the longest edge of the cell with the largest resource (or at its
+    /// worst sample): splits the edge's triangles, hands the new cell its share of the
+    /// counters and an output weight by the insertion rule.
     pub(super) fn insert(&mut self, now: u64) -> Option<CellId> {
         if self.len() >= self.params.max_cells {
             return None;

@@ -1,5 +1,4 @@
-//! The network's self-check: the simplicial topology, finite values, cached geometry and the
-//! spatial index.
+//! The self-check: simplicial topology, finite values, cached geometry, the spatial index.
 
 use std::collections::BTreeMap;
 
