@@ -52,6 +52,14 @@ pub enum SgcsError {
     /// Bad input to [`crate::Network::refit_outputs`], or a system it cannot solve.
     #[error("refit: {0}")]
     Refit(String),
+    /// [`crate::Network::insert_at`] on a network that already holds `max_cells` cells.
+    #[error(
+        "the network already holds its maximum of {max_cells} cells (parameter `max_cells`); raise it to insert more"
+    )]
+    Full {
+        /// The network's `max_cells`.
+        max_cells: usize,
+    },
     /// The caller's progress callback stopped the work.
     #[error("interrupted")]
     Interrupted,

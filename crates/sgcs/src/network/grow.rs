@@ -3,7 +3,7 @@
 use super::counters::flush;
 use super::{CellId, Network};
 use crate::index::dist_sq;
-use crate::{InsertRule, Insertion, OutputMode};
+use crate::{InsertRule, Insertion, OutputMode, SgcsError};
 
 /// The cells around a split edge as they were before the split: what the new cell's counters
 /// and output weight are computed from.
@@ -43,6 +43,52 @@ impl Network {
         let m = self.m;
         self.cells.out[r * m..(r + 1) * m].copy_from_slice(&v_r);
         Some(r)
+    }
+
+    /// Inserts a cell at `position` with output weight `output`, chosen by the caller: a
+    /// learner that decides itself where a new basis function goes (a sample it has just
+    /// measured, say) grows the structure the way growth at a sample does. The cell nearest to
+    /// `position` (`q`) and `q`'s neighbour nearest to it (`f`) have their edge split there:
+    /// `q–f` becomes `q–r–f` and each triangle on it two, so the network stays a simplicial
+    /// complex. The new cell starts with clean counters; no other cell's counters change.
+    ///
+    /// Errors: a vector of the wrong length or with a value that is not finite, or a network
+    /// that already holds `max_cells` cells.
+    pub fn insert_at(&mut self, position: &[f64], output: &[f64]) -> Result<CellId, SgcsError> {
+        self.check_sample(position, output, 1.0)?;
+        if self.len() >= self.params.max_cells {
+            return Err(SgcsError::Full {
+                max_cells: self.params.max_cells,
+            });
+        }
+        if self.index.wants_rebuild(self.len()) {
+            self.rebuild_index();
+        }
+        let q = self.bmu(position);
+        let f = self.nearest_neighbour(q, position);
+        let opposite = self.triangles_on_edge(q, f);
+        let mut affected = vec![q, f];
+        affected.extend(opposite.iter().map(|e| e.0));
+        let now = self.steps;
+        let r = self.split_edge(q, f, &opposite, position, now);
+        self.settle_new_cell(r, q, &affected);
+        let m = self.m;
+        self.cells.out[r * m..(r + 1) * m].copy_from_slice(output);
+        Ok(r)
+    }
+
+    /// `q`'s neighbour nearest to `position` (the lowest id on ties).
+    fn nearest_neighbour(&self, q: CellId, position: &[f64]) -> CellId {
+        let mut f = q;
+        let mut nearest = f64::INFINITY;
+        for &b in &self.cells.nbrs[q] {
+            let d = dist_sq(position, self.position(b));
+            if d < nearest {
+                nearest = d;
+                f = b;
+            }
+        }
+        f
     }
 
     /// `q = argmax τ_c` (the lowest id on ties). With insertion at the worst sample, only
@@ -305,6 +351,57 @@ mod tests {
         assert_close, bump_ridge, gated_params, grown, relative_l2, rng, unit_square_points,
         unit_triangle,
     };
+
+    #[test]
+    fn cells_inserted_where_the_caller_says_keep_the_topology_and_their_weights() {
+        let params = Params {
+            max_cells: 2_000,
+            ..Params::default()
+        };
+        let mut net = Network::new(params, 2, 1, &unit_triangle()).unwrap();
+        let mut r = rng(3);
+        for k in 0..1_500 {
+            // Clustered and spread positions alike, some far outside the first triangle.
+            let scale = if k % 3 == 0 { 5.0 } else { 1.0 };
+            let p = [scale * r.random::<f64>(), scale * r.random::<f64>()];
+            let v = [r.random::<f64>()];
+            let c = net.insert_at(&p, &v).unwrap();
+            assert_eq!(c, net.len() - 1);
+            assert_eq!(net.position(c), &p[..]);
+            assert_eq!(net.output(c), &v[..]);
+            net.check_invariants()
+                .unwrap_or_else(|e| panic!("after inserting cell {c}: {e}"));
+        }
+        // Training still works on a network grown this way, and keeps it valid.
+        for _ in 0..2_000 {
+            let (x, y) = (r.random::<f64>(), r.random::<f64>());
+            net.step(&[x, y], &[x * y]);
+        }
+        net.check_invariants().unwrap();
+    }
+
+    #[test]
+    fn insert_at_refuses_a_full_network_and_bad_vectors_with_what_is_wrong() {
+        let params = Params {
+            max_cells: 4,
+            ..Params::default()
+        };
+        let mut net = Network::new(params, 2, 1, &unit_triangle()).unwrap();
+        let err = net.insert_at(&[0.5], &[1.0]).unwrap_err().to_string();
+        assert!(err.contains("length 1, expected 2"), "{err}");
+        let err = net
+            .insert_at(&[0.5, f64::NAN], &[1.0])
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("finite"), "{err}");
+        net.insert_at(&[0.3, 0.3], &[1.0]).unwrap();
+        let err = net.insert_at(&[0.2, 0.2], &[1.0]).unwrap_err().to_string();
+        assert!(
+            err.contains("maximum of 4 cells") && err.contains("max_cells"),
+            "{err}"
+        );
+        net.check_invariants().unwrap();
+    }
 
     #[test]
     fn topology_holds_after_every_insertion() {

@@ -137,7 +137,7 @@ impl Network {
         })
     }
 
-    fn rebuild_index(&mut self) {
+    pub(super) fn rebuild_index(&mut self) {
         let reach = self.params.reach_sq().sqrt();
         self.index = Index::build(self.n, reach, &self.cells.pos, &self.cells.width);
     }

@@ -102,7 +102,12 @@ impl Network {
 
     /// Refuses a sample of the wrong lengths, with a value beyond `1e100` or NaN, or with a
     /// weight outside `[0, 1e100]`.
-    fn check_sample(&self, xi: &[f64], zeta: &[f64], weight: f64) -> Result<(), SgcsError> {
+    pub(super) fn check_sample(
+        &self,
+        xi: &[f64],
+        zeta: &[f64],
+        weight: f64,
+    ) -> Result<(), SgcsError> {
         check_values("xi", xi, self.n)?;
         check_values("zeta", zeta, self.m)?;
         if !(weight.is_finite() && (0.0..=MAX_ABS_VALUE).contains(&weight)) {
