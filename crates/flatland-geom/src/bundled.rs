@@ -52,6 +52,7 @@ pub fn scene(name: &str) -> Result<Scene, GeomError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_support::bundled;
 
     #[test]
     fn every_bundled_scene_loads_and_unknown_names_are_refused_with_the_list() {
@@ -65,5 +66,14 @@ mod tests {
             err.contains("nope") && err.contains("fig3, box, maze, corners"),
             "{err}"
         );
+    }
+
+    #[test]
+    fn bundled_scenes_load() {
+        for name in ["fig3", "box", "maze", "corners"] {
+            let scene = bundled(name);
+            assert!(scene.total_length() > 0.0);
+            assert!(scene.max_emission() > 0.0, "{name} has no light");
+        }
     }
 }

@@ -295,4 +295,42 @@ mod tests {
         assert_eq!(names(&dir), expected);
         std::fs::remove_dir_all(&dir).unwrap();
     }
+
+    #[test]
+    fn parse_errors_name_file_line_and_column() {
+        let dir = std::env::temp_dir().join(format!("flatland-geom-err-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("bad.json");
+        std::fs::write(
+            &path,
+            "{\"edges\": [\n  {\"a\": [0, 0], \"b\": [1, 0], \"reflectence\": 0.5}]}",
+        )
+        .unwrap();
+        let err = Scene::load(&path).unwrap_err().to_string();
+        assert!(err.starts_with(&format!("{}:2:", path.display())), "{err}");
+        assert!(err.contains("reflectence"), "{err}");
+        let path = dir.join("bad.ron");
+        std::fs::write(
+            &path,
+            "// comment\n(edges: [\n  (a: (0, 0), b: (1, 0), reflectance: 0.5, role: wall)])",
+        )
+        .unwrap();
+        let err = Scene::load(&path).unwrap_err().to_string();
+        assert!(err.starts_with(&format!("{}:3:", path.display())), "{err}");
+        let path = dir.join("invalid.ron");
+        std::fs::write(&path, "(edges: [(a: (0, 0), b: (0, 0), reflectance: 0.5)])").unwrap();
+        let err = Scene::load(&path).unwrap_err().to_string();
+        assert!(err.contains("invalid.ron: edge 0: zero length"), "{err}");
+        let err = Scene::load(dir.join("scene.txt")).unwrap_err().to_string();
+        assert!(err.contains("unknown scene format"), "{err}");
+        let err = Scene::load(dir.join("missing.ron"))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("missing.ron"), "{err}");
+        let err = serde_json::from_str::<Scene>(r#"{"edges":[]}"#)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("no surface edge"), "{err}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

@@ -1,0 +1,304 @@
+//! The per-pair cache: each pair of parent surface edges' shaft (lazy), class, visibility, events.
+
+use std::borrow::Cow;
+
+use super::{Kernel, PairClass, PairVisibility};
+use crate::visibility::{PairEvents, Shaft, Side, classify};
+
+/// Above this many surface parents the pair cache (n² entries) is not kept; rays then use the
+/// BVH directly (still about `log n` per ray).
+pub(super) const MAX_CACHED_SURFACES: usize = 512;
+
+impl Kernel {
+    /// Whether evaluating `k(s, t)` needs a visibility test that geometry cannot decide: the
+    /// points face each other (`k` could be positive) on a pair whose visibility varies
+    /// ([`PairClass::Varies`]). The project counts one **ray** for each such evaluation, for
+    /// every method alike; everything else is known without one.
+    #[must_use]
+    pub fn casts_ray(&self, s: f64, t: f64) -> bool {
+        let u = self.unoccluded(s, t);
+        u.k > 0.0 && self.pair_class(u.sender, u.receiver) == PairClass::Varies
+    }
+
+    /// How visibility behaves between the parent surface edges of ranks `a` and `b`, without a
+    /// ray (symmetric). Exact for every facing ray between interior points of the two edges.
+    ///
+    /// # Panics
+    /// If a rank is `>= surface_parents()`.
+    #[must_use]
+    pub fn pair_class(&self, a: usize, b: usize) -> PairClass {
+        if a == b {
+            return PairClass::Zero;
+        }
+        let (ga, gb) = (self.surface_parents[a], self.surface_parents[b]);
+        let class = |shaft: &Shaft| match shaft {
+            Shaft::NoFacing => PairClass::Zero,
+            Shaft::Clear => PairClass::Visible,
+            Shaft::Blocked(_) => PairClass::Hidden,
+            Shaft::Candidates(c) => match c.interior {
+                Some(true) => PairClass::Visible,
+                Some(false) => PairClass::Hidden,
+                None => PairClass::Varies,
+            },
+        };
+        match self.shaft(ga, gb) {
+            Some(shaft) => class(shaft),
+            None => class(&self.classify_ranks(a.min(b), a.max(b))),
+        }
+    }
+
+    /// Where visibility can change between the parent surface edges of ranks `a` (the sender
+    /// side, `x`) and `b` (the receiver side, `y`): see [`PairEvents`]. `None` unless
+    /// [`Kernel::pair_class`] is [`PairClass::Varies`]. No ray is cast.
+    ///
+    /// # Panics
+    /// If a rank is `>= surface_parents()`.
+    #[must_use]
+    pub fn visibility_events(&self, a: usize, b: usize) -> Option<Cow<'_, PairEvents>> {
+        if a == b {
+            return None;
+        }
+        let (ga, gb) = (self.surface_parents[a], self.surface_parents[b]);
+        // The shaft is stored for the lower rank first.
+        let which = usize::from(a > b);
+        match self.shaft(ga, gb) {
+            Some(Shaft::Candidates(c)) => c.events.as_ref().map(|e| Cow::Borrowed(&e[which])),
+            Some(_) => None,
+            None => match self.classify_ranks(a.min(b), a.max(b)) {
+                Shaft::Candidates(c) => c.events.map(|e| {
+                    let [forward, backward] = *e;
+                    Cow::Owned(if which == 0 { forward } else { backward })
+                }),
+                _ => None,
+            },
+        }
+    }
+
+    /// How visibility between surface edges `ex` and `ey` is decided: the shaft classification
+    /// the kernel caches per pair of parent edges (for facing rays). `None` if either is a
+    /// blocker or out of range.
+    #[must_use]
+    pub fn pair_visibility(&self, ex: usize, ey: usize) -> Option<PairVisibility> {
+        let (gx, gy) = (self.group_or_none(ex), self.group_or_none(ey));
+        let (px, py) = (self.parents.get(gx)?, self.parents.get(gy)?);
+        if px.rank == usize::MAX || py.rank == usize::MAX {
+            return None;
+        }
+        if gx == gy {
+            return Some(PairVisibility::SameEdge);
+        }
+        let computed;
+        let shaft = match self.shaft(gx, gy) {
+            Some(shaft) => shaft,
+            None => {
+                computed = self.classify_ranks(px.rank.min(py.rank), px.rank.max(py.rank));
+                &computed
+            }
+        };
+        let edge = |g: u32| self.scene.groups()[g as usize].first;
+        Some(match shaft {
+            Shaft::NoFacing => PairVisibility::NeverFacing,
+            Shaft::Clear => PairVisibility::Clear,
+            Shaft::Blocked(g) => PairVisibility::Blocked(edge(*g)),
+            Shaft::Candidates(c) => match c.interior {
+                Some(true) => PairVisibility::Clear,
+                Some(false) => PairVisibility::Blocked(edge(c.occluders[0])),
+                None => PairVisibility::Rays(c.occluders.iter().map(|&g| edge(g)).collect()),
+            },
+        })
+    }
+
+    fn classify_ranks(&self, r0: usize, r1: usize) -> Shaft {
+        let (g0, g1) = (self.surface_parents[r0], self.surface_parents[r1]);
+        classify(&self.segments, &self.bvh, self.side(g0), self.side(g1))
+    }
+
+    pub(super) fn side(&self, g: usize) -> Side {
+        let p = &self.parents[g];
+        Side {
+            index: g,
+            a: p.a,
+            b: self.segments[g].b,
+            two_sided: p.two_sided,
+        }
+    }
+
+    /// The cached shaft of two distinct surface parents, computed on first use.
+    #[inline(always)]
+    pub(super) fn shaft(&self, gx: usize, gy: usize) -> Option<&Shaft> {
+        if self.shafts.is_empty() || gx == gy || gx == usize::MAX || gy == usize::MAX {
+            return None;
+        }
+        let (rx, ry) = (self.parents[gx].rank, self.parents[gy].rank);
+        if rx == usize::MAX || ry == usize::MAX {
+            return None;
+        }
+        let (r0, r1) = if rx < ry { (rx, ry) } else { (ry, rx) };
+        let n = self.surface_parents.len();
+        Some(self.shafts[r0 * n + r1].get_or_init(|| self.classify_ranks(r0, r1)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_support::{bundled, random_scene, rng, unit_box};
+    use crate::visibility::Candidates;
+    use crate::{Edge, Scene};
+    use glam::DVec2;
+    use proptest::prelude::*;
+    use rand::RngExt;
+
+    fn v(x: f64, y: f64) -> DVec2 {
+        DVec2::new(x, y)
+    }
+
+    #[test]
+    fn shafts_are_classified() {
+        // Two facing unit segments 1 apart (floor facing up, ceiling facing down).
+        let floor = Edge::surface(v(0.0, 0.0), v(1.0, 0.0), 0.5);
+        let ceiling = Edge::surface(v(1.0, 1.0), v(0.0, 1.0), 0.5);
+        let shaft = |extra: Vec<Edge>| {
+            let mut edges = vec![floor, ceiling];
+            edges.extend(extra);
+            let kernel = Kernel::new(Scene::new(edges).unwrap());
+            kernel.shaft(0, 1).cloned().unwrap()
+        };
+        assert_eq!(shaft(vec![]), Shaft::Clear);
+        assert_eq!(
+            shaft(vec![Edge::blocker(v(-1.0, 0.5), v(2.0, 0.5))]),
+            Shaft::Blocked(2)
+        );
+        // A short floating blocker: its two end points are the events where V changes.
+        let events = |extra: Vec<Edge>| {
+            let mut edges = vec![floor, ceiling];
+            edges.extend(extra);
+            let kernel = Kernel::new(Scene::new(edges).unwrap());
+            assert_eq!(kernel.pair_class(0, 1), PairClass::Varies);
+            let e = kernel.visibility_events(0, 1).unwrap().into_owned();
+            assert_eq!(e.sub_pair(v(0.3, 0.0), v(0.7, 1.0)), 0, "no sub-pairs");
+            e.points(0).to_vec()
+        };
+        assert_eq!(
+            events(vec![Edge::blocker(v(0.2, 0.5), v(0.4, 0.5))]),
+            vec![v(0.2, 0.5), v(0.4, 0.5)]
+        );
+        // A blocker standing on the floor: both its foot (on the floor) and its top are events;
+        // one crossing the floor gives its top and the crossing point.
+        assert_eq!(
+            events(vec![Edge::blocker(v(0.5, 0.0), v(0.5, 0.3))]),
+            vec![v(0.5, 0.0), v(0.5, 0.3)]
+        );
+        assert_eq!(
+            events(vec![Edge::blocker(v(0.5, -0.5), v(0.5, 0.3))]),
+            vec![v(0.5, 0.3), v(0.5, 0.0)]
+        );
+        // A blocker outside the shaft, and one behind the floor.
+        assert_eq!(
+            shaft(vec![
+                Edge::blocker(v(1.5, 0.0), v(1.5, 1.0)),
+                Edge::blocker(v(0.0, -0.5), v(1.0, -0.1))
+            ]),
+            Shaft::Clear
+        );
+        // Back to back.
+        let back = Edge::surface(v(0.0, -1.0), v(1.0, -1.0), 0.5);
+        let kernel = Kernel::new(Scene::new(vec![floor, back]).unwrap());
+        assert_eq!(kernel.shaft(0, 1), Some(&Shaft::NoFacing));
+        // In a box, walls touching a shaft only at its corners do not make candidates; between
+        // opposite walls the side walls stay candidates: they block the corner-to-corner ray
+        // that runs along them (the grazing rule).
+        let kernel = Kernel::new(unit_box());
+        for (a, b) in [(0, 1), (1, 2), (2, 3), (0, 3)] {
+            assert_eq!(kernel.shaft(a, b), Some(&Shaft::Clear), "{a} {b}");
+        }
+        // They touch it only at its corners, so no event: every ray between interior points
+        // is visible, and only rays from a corner are still tested against them.
+        assert_eq!(
+            kernel.shaft(0, 2),
+            Some(&Shaft::Candidates(Candidates {
+                occluders: vec![1, 3].into(),
+                events: None,
+                interior: Some(true),
+            }))
+        );
+        assert_eq!(kernel.pair_class(0, 2), PairClass::Visible);
+        assert!(!kernel.visible(v(1.0, 0.0), 0, v(1.0, 1.0), 2));
+        assert!(kernel.visible(v(0.5, 0.0), 0, v(0.25, 1.0), 2));
+        assert_eq!(kernel.pair_visibility(0, 2), Some(PairVisibility::Clear));
+        assert_eq!(kernel.pair_visibility(0, 1), Some(PairVisibility::Clear));
+        assert_eq!(kernel.pair_visibility(0, 0), Some(PairVisibility::SameEdge));
+        assert_eq!(kernel.pair_visibility(0, 9), None);
+        // Subdivision does not multiply the shaft table: it is per parent edge.
+        let fine = Kernel::new(bundled("fig3").subdivide(1000).unwrap());
+        assert_eq!(fine.shafts.len(), 36);
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 200, ..ProptestConfig::default() })]
+
+        /// `V` is constant between the curves of the event points: two facing rays of one pair
+        /// that see every event point on the same side have the same visibility; pairs said to
+        /// be `Visible` or `Hidden` are so for every ray between interior points.
+        #[test]
+        fn visibility_is_constant_between_event_curves(seed in any::<u64>(), snap in any::<bool>()) {
+            let kernel = Kernel::new(random_scene(seed, snap));
+            let n = kernel.surface_parents();
+            let mut r = rng(seed ^ 0xe7e);
+            for _ in 0..50 {
+                let (a, b) = (r.random_range(0..n), r.random_range(0..n));
+                // Where an occluder lies on the line of one of the two edges, rounding of x or
+                // y decides whether a ray touches it (see `visible_brute_force`): skip.
+                let (ga, gb) = (kernel.surface_parents[a], kernel.surface_parents[b]);
+                let on_line = |g: usize, e: &crate::Edge| {
+                    let l = kernel.segments[g];
+                    use crate::visibility::orient;
+                    orient(l.a, l.b, e.a) == 0.0 && orient(l.a, l.b, e.b) == 0.0
+                };
+                if kernel.scene().edges().iter().enumerate().any(|(i, e)| {
+                    let g = kernel.scene().group_of(i);
+                    g != ga && g != gb && (on_line(ga, e) || on_line(gb, e))
+                }) {
+                    continue;
+                }
+                let class = kernel.pair_class(a, b);
+                let events = kernel.visibility_events(a, b);
+                prop_assert_eq!(class == PairClass::Varies, events.is_some(), "{:?} {:?}", class, events);
+                prop_assert_eq!(class, kernel.pair_class(b, a), "symmetric");
+                let mut seen: Vec<((DVec2, DVec2), bool)> = Vec::new();
+                for _ in 0..200 {
+                    let (s, t) = (r.random_range(0.0..1.0), r.random_range(0.0..1.0));
+                    let u = kernel.unoccluded(s, t);
+                    if (u.sender, u.receiver) != (a, b) || u.k == 0.0 {
+                        continue;
+                    }
+                    let visible = kernel.k(s, t) > 0.0;
+                    match class {
+                        // Only rounding can make G > 0 here (e.g. two coincident edges).
+                        PairClass::Zero => {}
+                        PairClass::Visible => prop_assert!(visible),
+                        PairClass::Hidden => prop_assert!(!visible),
+                        PairClass::Varies => {
+                            let e = events.as_ref().unwrap();
+                            if let Some((_, v)) = seen.iter().find(|(ray, _)| e.same_face(*ray, (u.x, u.y))) {
+                                prop_assert_eq!(*v, visible, "same face, other V: {} {} {:?} {:?} pair {} {} events {:?}", s, t, u.x, u.y, a, b, e);
+                            }
+                            seen.push(((u.x, u.y), visible));
+                            // Seen from y, the sender's face changes only at its breaks.
+                            let (pa, pb) = kernel.surface_parent(a);
+                            let breaks = e.sender_breaks(u.y);
+                            let at = |w: f64| pa + (pb - pa) * w;
+                            for _ in 0..8 {
+                                let (w1, w2) = (r.random_range(0.0..1.0), r.random_range(0.0..1.0));
+                                let between = breaks.iter().any(|&k| (k - w1) * (k - w2) <= 0.0);
+                                if !between {
+                                    prop_assert!(e.same_face((at(w1), u.y), (at(w2), u.y)), "{} {} {:?}", w1, w2, breaks);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,75 @@
+//! The values the kernel's queries return: a sample, a pair's class and visibility, `k` unoccluded.
+
+use glam::DVec2;
+
+use crate::scene::SurfacePoint;
+
+/// Everything [`Kernel::eval`](crate::Kernel::eval) knows about one `(s, t)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KernelSample {
+    /// Sender `x = point(s)`.
+    pub x: SurfacePoint,
+    /// Receiver `y = point(t)`.
+    pub y: SurfacePoint,
+    /// `G(x, y) = cos_x cos_y / (2 r)` (0 on the same parent edge or when `x = y`).
+    pub geometry: f64,
+    /// `V(x, y)`.
+    pub visible: bool,
+    /// `k(s, t)`, exactly what [`Kernel::k`](crate::Kernel::k) returns.
+    pub k: f64,
+    /// `ζ(s, t) = E'(e_x) · k(s, t)`.
+    pub zeta: f64,
+}
+
+/// How the visibility of a pair of surface edges is decided (see
+/// [`Kernel::pair_visibility`](crate::Kernel::pair_visibility)). Occluders are named by edge
+/// index (the first piece of a subdivided parent).
+#[derive(Clone, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum PairVisibility {
+    /// Two pieces of one edge (or the same edge): `k = 0`.
+    SameEdge,
+    /// The edges never face each other: `k = 0`, no ray.
+    NeverFacing,
+    /// No occluder cuts a facing ray between interior points of the edges: `V = 1`, no ray.
+    /// (A ray from an end point may still be checked: one running along a wall that touches
+    /// the pair's corner is blocked by the grazing rule.)
+    Clear,
+    /// This edge cuts every facing ray between interior points of the two edges: `V = 0`.
+    Blocked(usize),
+    /// Rays are needed, against these occluders only.
+    Rays(Vec<usize>),
+}
+
+/// How visibility behaves over all facing rays between interior points of two parent surface
+/// edges, known from geometry alone (see [`Kernel::pair_class`](crate::Kernel::pair_class)).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PairClass {
+    /// The same parent edge, or edges that never face each other: `k = 0`.
+    Zero,
+    /// Every such ray is visible: `V = 1`.
+    Visible,
+    /// Every such ray is blocked: `V = 0`.
+    Hidden,
+    /// Some rays are blocked and some are not; the boundaries are the curves of the pair's
+    /// [`Kernel::visibility_events`](crate::Kernel::visibility_events).
+    Varies,
+}
+
+/// The kernel at one `(s, t)` without its visibility: what geometry gives without a ray.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Unoccluded {
+    /// Rank of the sender's parent surface edge (its place among the parent surface edges in
+    /// parameter order; pieces of one subdivided edge share it).
+    pub sender: usize,
+    /// Rank of the receiver's parent surface edge.
+    pub receiver: usize,
+    /// The sender point `x = point(s)`.
+    pub x: DVec2,
+    /// The receiver point `y = point(t)`.
+    pub y: DVec2,
+    /// `ρ(e_y) · G(x, y)`: `k(s, t)` when `x` and `y` see each other (0 on one parent edge).
+    pub k: f64,
+    /// `E'(e_x) · ρ(e_y) · G(x, y)`: `ζ(s, t)` when `x` and `y` see each other.
+    pub zeta: f64,
+}

@@ -1,0 +1,124 @@
+//! The file schema of a scene (`RawScene`, `RawEdge`) and serde through validation.
+
+use glam::DVec2;
+use serde::{Deserialize, Serialize};
+
+use super::{Edge, Role, Scene};
+use crate::GeomError;
+
+impl Scene {
+    /// The serializable form.
+    pub(crate) fn to_raw(&self) -> RawScene {
+        RawScene {
+            edges: self.edges.iter().map(RawEdge::from).collect(),
+        }
+    }
+}
+
+/// The file schema of a scene, before validation.
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawScene {
+    pub edges: Vec<RawEdge>,
+}
+
+/// The file schema of an edge.
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawEdge {
+    a: [f64; 2],
+    b: [f64; 2],
+    reflectance: f64,
+    #[serde(default, skip_serializing_if = "is_zero")]
+    emission: f64,
+    #[serde(default, skip_serializing_if = "is_surface")]
+    role: Role,
+    #[serde(default, skip_serializing_if = "is_false")]
+    two_sided: bool,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
+}
+fn is_surface(r: &Role) -> bool {
+    *r == Role::Surface
+}
+fn is_false(b: &bool) -> bool {
+    !*b
+}
+
+impl From<&Edge> for RawEdge {
+    fn from(e: &Edge) -> Self {
+        RawEdge {
+            a: e.a.to_array(),
+            b: e.b.to_array(),
+            reflectance: e.reflectance,
+            emission: e.emission,
+            role: e.role,
+            two_sided: e.two_sided,
+        }
+    }
+}
+
+impl TryFrom<RawScene> for Scene {
+    type Error = GeomError;
+    fn try_from(raw: RawScene) -> Result<Scene, GeomError> {
+        Scene::new(
+            raw.edges
+                .into_iter()
+                .map(|e| Edge {
+                    a: DVec2::from_array(e.a),
+                    b: DVec2::from_array(e.b),
+                    reflectance: e.reflectance,
+                    emission: e.emission,
+                    role: e.role,
+                    two_sided: e.two_sided,
+                })
+                .collect(),
+        )
+    }
+}
+
+impl Serialize for Scene {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        self.to_raw().serialize(serializer)
+    }
+}
+
+impl<'de> Deserialize<'de> for Scene {
+    /// Deserializes through validation: an invalid scene is a deserialization error.
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Scene, D::Error> {
+        let raw = RawScene::deserialize(deserializer)?;
+        Scene::try_from(raw).map_err(serde::de::Error::custom)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn json_and_ron_round_trip_and_defaults() {
+        let text = r#"{"edges":[{"a":[0,0],"b":[1,0],"reflectance":0.5},
+            {"a":[1,0],"b":[0,1],"reflectance":0.5,"emission":2,"two_sided":true},
+            {"a":[0,1],"b":[0,0],"reflectance":0.5,"role":"blocker"}]}"#;
+        let scene = Scene::from_json_str(text).unwrap();
+        assert_eq!(scene.edges()[0].role, Role::Surface);
+        assert!(scene.edges()[1].two_sided);
+        assert_eq!(scene.edges()[2].role, Role::Blocker);
+        let dir = std::env::temp_dir().join(format!("flatland-geom-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for ext in ["ron", "json", "RON"] {
+            let path = dir.join(format!("scene.{ext}"));
+            scene.save(&path).unwrap();
+            assert_eq!(Scene::load(&path).unwrap(), scene, "{ext}");
+        }
+        let json = serde_json::to_string(&scene).unwrap();
+        assert_eq!(serde_json::from_str::<Scene>(&json).unwrap(), scene);
+        assert_eq!(
+            Scene::from_ron_str(&ron::to_string(&scene).unwrap()).unwrap(),
+            scene
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

@@ -1,0 +1,224 @@
+//! Where the visibility of a pair of parent edges can change: [`PairEvents`] and its event points.
+
+use std::collections::HashSet;
+
+use glam::DVec2;
+
+use super::bvh::Segment;
+use super::predicates::{
+    convex_hull, on_closed_segment, orient, proper_crossing, strictly_inside, strictly_opposite,
+};
+use super::shaft::Side;
+
+/// Where the visibility between two parent surface edges `P` and `Q` can change.
+///
+/// Visibility between `x` on `P` and `y` on `Q` changes only where the segment `x–y` sweeps
+/// over an **event point**: an end point of an occluder (the ray starts or stops meeting it),
+/// or a point where an occluder crosses `P` or `Q` (an end of the ray crosses the occluder's
+/// line on the occluder). A segment between interior points of `P` and `Q` lies inside the
+/// convex hull of the two edges, touching its boundary only at its ends, so only event points
+/// strictly inside that hull or on `P` or `Q` matter; the end points of `P` and `Q`
+/// themselves are events only where the other edge reaches that edge's line (a ray through
+/// one of them runs along that line). With no event point, visibility is the same for all rays
+/// between interior points of `P` and `Q`.
+///
+/// **Faces.** When `P` and `Q` both lie on the boundary of their convex hull, a ray through an
+/// event point has it between its ends, so in the `(s, t)` rectangle of the pair the rays
+/// through one event point form one arc from border to border, two arcs cross at most once (one
+/// line passes through two points), and the regions where a ray has every event point on the
+/// same side are connected: visibility is constant on each. An edge that crosses the other's
+/// line is first cut there into pieces that do not, giving up to four **sub-pairs**, each with
+/// its own event points. So two rays with the same [`PairEvents::sub_pair`] and the same side
+/// of each of that sub-pair's [`PairEvents::points`] have the same visibility.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PairEvents {
+    /// The lines of `P` and `Q` (end points).
+    p: [DVec2; 2],
+    q: [DVec2; 2],
+    /// Whether `P` strictly crosses the line of `Q`, and `Q` that of `P`.
+    split_p: bool,
+    split_q: bool,
+    /// Event points of sub-pair `2·side(x) + side(y)`.
+    sub: [Box<[DVec2]>; 4],
+}
+
+impl PairEvents {
+    /// The sub-pair (0..4) of the ray from `x` on `P` to `y` on `Q`: which side of the line of
+    /// `Q` `x` is on, if `P` crosses it, and which side of the line of `P` `y` is on.
+    #[must_use]
+    #[inline]
+    pub fn sub_pair(&self, x: DVec2, y: DVec2) -> usize {
+        let sx = self.split_p && orient(self.q[0], self.q[1], x) > 0.0;
+        let sy = self.split_q && orient(self.p[0], self.p[1], y) > 0.0;
+        2 * usize::from(sx) + usize::from(sy)
+    }
+
+    /// The event points of sub-pair `sub` (empty for a sub-pair that does not exist).
+    ///
+    /// # Panics
+    /// If `sub >= 4`.
+    #[must_use]
+    pub fn points(&self, sub: usize) -> &[DVec2] {
+        &self.sub[sub]
+    }
+
+    /// Whether two rays from `P` to `Q` lie in the same face: the same sub-pair and the same
+    /// [`PairEvents::side`] of each of its event points. Then their visibility is the same.
+    #[must_use]
+    pub fn same_face(&self, (x1, y1): (DVec2, DVec2), (x2, y2): (DVec2, DVec2)) -> bool {
+        let sub = self.sub_pair(x1, y1);
+        sub == self.sub_pair(x2, y2)
+            && self.sub[sub]
+                .iter()
+                .all(|&v| PairEvents::side(x1, y1, v) == PairEvents::side(x2, y2, v))
+    }
+
+    /// The side of the ray `x → y` an event point `v` is on: `true` if strictly left (exact).
+    #[must_use]
+    #[inline]
+    pub fn side(x: DVec2, y: DVec2, v: DVec2) -> bool {
+        orient(x, y, v) > 0.0
+    }
+
+    /// For rays from `P` to a fixed point `y` of `Q`: the parameters `u ∈ (0, 1)` along `P`
+    /// (from its start) where the face of the ray `x(u) → y` can change — where `x(u)`, `y`
+    /// and an event point are collinear, and where `P` crosses the line of `Q`. Sorted, no
+    /// duplicates; between two of them (and the ends) every ray lies in one face.
+    #[must_use]
+    pub fn sender_breaks(&self, y: DVec2) -> Vec<f64> {
+        let [a, b] = self.p;
+        let d = b - a;
+        let mut breaks: Vec<f64> = Vec::new();
+        for &v in self.sub.iter().flat_map(|points| points.iter()) {
+            let w = v - y;
+            let denominator = w.perp_dot(d);
+            if denominator != 0.0 {
+                breaks.push(w.perp_dot(y - a) / denominator);
+            }
+        }
+        if self.split_p {
+            let (oa, ob) = (
+                orient(self.q[0], self.q[1], a),
+                orient(self.q[0], self.q[1], b),
+            );
+            breaks.push(oa / (oa - ob));
+        }
+        breaks.retain(|u| *u > 0.0 && *u < 1.0);
+        breaks.sort_by(f64::total_cmp);
+        breaks.dedup();
+        breaks
+    }
+
+    /// The same events seen from `Q` to `P` (rays reversed).
+    #[must_use]
+    pub fn reversed(&self) -> PairEvents {
+        let [a, b, c, d] = self.sub.clone();
+        PairEvents {
+            p: self.q,
+            q: self.p,
+            split_p: self.split_q,
+            split_q: self.split_p,
+            // Index 2·side(x) + side(y) with the roles of x and y exchanged.
+            sub: [a, c, b, d],
+        }
+    }
+}
+
+/// The [`PairEvents`] of `p` and `q`: each edge cut where it crosses the other's line, and the
+/// event points of every resulting sub-pair.
+pub(super) fn pair_events(
+    segments: &[Segment],
+    candidates: &[u32],
+    p: Side,
+    q: Side,
+) -> PairEvents {
+    // The pieces of `own` on side 0 and side 1 of the line of `other` (one piece if it does not
+    // cross it, then on side 0).
+    let pieces = |own: Side, other: Side| -> (bool, [Option<Side>; 2]) {
+        let (oa, ob) = (
+            orient(other.a, other.b, own.a),
+            orient(other.a, other.b, own.b),
+        );
+        if !strictly_opposite(oa, ob) {
+            return (false, [Some(own), None]);
+        }
+        let z = own.a + (own.b - own.a) * (oa / (oa - ob));
+        let (first, second) = (Side { b: z, ..own }, Side { a: z, ..own });
+        // Side 1 is the positive side of the other's line.
+        let split = if oa > 0.0 {
+            [Some(second), Some(first)]
+        } else {
+            [Some(first), Some(second)]
+        };
+        (true, split)
+    };
+    let (split_p, p_pieces) = pieces(p, q);
+    let (split_q, q_pieces) = pieces(q, p);
+    let mut sub: [Box<[DVec2]>; 4] = Default::default();
+    for (sx, pp) in p_pieces.iter().enumerate() {
+        for (sy, qq) in q_pieces.iter().enumerate() {
+            if let (Some(pp), Some(qq)) = (pp, qq) {
+                sub[2 * sx + sy] = event_points(segments, candidates, *pp, *qq).into();
+            }
+        }
+    }
+    PairEvents {
+        p: [p.a, p.b],
+        q: [q.a, q.b],
+        split_p,
+        split_q,
+        sub,
+    }
+}
+
+/// The event points of the shaft between `p` and `q` with occluders `candidates` (see
+/// [`PairEvents`]): occluder end points strictly inside the hull of the two edges or on one of
+/// them (their own end points excepted) and the points where an occluder crosses `p` or `q`
+/// inside it.
+pub(super) fn event_points(
+    segments: &[Segment],
+    candidates: &[u32],
+    p: Side,
+    q: Side,
+) -> Vec<DVec2> {
+    let corners = [p.a, p.b, q.a, q.b];
+    // A ray from x on P through P's own end point runs along P's line, so it can only reach a
+    // point y of Q on that line. Unless Q lies on P's line there (its end point there is the
+    // pair's corner, a boundary of the (s, t) rectangle), that end point of P sweeps over no ray
+    // between interior points and is no event. Likewise for Q's end points.
+    let ignorable = |e: DVec2, own: Side, other: Side| {
+        (e == own.a || e == own.b)
+            && !on_closed_segment(e, other.a, other.b)
+            && !strictly_opposite(orient(own.a, own.b, other.a), orient(own.a, own.b, other.b))
+    };
+    let corner_of_only_one = |e: DVec2| ignorable(e, p, q) || ignorable(e, q, p);
+    let mut events: Vec<DVec2> = Vec::new();
+    // Points already pushed, by bit pattern (`+ 0.0` folds -0.0 into 0.0, as `==` does): a
+    // linear `contains` made the shaft of 10 000 blockers quadratic.
+    let mut seen: HashSet<[u64; 2]> = HashSet::new();
+    let mut push = |e: DVec2, events: &mut Vec<DVec2>| {
+        if !corner_of_only_one(e) && seen.insert([(e.x + 0.0).to_bits(), (e.y + 0.0).to_bits()]) {
+            events.push(e);
+        }
+    };
+    let hull = convex_hull(&corners);
+    for &i in candidates {
+        let s = segments[i as usize];
+        for e in [s.a, s.b] {
+            // A ray between interior points of P and Q runs inside the hull: it can sweep over
+            // a point inside it or on P or Q, never over one on the hull's other sides.
+            if strictly_inside(e, &hull)
+                || on_closed_segment(e, p.a, p.b)
+                || on_closed_segment(e, q.a, q.b)
+            {
+                push(e, &mut events);
+            }
+        }
+        for edge in [p, q] {
+            if let Some(c) = proper_crossing(s.a, s.b, edge.a, edge.b) {
+                push(c, &mut events);
+            }
+        }
+    }
+    events
+}
