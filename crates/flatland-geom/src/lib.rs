@@ -41,6 +41,7 @@
 
 pub mod bundled;
 mod error;
+pub mod generate;
 mod io;
 mod kernel;
 mod overlap;
