@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use flatland_geom::{Kernel, Scene};
-use kernel_fit::{Approximation, ModelFile};
+use kernel_fit::ModelFile;
 
 use crate::{interrupt, output};
 
@@ -63,7 +63,7 @@ pub fn run(args: &Args) -> Result<()> {
     interrupt::check()?;
     let values = reference.approximate_grid(&file.model);
     interrupt::check()?;
-    let cells = file.model.basis_functions();
+    let cells = file.model.network().len();
     let title = format!(
         "learned ζ of {} ({cells} cells), {r}×{r} grid",
         args.model.display(),

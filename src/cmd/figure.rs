@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use anyhow::Result;
-use kernel_fit::{Approximation, Fit, FitParams};
+use kernel_fit::{Fit, FitParams};
 
 use super::SceneArgs;
 use crate::report::figure::{PANELS, panels};
@@ -77,7 +77,7 @@ pub fn run(args: &Args) -> Result<()> {
     println!(
         "{label}: {} cells, relative L2 {}; wrote a_geometry, b_kernel, c_cells, \
          d_approximation, e_error (.png) to {}",
-        fit.basis_functions(),
+        fit.network().len(),
         defined.format(&summary.errors),
         args.out.display()
     );

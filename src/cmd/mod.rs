@@ -6,8 +6,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use flatland_geom::{Kernel, Scene};
+use flatland_solve::{Errors, Reference};
 use indicatif::{ProgressBar, ProgressStyle};
-use kernel_fit::{Errors, FitParams, REFERENCE_SEED, Reference, limits};
+use kernel_fit::{FitParams, REFERENCE_SEED, limits};
 
 pub mod bench;
 pub mod check;

@@ -8,11 +8,11 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use flatland_geom::{Kernel, Scene, write_atomic};
-use kernel_fit::baselines::{BlockValue, HrParams, UniformParams, run_hr_at_budget, run_uniform};
-use kernel_fit::solve::{
-    Comparison, ExactReference, KernelRepresentation, Mesh, SolveParams, Stop, solve_against,
+use flatland_solve::{
+    Comparison, ExactReference, Mesh, Representation, SolveError, SolveParams, Stop, solve_against,
 };
-use kernel_fit::{Fit, FitError, ModelFile};
+use kernel_fit::baselines::{BlockValue, HrParams, UniformParams, run_hr_at_budget, run_uniform};
+use kernel_fit::{Fit, ModelFile};
 
 use super::SceneArgs;
 use crate::interrupt;
@@ -119,7 +119,7 @@ fn output_of(path: &Path) -> Result<Output> {
 
 /// A built representation and what building it cost.
 struct Built {
-    rep: Box<dyn KernelRepresentation>,
+    rep: Box<dyn Representation>,
     build_s: f64,
 }
 
@@ -152,9 +152,9 @@ pub fn run(args: &Args) -> Result<()> {
 
     // Every long loop below polls Ctrl-C; nothing is written before the end.
     let stop: &Stop = &interrupt::requested;
-    let interrupted = |e: FitError| -> anyhow::Error {
+    let interrupted = |e: SolveError| -> anyhow::Error {
         match e {
-            FitError::Interrupted => interrupt::stopped().into(),
+            SolveError::Interrupted => interrupt::stopped().into(),
             other => other.into(),
         }
     };
@@ -241,7 +241,7 @@ fn scene_for(args: &Args, choice: &Choice) -> Result<(Scene, String)> {
 /// Builds the representation `choice` names (fits, baselines) on `kernel`.
 fn build(choice: &Choice, kernel: &Kernel, args: &Args) -> Result<Built> {
     let started = Instant::now();
-    let rep: Box<dyn KernelRepresentation> = match choice {
+    let rep: Box<dyn Representation> = match choice {
         Choice::Exact => Box::new(Kernel::new(kernel.scene().clone())),
         Choice::Model(path) => Box::new(ModelFile::load(path)?.model),
         Choice::Hr => {

@@ -7,7 +7,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use anyhow::Result;
-use kernel_fit::Reference;
+use flatland_solve::Reference;
 use kernel_fit::bench::{BenchPlan, BenchRow, Method, run_bench};
 
 use crate::cmd::{Defined, error_text};
@@ -77,7 +77,7 @@ pub fn write_outputs(dir: &Path, scene: &str, rows: &[BenchRow], defined: Define
     csv.write_record(CSV_HEADER)?;
     let field = |ok: bool, v: f64| if ok { v.to_string() } else { String::new() };
     for r in rows {
-        let solve = |f: fn(&kernel_fit::solve::SolveErrors) -> f64| {
+        let solve = |f: fn(&flatland_solve::SolveErrors) -> f64| {
             r.solve.as_ref().map_or(String::new(), |e| f(e).to_string())
         };
         csv.write_record([

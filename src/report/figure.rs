@@ -3,8 +3,9 @@
 
 use anyhow::{Result, anyhow};
 use flatland_geom::{Role, Scene};
+use flatland_solve::Reference;
+use kernel_fit::Fit;
 use kernel_fit::colormap::Scale;
-use kernel_fit::{Fit, Reference};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 

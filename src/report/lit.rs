@@ -5,7 +5,7 @@ use std::path::Path;
 
 use anyhow::{Result, anyhow};
 use flatland_geom::{Role, Scene};
-use kernel_fit::solve::{ExactReference, Mesh};
+use flatland_solve::{ExactReference, Mesh};
 use plotters::prelude::*;
 
 use crate::plot::{register_font, write_rgb_png};

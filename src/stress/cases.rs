@@ -8,7 +8,8 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use flatland_geom::{DVec2, Edge, Kernel, Role, Scene};
-use kernel_fit::{Fit, FitParams, Reference, StopReason};
+use flatland_solve::Reference;
+use kernel_fit::{Fit, FitParams, StopReason};
 use rand::RngExt;
 
 use super::support::*;
@@ -45,7 +46,7 @@ pub fn scale_cases(suite: &mut Suite, fig3: &Scene, baseline: &mut Baseline) {
                 let k = kernel.k_batch(&pairs);
                 row.see_all(k.iter().copied());
                 let scaled: Vec<f64> = k.iter().map(|k| k * scale).collect();
-                let diff = kernel_fit::relative_l2(&scaled, &base_k);
+                let diff = flatland_solve::relative_l2(&scaled, &base_k);
                 row.require(diff <= 1e-6, || {
                     format!("k·scale differs from the original by {diff:.2e} (relative L2)")
                 });
@@ -376,7 +377,7 @@ pub fn many_edges_case(suite: &mut Suite, maze: &Scene) {
             row.see_all(k.iter().copied());
             // Pieces are rounded copies of their parent, so a ray that passes within rounding of a
             // piece's end point may decide differently; the fields agree in L2.
-            let diff = kernel_fit::relative_l2(&k, &base_k);
+            let diff = flatland_solve::relative_l2(&k, &base_k);
             row.error = Some(diff);
             row.require(diff <= 1e-3, || {
                 format!("k differs from the maze's by {diff:.2e} (relative L2)")

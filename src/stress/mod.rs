@@ -252,7 +252,7 @@ fn table(rows: &[Row], quick: bool, secs: f64) -> String {
 mod tests {
     use super::*;
     use flatland_geom::{Edge, Kernel, Scene};
-    use kernel_fit::Errors;
+    use flatland_solve::Errors;
 
     fn unit_box(rho: f64) -> Kernel {
         let mut edges = room(&[v(0.0, 0.0), v(1.0, 0.0), v(1.0, 1.0), v(0.0, 1.0)], rho);

@@ -8,7 +8,8 @@ use std::sync::Arc;
 
 use anyhow::Result;
 use flatland_geom::{DVec2, Edge, Kernel, Scene};
-use kernel_fit::{Errors, Fit, FitParams, FitSummary, Reference};
+use flatland_solve::{Errors, Reference};
+use kernel_fit::{Fit, FitParams, FitSummary};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use sgcs::Network;

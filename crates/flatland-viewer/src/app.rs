@@ -14,7 +14,8 @@ use egui::{
     TextureHandle, TextureOptions, UiBuilder, Vec2,
 };
 use flatland_geom::{DVec2, Kernel, PairClass, Scene, bundled};
-use kernel_fit::{Approximation, FitParams, LearnedKernel, Preset, StopReason};
+use flatland_solve::Representation;
+use kernel_fit::{FitParams, LearnedKernel, Preset, StopReason};
 
 use crate::colormap::{grid_image, samples_image};
 use crate::settings::{SETTINGS_KEY, SceneChoice, Settings, live_params};
@@ -274,7 +275,7 @@ impl ViewerApp {
         self.fps_now
     }
     /// Final errors of the finished fit (after the refit), once the learner has them.
-    pub fn final_errors(&self) -> Option<kernel_fit::Errors> {
+    pub fn final_errors(&self) -> Option<flatland_solve::Errors> {
         self.status
             .as_ref()
             .and_then(|s| s.summary.as_ref())

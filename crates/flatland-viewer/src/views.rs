@@ -11,8 +11,8 @@ use egui::{
 };
 use egui_plot::{Legend, Line, LineStyle, Plot, PlotPoints, Polygon};
 use flatland_geom::{DVec2, GeomError, Role, Scene};
+use flatland_solve::Mesh;
 use kernel_fit::Snapshot;
-use kernel_fit::solve::Mesh;
 
 use kernel_fit::colormap::Scale;
 
@@ -1175,7 +1175,7 @@ mod drag_tests {
     use egui::{Event, PointerButton};
     use egui_kittest::Harness;
     use flatland_geom::Kernel;
-    use kernel_fit::Reference;
+    use flatland_solve::Reference;
 
     #[test]
     fn dragging_an_end_point_reports_the_move() {

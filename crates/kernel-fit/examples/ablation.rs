@@ -6,7 +6,7 @@
 use std::sync::Arc;
 
 use flatland_geom::{Kernel, Scene};
-use kernel_fit::Reference;
+use flatland_solve::Reference;
 use kernel_fit::ablation::{leave_one_out, path, run_variants};
 use kernel_fit::baselines::{HrParams, run_hr_at_budget};
 use kernel_fit::rooms::random_room;

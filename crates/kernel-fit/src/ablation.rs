@@ -9,7 +9,9 @@ use std::time::Instant;
 use flatland_geom::Kernel;
 use serde::{Deserialize, Serialize};
 
-use crate::{Fit, FitError, FitParams, FitSummary, Gating, Reference, Target};
+use flatland_solve::Reference;
+
+use crate::{Fit, FitError, FitParams, FitSummary, Gating, Target};
 
 /// One configuration of the learner.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -9,10 +9,12 @@ use flatland_geom::Kernel;
 use serde::{Deserialize, Serialize};
 
 use crate::baselines::{BaselineRun, HrParams, UniformParams, run_hr_at_budget, run_uniform};
-use crate::solve::{
-    ExactReference, KernelRepresentation, Mesh, SolveErrors, SolveParams, never, solve_against,
+use flatland_solve::{
+    Errors, ExactReference, Mesh, Reference, Representation, SolveErrors, SolveParams, never,
+    solve_against,
 };
-use crate::{Approximation, Errors, Fit, FitError, FitParams, Reference};
+
+use crate::{Fit, FitError, FitParams};
 
 /// A method the benchmark compares.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
@@ -245,7 +247,7 @@ impl Solver {
     }
 
     /// The errors of B solved with `rep`, and the solve's wall time.
-    fn score(&self, rep: &dyn KernelRepresentation) -> Result<(SolveErrors, f64), FitError> {
+    fn score(&self, rep: &dyn Representation) -> Result<(SolveErrors, f64), FitError> {
         let started = Instant::now();
         let c = solve_against(
             rep,
@@ -263,7 +265,7 @@ fn row(
     method: Method,
     budget: usize,
     seed: u64,
-    approx: &(impl Approximation + KernelRepresentation),
+    approx: &impl Representation,
     reference: &Reference,
     rays: u64,
     wall_s: f64,
@@ -280,18 +282,18 @@ fn row(
         method,
         budget,
         seed,
-        basis_functions: Approximation::basis_functions(approx),
+        basis_functions: approx.basis_functions().unwrap_or_default(),
         errors: reference.errors(approx),
         rays,
         wall_s,
-        memory_bytes: Approximation::memory_bytes(approx),
+        memory_bytes: approx.memory_bytes(),
         solve,
         solve_s,
     })
 }
 
 /// The row of a baseline run.
-fn baseline_row<A: Approximation + KernelRepresentation>(
+fn baseline_row<A: Representation>(
     method: Method,
     budget: usize,
     seed: u64,

@@ -106,7 +106,7 @@ impl Scale {
 /// drawn above the scale), the brightest of all when everything emits or nothing is lit; never
 /// 0.
 #[must_use]
-pub fn radiosity_top(mesh: &crate::solve::Mesh, b: &[f64]) -> f64 {
+pub fn radiosity_top(mesh: &flatland_solve::Mesh, b: &[f64]) -> f64 {
     let finite_max =
         |it: &mut dyn Iterator<Item = f64>| it.filter(|v| v.is_finite()).fold(0.0_f64, f64::max);
     let lit = finite_max(

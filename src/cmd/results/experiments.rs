@@ -6,14 +6,11 @@ use std::time::Instant;
 
 use anyhow::Result;
 use flatland_geom::Kernel;
+use flatland_solve::{Errors, Reference, SolveErrors, density_ratio, discontinuity_mask};
 use kernel_fit::ablation::{self, VariantRow};
 use kernel_fit::baselines::{BlockValue, HrParams, Oracle, count_initial_links, run_hr_at_budget};
 use kernel_fit::bench::{BenchPlan, BenchRow, Method, run_bench};
-use kernel_fit::solve::SolveErrors;
-use kernel_fit::{
-    Errors, Fit, FitParams, FitSummary, Preset, Reference, Resampling, density_ratio,
-    discontinuity_mask,
-};
+use kernel_fit::{Fit, FitParams, FitSummary, Preset, Resampling};
 
 use crate::cmd::Defined;
 use crate::interrupt;

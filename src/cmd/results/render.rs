@@ -534,7 +534,7 @@ fn rooms(doc: &mut String, f: &Findings) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use kernel_fit::Errors;
+    use flatland_solve::Errors;
 
     fn row(method: Method, grid: f64, heldout: f64) -> BenchRow {
         BenchRow {

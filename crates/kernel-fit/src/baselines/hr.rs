@@ -45,9 +45,13 @@
 //! (depth ≤ 2 log₂(edge length / min length)).
 
 use super::BaselineRun;
+use crate::FitError;
 use crate::seeds;
-use crate::{Approximation, FitError};
 use flatland_geom::{Kernel, PairClass};
+use flatland_solve::{
+    KernelRectangle, Mesh, RectangleOperator, Representation, SolveError, SolveParams, Stop,
+    TransferOperator, inverse_source_weights,
+};
 use glam::DVec2;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -797,7 +801,10 @@ fn estimate(
     (value, rays)
 }
 
-impl Approximation for HierarchicalRadiosity {
+/// HR: ζ̃ by descent of a pair's refinement tree; for a solve, its own links, each a rectangle
+/// of constant `ζ̃ / E'(sender edge)` (links never straddle an edge), applied by gather and
+/// push–pull ([`RectangleOperator`]).
+impl Representation for HierarchicalRadiosity {
     fn zeta(&self, s: f64, t: f64) -> f64 {
         let (Some(i), Some(j)) = (self.surfaces.locate(s), self.surfaces.locate(t)) else {
             return 0.0;
@@ -839,8 +846,8 @@ impl Approximation for HierarchicalRadiosity {
         }
     }
 
-    fn basis_functions(&self) -> usize {
-        self.stats.links
+    fn basis_functions(&self) -> Option<usize> {
+        Some(self.stats.links)
     }
 
     fn memory_bytes(&self) -> usize {
@@ -849,6 +856,27 @@ impl Approximation for HierarchicalRadiosity {
             + self.offsets.len() * size_of::<u32>()
             + self.pairs.len() * size_of::<(u32, u32)>()
             + self.surfaces.len() * 3 * size_of::<f64>() // edge id and parameter range
+    }
+
+    fn operator(
+        &self,
+        mesh: &Mesh,
+        _: &SolveParams,
+        stop: &Stop,
+    ) -> Result<Box<dyn TransferOperator>, SolveError> {
+        let inverse = inverse_source_weights(mesh)?;
+        if stop() {
+            return Err(SolveError::Interrupted);
+        }
+        let rectangles = self.links().into_iter().map(|link| {
+            let sender = mesh.elements()[mesh.element_at(0.5 * (link.s[0] + link.s[1]))];
+            KernelRectangle {
+                s: link.s,
+                t: link.t,
+                k: link.value * inverse[sender.mesh_edge],
+            }
+        });
+        Ok(Box::new(RectangleOperator::new(mesh, rectangles)))
     }
 }
 
@@ -891,7 +919,7 @@ pub fn run_hr_at_budget(
 mod tests {
     use super::*;
     use crate::baselines::test_support::{blocker_kernel, box_edges, box_kernel, kernel, surface};
-    use crate::{Reference, grid_point, relative_l2};
+    use flatland_solve::{Reference, grid_point, relative_l2};
 
     #[test]
     fn closed_box_links_twelve_ordered_pairs() {

@@ -1,8 +1,9 @@
 //! Baselines the SGCS fit is compared against: a uniform grid and hierarchical radiosity.
 //!
 //! Both approximate the same target as the network, ζ(s, t) over `[0, 1)²` (s = sender,
-//! t = receiver, docs/ALGORITHM.md §1), and both implement [`Approximation`], so
-//! [`Reference::errors`](crate::Reference::errors) measures them exactly as it measures SGCS.
+//! t = receiver, docs/ALGORITHM.md §1), and both implement [`Representation`], so
+//! [`Reference::errors`](flatland_solve::Reference::errors) measures them exactly as it measures
+//! SGCS and [`flatland_solve::solve`] lights a scene with them.
 //!
 //! - [`UniformGrid`]: a g × g piecewise-constant grid over (s, t); each block holds the mean ζ
 //!   of `m` random rays inside it. g² basis functions, g²·m rays.
@@ -20,7 +21,7 @@
 //!
 //! ```no_run
 //! use flatland_geom::{Kernel, Scene};
-//! use kernel_fit::Reference;
+//! use flatland_solve::Reference;
 //! use kernel_fit::baselines::{run_hr_at_budget, run_uniform, HrParams, UniformParams};
 //!
 //! let scene = Scene::load("scenes/fig3.ron").unwrap();
@@ -32,6 +33,8 @@
 //! ```
 
 mod hr;
+#[cfg(test)]
+mod solve_tests;
 mod uniform;
 
 pub use hr::{
@@ -40,7 +43,7 @@ pub use hr::{
 };
 pub use uniform::{BlockValue, UniformGrid, UniformParams, run_uniform};
 
-use crate::Approximation;
+use flatland_solve::Representation;
 use std::time::Duration;
 
 /// One baseline run: what `flatland bench` records per method, budget and seed.
@@ -58,9 +61,11 @@ pub struct BaselineRun<A> {
     pub memory_bytes: usize,
 }
 
-impl<A: Approximation> BaselineRun<A> {
+impl<A: Representation> BaselineRun<A> {
     fn new(approx: A, rays: u64, wall: Duration) -> Self {
-        let basis_functions = approx.basis_functions();
+        let basis_functions = approx
+            .basis_functions()
+            .expect("a baseline counts its basis functions");
         let memory_bytes = approx.memory_bytes();
         BaselineRun {
             approx,

@@ -7,9 +7,13 @@
 //! beat.
 
 use super::BaselineRun;
+use crate::FitError;
 use crate::seeds;
-use crate::{Approximation, FitError};
 use flatland_geom::Kernel;
+use flatland_solve::{
+    KernelRectangle, Mesh, RectangleOperator, Representation, SolveError, SolveParams, Stop,
+    TransferOperator, inverse_source_weights,
+};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::time::Instant;
@@ -147,7 +151,7 @@ impl UniformGrid {
 /// A grid of exact block means (no rays).
 fn exact_grid(kernel: &Kernel, g: usize, block_value: BlockValue) -> UniformGrid {
     let weighted = block_value == BlockValue::ExactZetaMean;
-    let values = crate::solve::exact_block_means(kernel, g, weighted, &crate::solve::never)
+    let values = flatland_solve::exact_block_means(kernel, g, weighted, &flatland_solve::never)
         .expect("never interrupted; the scene's own mesh");
     let scene = kernel.scene();
     let sender_weights = if weighted {
@@ -191,7 +195,10 @@ fn next_below(x: f64) -> f64 {
     f64::from_bits(x.to_bits() - 1)
 }
 
-impl Approximation for UniformGrid {
+/// The uniform grid: ζ̃ by block lookup; for a solve, each block is a rectangle. Blocks of ζ are
+/// split where they straddle a sender edge (each part divided by its own E'); blocks of k
+/// ([`BlockValue::ExactKernelMean`]) are used as they are.
+impl Representation for UniformGrid {
     fn zeta(&self, s: f64, t: f64) -> f64 {
         let value = self.values[self.block(s) * self.g + self.block(t)];
         if self.sender_weights.is_empty() {
@@ -204,12 +211,48 @@ impl Approximation for UniformGrid {
         value * self.sender_weights[k].1
     }
 
-    fn basis_functions(&self) -> usize {
-        self.values.len()
+    fn basis_functions(&self) -> Option<usize> {
+        Some(self.values.len())
     }
 
     fn memory_bytes(&self) -> usize {
         self.values.len() * std::mem::size_of::<f64>()
+    }
+
+    fn operator(
+        &self,
+        mesh: &Mesh,
+        _: &SolveParams,
+        stop: &Stop,
+    ) -> Result<Box<dyn TransferOperator>, SolveError> {
+        let g = self.g();
+        let of_k = self.block_value() == BlockValue::ExactKernelMean;
+        let inverse = if of_k {
+            vec![1.0; mesh.edges().len()]
+        } else {
+            inverse_source_weights(mesh)?
+        };
+        if stop() {
+            return Err(SolveError::Interrupted);
+        }
+        let mut rectangles = Vec::with_capacity(g * g * 2);
+        for i in 0..g {
+            let s = [i as f64 / g as f64, (i + 1) as f64 / g as f64];
+            for (k, edge) in mesh.edges().iter().enumerate() {
+                let part = [s[0].max(edge.s[0]), s[1].min(edge.s[1])];
+                if part[1] <= part[0] {
+                    continue;
+                }
+                for j in 0..g {
+                    rectangles.push(KernelRectangle {
+                        s: part,
+                        t: [j as f64 / g as f64, (j + 1) as f64 / g as f64],
+                        k: self.values()[i * g + j] * inverse[k],
+                    });
+                }
+            }
+        }
+        Ok(Box::new(RectangleOperator::new(mesh, rectangles)))
     }
 }
 
@@ -240,7 +283,7 @@ pub fn run_uniform(
 mod tests {
     use super::*;
     use crate::baselines::test_support::{blocker_kernel, box_kernel};
-    use crate::{Reference, grid_point};
+    use flatland_solve::{Reference, grid_point};
 
     #[test]
     fn error_falls_with_g() {

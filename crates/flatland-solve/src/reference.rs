@@ -10,16 +10,7 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
-/// Anything that approximates the learning target ζ(s, t) over `[0, 1)²`: the SGCS network,
-/// the hierarchical-radiosity and uniform baselines.
-pub trait Approximation: Sync {
-    /// The approximated ζ at `(s, t)`.
-    fn zeta(&self, s: f64, t: f64) -> f64;
-    /// Number of basis functions (cells, links, blocks) the representation holds.
-    fn basis_functions(&self) -> usize;
-    /// Bytes the representation needs in memory (its payload, not allocator slack).
-    fn memory_bytes(&self) -> usize;
-}
+use crate::Representation;
 
 /// The errors of one approximation against a [`Reference`].
 ///
@@ -100,7 +91,7 @@ impl Reference {
     }
 
     /// Evaluates an approximation on the reference grid (row-major, row ↔ s), in parallel.
-    pub fn approximate_grid(&self, approx: &dyn Approximation) -> Vec<f64> {
+    pub fn approximate_grid(&self, approx: &dyn Representation) -> Vec<f64> {
         let res = self.res;
         (0..res * res)
             .into_par_iter()
@@ -112,7 +103,7 @@ impl Reference {
     }
 
     /// Every error measure of `approx`.
-    pub fn errors(&self, approx: &dyn Approximation) -> Errors {
+    pub fn errors(&self, approx: &dyn Representation) -> Errors {
         let grid = self.approximate_grid(approx);
         let predicted: Vec<f64> = self
             .heldout_points

@@ -4,7 +4,7 @@ use std::ops::Range;
 
 use flatland_geom::{DVec2, Kernel, Scene};
 
-use crate::{FitError, InputFrame};
+use crate::{InputFrame, SolveError};
 
 /// A surface edge as the solver sees it: a whole edge of the scene (all pieces of an edge that
 /// [`Scene::subdivide`] cut, which share one line and one material), with its elements.
@@ -99,10 +99,10 @@ impl Mesh {
     /// length). Sections are the parts of a surface edge between its ends and the junctions
     /// where other edges touch or cross it ([`MeshEdge::junctions`]). Errors name the valid
     /// range: at least [`Mesh::min_elements`], at most [`MAX_ELEMENTS`].
-    pub fn new(kernel: &Kernel, elements: usize) -> Result<Mesh, FitError> {
+    pub fn new(kernel: &Kernel, elements: usize) -> Result<Mesh, SolveError> {
         let fewest = Mesh::min_elements(kernel.scene());
         if elements < fewest || elements > MAX_ELEMENTS {
-            return Err(FitError::InvalidParameter {
+            return Err(SolveError::InvalidParameter {
                 name: "elements",
                 value: elements.to_string(),
                 valid: if elements > MAX_ELEMENTS {
@@ -116,7 +116,7 @@ impl Mesh {
         Mesh::build(kernel, elements)
     }
 
-    fn build(kernel: &Kernel, elements: usize) -> Result<Mesh, FitError> {
+    fn build(kernel: &Kernel, elements: usize) -> Result<Mesh, SolveError> {
         let scene = kernel.scene();
         let runs = surface_runs(scene);
         let total_length = scene.total_length();
@@ -215,7 +215,7 @@ impl Mesh {
     }
 
     /// One element per section of a surface edge: the coarsest mesh (no limit on the count).
-    pub fn coarsest(kernel: &Kernel) -> Result<Mesh, FitError> {
+    pub fn coarsest(kernel: &Kernel) -> Result<Mesh, SolveError> {
         Mesh::build(kernel, Mesh::min_elements(kernel.scene()))
     }
 
@@ -290,7 +290,7 @@ impl Mesh {
     }
 
     /// Element `i`'s end points and midpoint in the unit frame.
-    pub(crate) fn local(&self, i: usize) -> [DVec2; 3] {
+    pub fn local(&self, i: usize) -> [DVec2; 3] {
         self.local[i]
     }
 
@@ -374,7 +374,7 @@ fn apportion(lengths: &[f64], total: usize) -> Vec<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::solve::test_support::bundled;
+    use crate::test_support::bundled;
 
     #[test]
     fn elements_tile_the_parameter_range_in_order_and_never_straddle_edges() {

@@ -3,8 +3,7 @@
 
 use rayon::prelude::*;
 
-use super::{Mesh, Stop};
-use crate::FitError;
+use crate::{Mesh, SolveError, Stop};
 
 /// The discrete operator K of `B = E + K B` on a [`Mesh`]: what a solver iterates with.
 pub trait TransferOperator: Send + Sync {
@@ -33,13 +32,13 @@ const ROWS_PER_TASK: usize = 8;
 impl DenseOperator {
     /// Fills row `i` (receiver element `i`, all N senders) with `row(i, &mut row)`, rows in
     /// parallel. `stop` is polled once per row; when it says so the assembly ends with
-    /// [`FitError::Interrupted`]. Entries that are not finite are an error (they would poison
+    /// [`SolveError::Interrupted`]. Entries that are not finite are an error (they would poison
     /// the solve), naming the row and column.
     pub fn assemble(
         n: usize,
         row: impl Fn(usize, &mut [f64]) + Sync,
         stop: &Stop,
-    ) -> Result<DenseOperator, FitError> {
+    ) -> Result<DenseOperator, SolveError> {
         let mut k = vec![0.0; n * n];
         if n > 0 {
             k.par_chunks_mut(n)
@@ -47,11 +46,11 @@ impl DenseOperator {
                 .enumerate()
                 .try_for_each(|(i, out)| {
                     if stop() {
-                        return Err(FitError::Interrupted);
+                        return Err(SolveError::Interrupted);
                     }
                     row(i, out);
                     match out.iter().position(|v| !v.is_finite()) {
-                        Some(j) => Err(FitError::NonFiniteOperator { row: i, column: j }),
+                        Some(j) => Err(SolveError::NonFiniteOperator { row: i, column: j }),
                         None => Ok(()),
                     }
                 })?;
@@ -218,8 +217,8 @@ impl TransferOperator for RectangleOperator {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::solve::never;
-    use crate::solve::test_support::bundled;
+    use crate::never;
+    use crate::test_support::bundled;
     use flatland_geom::Kernel;
     use rand::{RngExt, SeedableRng};
     use rand_chacha::ChaCha8Rng;
@@ -248,7 +247,7 @@ mod tests {
     #[test]
     fn dense_assembly_stops_and_refuses_non_finite_entries() {
         let err = DenseOperator::assemble(50, |_, row| row.fill(1.0), &|| true).unwrap_err();
-        assert!(matches!(err, FitError::Interrupted), "{err}");
+        assert!(matches!(err, SolveError::Interrupted), "{err}");
         let err = DenseOperator::assemble(
             4,
             |i, row| {

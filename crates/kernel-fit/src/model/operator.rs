@@ -10,11 +10,12 @@
 //! solve sees exactly the kernel the model represents.
 
 use flatland_geom::{Kernel, PairClass};
+use flatland_solve::{
+    DenseOperator, Mesh, Receiver, Sender, SolveError, Stop, check_scene, point_to_segment,
+    receiver, sender,
+};
 
-use super::exact::{check_scene, receiver, sender};
-use super::transfer::{Sender, point_to_segment};
-use super::{DenseOperator, Mesh, Stop};
-use crate::{FitError, LearnedKernel};
+use crate::LearnedKernel;
 
 /// `K_ij = ρ_i ∫_{element j} G(x, y_i) Ṽ(x, y_i) dl_x` of a visibility model on `mesh`.
 pub(crate) fn visibility_operator(
@@ -22,7 +23,7 @@ pub(crate) fn visibility_operator(
     kernel: &Kernel,
     mesh: &Mesh,
     stop: &Stop,
-) -> Result<DenseOperator, FitError> {
+) -> Result<DenseOperator, SolveError> {
     check_scene(kernel, mesh)?;
     let (edges, elements) = (mesh.edges(), mesh.elements());
     // The rank of each mesh edge's parent surface edge.
@@ -88,7 +89,7 @@ fn piecewise(
     width: f64,
     bounds: &[f64],
     v: &[f64],
-    r: &super::transfer::Receiver,
+    r: &Receiver,
 ) -> f64 {
     let element = &mesh.elements()[j];
     let whole = sender(mesh, j);
@@ -124,12 +125,15 @@ mod tests {
 
     use super::*;
     use crate::baselines::{BlockValue, HrParams, UniformParams, run_hr_at_budget, run_uniform};
-    use crate::solve::test_support::bundled;
-    use crate::solve::{
-        ExactReference, KernelRepresentation, SolveParams, never, quadrature_operator,
+    use crate::{Fit, FitParams};
+    use flatland_solve::{
+        ExactReference, Reference, Representation, SolveParams, never, quadrature_operator,
         solve_against,
     };
-    use crate::{Fit, FitParams, Reference};
+
+    fn bundled(name: &str) -> flatland_geom::Scene {
+        flatland_geom::bundled::scene(name).expect("bundled scene")
+    }
 
     fn learned(name: &str, cells: usize) -> (Arc<Kernel>, LearnedKernel) {
         let kernel = Arc::new(Kernel::new(bundled(name)));
@@ -174,7 +178,7 @@ mod tests {
             let mesh = Mesh::new(&kernel, 128).unwrap();
             let reference = ExactReference::new(&kernel, 1024, &params, &never).unwrap();
             let exact = reference.radiosity_on(&mesh, &never).unwrap();
-            let error = |rep: &dyn KernelRepresentation| {
+            let error = |rep: &dyn Representation| {
                 solve_against(rep, &mesh, &exact, &params, &never)
                     .unwrap()
                     .errors

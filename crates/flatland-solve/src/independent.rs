@@ -154,8 +154,8 @@ fn path(scene: &Scene, mut edge: usize, mut y: DVec2, first: f64, rng: &mut ChaC
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::solve::test_support::{bundled, l_room};
-    use crate::solve::{ExactReference, Mesh, SolveParams, never};
+    use crate::test_support::{bundled, l_room};
+    use crate::{ExactReference, Mesh, SolveParams, never};
     use flatland_geom::Kernel;
     use rayon::prelude::*;
 

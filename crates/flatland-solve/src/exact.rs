@@ -10,9 +10,8 @@
 use flatland_geom::{DVec2, Kernel, PairVisibility};
 use rayon::prelude::*;
 
-use super::transfer::{Receiver, Sender, point_to_segment, point_to_segment_visible};
-use super::{DenseOperator, Mesh, Stop};
-use crate::FitError;
+use crate::transfer::{Receiver, Sender, point_to_segment, point_to_segment_visible};
+use crate::{DenseOperator, Mesh, SolveError, Stop};
 
 /// How light passes between two surface edges of a mesh.
 #[derive(Clone, Debug, PartialEq)]
@@ -34,7 +33,7 @@ pub(crate) struct PairTable {
 
 impl PairTable {
     /// Classifies every pair of `mesh`'s edges with `kernel`'s shaft test.
-    pub(crate) fn new(kernel: &Kernel, mesh: &Mesh) -> Result<PairTable, FitError> {
+    pub(crate) fn new(kernel: &Kernel, mesh: &Mesh) -> Result<PairTable, SolveError> {
         check_scene(kernel, mesh)?;
         let scene = kernel.scene();
         let edges = mesh.edges();
@@ -99,12 +98,12 @@ impl PairTable {
 }
 
 /// Refuses a mesh made for another scene.
-pub(crate) fn check_scene(kernel: &Kernel, mesh: &Mesh) -> Result<(), FitError> {
+pub fn check_scene(kernel: &Kernel, mesh: &Mesh) -> Result<(), SolveError> {
     let actual = kernel.scene().fingerprint();
     if actual == mesh.fingerprint() {
         Ok(())
     } else {
-        Err(FitError::SceneMismatch {
+        Err(SolveError::SceneMismatch {
             representation: format!("{actual:016x}"),
             mesh: format!("{:016x}", mesh.fingerprint()),
         })
@@ -112,7 +111,7 @@ pub(crate) fn check_scene(kernel: &Kernel, mesh: &Mesh) -> Result<(), FitError> 
 }
 
 /// The receiver at frame point `y` on mesh edge `edge`.
-pub(crate) fn receiver(mesh: &Mesh, edge: usize, y: DVec2) -> Receiver {
+pub fn receiver(mesh: &Mesh, edge: usize, y: DVec2) -> Receiver {
     let e = &mesh.edges()[edge];
     Receiver {
         position: y,
@@ -122,7 +121,7 @@ pub(crate) fn receiver(mesh: &Mesh, edge: usize, y: DVec2) -> Receiver {
 }
 
 /// Element `j` as a sender, in frame coordinates.
-pub(crate) fn sender(mesh: &Mesh, j: usize) -> Sender {
+pub fn sender(mesh: &Mesh, j: usize) -> Sender {
     let e = mesh.edge_of(j);
     let [a, b, _] = mesh.local(j);
     Sender {
@@ -170,7 +169,7 @@ pub fn exact_operator(
     kernel: &Kernel,
     mesh: &Mesh,
     stop: &Stop,
-) -> Result<DenseOperator, FitError> {
+) -> Result<DenseOperator, SolveError> {
     let table = PairTable::new(kernel, mesh)?;
     exact_operator_with(&table, mesh, stop)
 }
@@ -179,7 +178,7 @@ pub(crate) fn exact_operator_with(
     table: &PairTable,
     mesh: &Mesh,
     stop: &Stop,
-) -> Result<DenseOperator, FitError> {
+) -> Result<DenseOperator, SolveError> {
     DenseOperator::assemble(
         mesh.len(),
         |i, row| {
@@ -220,14 +219,15 @@ const BLOCK_POINTS: usize = 8;
 /// The exact mean over each block of a `g × g` grid of `(s, t)` of `ζ` (`weighted`) or of `k`,
 /// row-major (row ↔ s). The integral over `s` is exact (closed form with exact visibility, per
 /// sender edge, so each part gets its own E'); the one over `t` is composite Gauss–Legendre
-/// ([`BLOCK_PANELS`] × [`BLOCK_POINTS`] points per receiver edge in the block), which converges
-/// because the inner integral is continuous in `t`. No ray is cast.
-pub(crate) fn exact_block_means(
+/// (`BLOCK_PANELS` × `BLOCK_POINTS` = 32 × 8 points per receiver edge in the block), which
+/// converges because the inner integral is continuous in `t`. No ray is cast. The uniform
+/// grid's exact block values (`flatland_baselines::BlockValue`) are these.
+pub fn exact_block_means(
     kernel: &Kernel,
     g: usize,
     weighted: bool,
     stop: &Stop,
-) -> Result<Vec<f64>, FitError> {
+) -> Result<Vec<f64>, SolveError> {
     block_means_with(kernel, g, weighted, BLOCK_PANELS, stop)
 }
 
@@ -237,13 +237,13 @@ fn block_means_with(
     weighted: bool,
     panels: usize,
     stop: &Stop,
-) -> Result<Vec<f64>, FitError> {
+) -> Result<Vec<f64>, SolveError> {
     let mesh = Mesh::coarsest(kernel)?;
     let table = PairTable::new(kernel, &mesh)?;
-    let (nodes, weights) = super::gauss_legendre(BLOCK_POINTS);
+    let (nodes, weights) = crate::gauss_legendre(BLOCK_POINTS);
     let l = mesh.total_length();
     let edges = mesh.edges();
-    let overlap = |range: [f64; 2], edge: &super::MeshEdge| {
+    let overlap = |range: [f64; 2], edge: &crate::MeshEdge| {
         let part = [range[0].max(edge.s[0]), range[1].min(edge.s[1])];
         (part[1] > part[0]).then_some(part)
     };
@@ -258,7 +258,7 @@ fn block_means_with(
         .into_par_iter()
         .map_init(Vec::new, |scratch, block| {
             if stop() {
-                return Err(FitError::Interrupted);
+                return Err(SolveError::Interrupted);
             }
             let (i, j) = (block / g, block % g);
             let s_range = [i as f64 / g as f64, (i + 1) as f64 / g as f64];
@@ -322,8 +322,8 @@ fn block_means_with(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::solve::never;
-    use crate::solve::test_support::{bundled, l_room};
+    use crate::never;
+    use crate::test_support::{bundled, l_room};
 
     #[test]
     fn exact_operator_rows_agree_with_the_kernel_integrated_by_rays() {

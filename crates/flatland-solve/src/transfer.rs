@@ -170,7 +170,7 @@ fn shadow(y: DVec2, p0: DVec2, p1: DVec2, c0: DVec2, c1: DVec2) -> Option<[f64; 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::solve::quadrature::{gauss_legendre, integrate};
+    use crate::quadrature::{gauss_legendre, integrate};
     use flatland_geom::{Edge, Kernel, Scene};
     use rand::{RngExt, SeedableRng};
     use rand_chacha::ChaCha8Rng;

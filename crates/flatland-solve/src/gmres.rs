@@ -5,8 +5,7 @@
 //! a two-sided edge with ρ > ½ or a learned kernel that overshoots. GMRES needs only that
 //! `I − K` be invertible, and on the bundled scenes reaches 1e-10 in 10–20 products with K.
 
-use super::{Stop, TransferOperator};
-use crate::FitError;
+use crate::{SolveError, Stop, TransferOperator};
 
 /// Krylov vectors kept before a restart.
 const RESTART: usize = 40;
@@ -50,7 +49,7 @@ pub(crate) fn solve(
     tolerance: f64,
     max_iterations: usize,
     stop: &Stop,
-) -> Result<Converged, FitError> {
+) -> Result<Converged, SolveError> {
     let n = e.len();
     let norm_e = norm(e);
     if norm_e == 0.0 {
@@ -67,7 +66,7 @@ pub(crate) fn solve(
     let mut basis: Vec<Vec<f64>> = Vec::with_capacity(m + 1);
     loop {
         if stop() {
-            return Err(FitError::Interrupted);
+            return Err(SolveError::Interrupted);
         }
         apply_system(op, x, &mut r);
         for (ri, ei) in r.iter_mut().zip(e) {
@@ -76,7 +75,7 @@ pub(crate) fn solve(
         let beta = norm(&r);
         let residual = beta / norm_e;
         if !residual.is_finite() || (residual > tolerance && iterations >= max_iterations) {
-            return Err(FitError::NotConverged {
+            return Err(SolveError::NotConverged {
                 iterations,
                 residual,
                 tolerance,
@@ -98,7 +97,7 @@ pub(crate) fn solve(
         let mut steps = 0;
         for k in 0..m {
             if stop() {
-                return Err(FitError::Interrupted);
+                return Err(SolveError::Interrupted);
             }
             apply_system(op, &basis[k], &mut w);
             iterations += 1;
@@ -161,7 +160,7 @@ pub(crate) fn solve(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::solve::{DenseOperator, never};
+    use crate::{DenseOperator, never};
     use rand::{RngExt, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
@@ -240,9 +239,9 @@ mod tests {
         // Rows summing to exactly 1 and light inside: I − K is singular, no finite answer.
         let mut x = vec![1.0; 2];
         let err = solve(&op, &[1.0, 0.0], &mut x, 1e-10, 50, &never).unwrap_err();
-        assert!(matches!(err, FitError::NotConverged { .. }), "{err}");
+        assert!(matches!(err, SolveError::NotConverged { .. }), "{err}");
         assert!(x.iter().all(|v| v.is_finite()));
         let err = solve(&op, &[1.0, 0.0], &mut [1.0; 2], 1e-10, 50, &|| true).unwrap_err();
-        assert!(matches!(err, FitError::Interrupted));
+        assert!(matches!(err, SolveError::Interrupted));
     }
 }

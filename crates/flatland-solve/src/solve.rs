@@ -1,71 +1,6 @@
-//! Solve the Flatland radiosity equation with any kernel representation.
-//!
-//! `B(y) = E(y) + ρ(y) ∫ G(x, y) V(x, y) B(x) dl_x` on the surface edges; in the kernel's
-//! parameters, `B(t) = E(t) + ∫ k(s, t) B(s) L ds`. B is the radiosity *leaving* a point,
-//! emission included; `B − E` is the reflected part, the only part a kernel decides.
-//!
-//! **Discretisation.** A [`Mesh`] splits every surface edge into elements (never straddling
-//! two edges, default count from the scene: [`Mesh::default_elements`]); B is constant per
-//! element and the equation is collocated at element midpoints `y_i`:
-//! `B_i = E_i + Σ_j K_ij B_j`, `K_ij = ρ_i ∫_{element j} G(x, y_i) V(x, y_i) dl_x`.
-//! Midpoint collocation is second-order accurate away from corners.
-//!
-//! **Operators.** Each representation supplies its `K` through one trait,
-//! [`KernelRepresentation`]:
-//! - the exact kernel ([`flatland_geom::Kernel`]): the closed-form point-to-segment transfer
-//!   `(sin φ₂ − sin φ₁) / 2` where the shaft test proves a pair of edges clear, and the exact
-//!   visible part of each element elsewhere — no rays, no quadrature, so the solve converges as
-//!   elements are refined ([`exact_operator`]);
-//! - the default learned model ([`LearnedKernel`](crate::LearnedKernel), which keeps `G`
-//!   exact and learns `V`): the closed-form transfer of each piece of an element between the
-//!   faces of the visibility structure, times the model's `Ṽ` on that face — its own kernel,
-//!   integrated exactly, with no ray; the paper's network (which learns ζ itself): Gauss–Legendre
-//!   quadrature of `k̃ = ζ̃ / E'` (the default of the trait, [`quadrature_operator`]);
-//! - hierarchical radiosity and the uniform grid: their own links or blocks, gathered and
-//!   pushed–pulled ([`RectangleOperator`]).
-//!
-//! **Energy.** In a closed room of one-sided surfaces without blockers every sender's light
-//! lands on a surface (`∫ G V dl_y = 1`), so the power the surfaces absorb, `∫ (1 − ρ) H dl`
-//! with H the irradiance `(B − E) / ρ`, equals the power emitted, `∫ E dl` (tested to 0.2 % at
-//! 512 elements). Blockers absorb too. A two-sided surface sends its one B from both sides,
-//! so its emitted power counts twice.
-//!
-//! **Linear solve.** Restarted GMRES on `(I − K) B = E` to a relative residual
-//! [`SolveParams::tolerance`] (default 1e-10); it needs only `I − K` invertible, not `‖K‖ < 1`.
-//!
-//! **Errors.** [`ExactReference`] solves the exact kernel on a fine mesh once and gives the
-//! exact B at any mesh's collocation points (by the equation itself: `E + ρ ∫ G V B` with the
-//! fine B, the Nyström interpolation). [`solve_errors`] then measures a solution's relative L2
-//! error (element lengths as weights), of B and of the reflected part `B − E`.
-//! [`solve_against`] does both for one representation: what a view or a benchmark row needs.
-//!
-//! ```
-//! use flatland_geom::{DVec2, Edge, Kernel, Scene};
-//! use kernel_fit::solve::{Mesh, SolveParams, never, solve};
-//!
-//! // A closed square room, uniform ρ = 0.5 and E = 1 everywhere: B = E / (1 − ρ) = 2.
-//! let p = [DVec2::new(0.0, 0.0), DVec2::new(1.0, 0.0), DVec2::new(1.0, 1.0), DVec2::new(0.0, 1.0)];
-//! let edges = (0..4).map(|i| Edge::surface(p[i], p[(i + 1) % 4], 0.5).with_emission(1.0)).collect();
-//! let kernel = Kernel::new(Scene::new(edges)?);
-//! let mesh = Mesh::new(&kernel, 64)?;
-//! let solution = solve(&kernel, &mesh, &SolveParams::default(), &never)?;
-//! assert!(solution.radiosity.iter().all(|b| (b - 2.0).abs() < 1e-9));
-//! # Ok::<(), Box<dyn std::error::Error>>(())
-//! ```
-
-mod exact;
-mod gmres;
-mod learned;
-mod mesh;
-mod operator;
-mod quadrature;
-mod represent;
-mod transfer;
-
-#[cfg(test)]
-mod independent;
-#[cfg(test)]
-pub(crate) mod test_support;
+//! The solve itself: its settings, the solution, `B = E + K B` by GMRES with any
+//! representation's operator, a solution's errors, and the exact reference every solved B is
+//! compared with.
 
 use std::time::Instant;
 
@@ -73,17 +8,11 @@ use flatland_geom::Kernel;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::FitError;
-pub use exact::exact_operator;
-pub(crate) use exact::{PairTable, exact_block_means};
-pub use mesh::{DEFAULT_ELEMENTS, Element, MAX_ELEMENTS, MIN_PER_EDGE, Mesh, MeshEdge};
-pub use operator::{DenseOperator, KernelRectangle, RectangleOperator, TransferOperator};
-pub use quadrature::gauss_legendre;
-pub use represent::{KernelRepresentation, inverse_source_weights, quadrature_operator};
-pub use transfer::{Receiver, Sender, point_to_segment, point_to_segment_visible};
+use crate::exact::{self, PairTable};
+use crate::{MAX_ELEMENTS, Mesh, Representation, SolveError, TransferOperator, gmres};
 
 /// The stop flag of every long loop here: polled between rows and iterations; when it returns
-/// `true` the work ends with [`FitError::Interrupted`].
+/// `true` the work ends with [`SolveError::Interrupted`].
 pub type Stop = dyn Fn() -> bool + Sync;
 
 /// A [`Stop`] that never stops.
@@ -116,9 +45,9 @@ impl Default for SolveParams {
 
 impl SolveParams {
     /// Checks every field; the error names it and its valid range.
-    pub fn validate(&self) -> Result<(), FitError> {
+    pub fn validate(&self) -> Result<(), SolveError> {
         let bad =
-            |name, value: String, valid| Err(FitError::InvalidParameter { name, value, valid });
+            |name, value: String, valid| Err(SolveError::InvalidParameter { name, value, valid });
         if !(self.tolerance > 0.0 && self.tolerance <= 0.1) {
             return bad("tolerance", self.tolerance.to_string(), "in (0, 0.1]");
         }
@@ -160,12 +89,12 @@ impl Solution {
 }
 
 /// Solves `B = E + K B` on `mesh` with `rep`'s operator.
-pub fn solve<R: KernelRepresentation + ?Sized>(
+pub fn solve<R: Representation + ?Sized>(
     rep: &R,
     mesh: &Mesh,
     params: &SolveParams,
     stop: &Stop,
-) -> Result<Solution, FitError> {
+) -> Result<Solution, SolveError> {
     params.validate()?;
     let started = Instant::now();
     let op = rep.operator(mesh, params, stop)?;
@@ -181,10 +110,10 @@ pub fn solve_operator(
     mesh: &Mesh,
     params: &SolveParams,
     stop: &Stop,
-) -> Result<Solution, FitError> {
+) -> Result<Solution, SolveError> {
     params.validate()?;
     if op.len() != mesh.len() {
-        return Err(FitError::InvalidParameter {
+        return Err(SolveError::InvalidParameter {
             name: "operator",
             value: format!("{} elements", op.len()),
             valid: "an operator built on the mesh being solved",
@@ -240,7 +169,7 @@ pub fn solve_errors(mesh: &Mesh, b: &[f64], exact: &[f64]) -> SolveErrors {
 }
 
 fn weighted_relative_l2(approx: &[f64], exact: &[f64], weights: &[f64]) -> f64 {
-    let scale = crate::eval::largest_finite(approx, exact);
+    let scale = crate::reference::largest_finite(approx, exact);
     if scale == 0.0 {
         return 0.0;
     }
@@ -273,7 +202,7 @@ impl ExactReference {
         elements: usize,
         params: &SolveParams,
         stop: &Stop,
-    ) -> Result<ExactReference, FitError> {
+    ) -> Result<ExactReference, SolveError> {
         params.validate()?;
         let mesh = Mesh::new(kernel, elements)?;
         let started = Instant::now();
@@ -311,9 +240,9 @@ impl ExactReference {
     /// The exact B at the collocation points of `mesh` (a mesh of the same scene): the
     /// equation itself evaluated there, `E + ρ Σ_j B_j ∫_{fine element j} G V`, with the
     /// exact transfer. Rows in parallel; `stop` polled per point.
-    pub fn radiosity_on(&self, mesh: &Mesh, stop: &Stop) -> Result<Vec<f64>, FitError> {
+    pub fn radiosity_on(&self, mesh: &Mesh, stop: &Stop) -> Result<Vec<f64>, SolveError> {
         if mesh.fingerprint() != self.mesh.fingerprint() {
-            return Err(FitError::SceneMismatch {
+            return Err(SolveError::SceneMismatch {
                 representation: format!("{:016x}", self.mesh.fingerprint()),
                 mesh: format!("{:016x}", mesh.fingerprint()),
             });
@@ -326,7 +255,7 @@ impl ExactReference {
                 || vec![0.0; self.mesh.len()],
                 |row, i| {
                     if stop() {
-                        return Err(FitError::Interrupted);
+                        return Err(SolveError::Interrupted);
                     }
                     let edge = mesh.edge_of(i);
                     let k = mesh.elements()[i].mesh_edge;
@@ -360,15 +289,15 @@ pub struct Comparison {
 
 /// Solves with `rep` on `mesh` and measures the errors against `exact` (the exact B at the
 /// mesh's collocation points, from [`ExactReference::radiosity_on`]).
-pub fn solve_against<R: KernelRepresentation + ?Sized>(
+pub fn solve_against<R: Representation + ?Sized>(
     rep: &R,
     mesh: &Mesh,
     exact: &[f64],
     params: &SolveParams,
     stop: &Stop,
-) -> Result<Comparison, FitError> {
+) -> Result<Comparison, SolveError> {
     if exact.len() != mesh.len() {
-        return Err(FitError::InvalidParameter {
+        return Err(SolveError::InvalidParameter {
             name: "exact",
             value: format!("{} values", exact.len()),
             valid: "one exact B per element of the mesh",
@@ -381,10 +310,10 @@ pub fn solve_against<R: KernelRepresentation + ?Sized>(
 
 #[cfg(test)]
 mod tests {
-    use super::test_support::{bundled, l_room, room};
     use super::*;
-    use crate::baselines::{BlockValue, HrParams, UniformGrid, UniformParams, run_hr_at_budget};
-    use flatland_geom::{DVec2, Edge, KernelParams, Scene};
+    use crate::test_support::{bundled, l_room, room};
+    use crate::{exact_operator, quadrature_operator};
+    use flatland_geom::{DVec2, Edge, Scene};
     use rand::{RngExt, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
@@ -543,108 +472,6 @@ mod tests {
     }
 
     #[test]
-    fn every_representation_solves_through_the_one_trait() {
-        let kernel = Kernel::new(bundled("fig3"));
-        let mesh = Mesh::new(&kernel, 256).unwrap();
-        let params = SolveParams::default();
-        let truth = ExactReference::new(&kernel, 2048, &params, &never)
-            .unwrap()
-            .radiosity_on(&mesh, &never)
-            .unwrap();
-        let exact_b = solve_against(&kernel, &mesh, &truth, &params, &never).unwrap();
-        assert!(
-            exact_b.errors.rel_l2_reflected < 5e-3,
-            "{:?}",
-            exact_b.errors
-        );
-        let hr = run_hr_at_budget(&kernel, 400, 1, &HrParams::default())
-            .unwrap()
-            .approx;
-        let uniform = UniformGrid::build(&kernel, 20, &UniformParams::default(), 1).unwrap();
-        let exact_means = |block_value| {
-            UniformGrid::build(
-                &kernel,
-                20,
-                &UniformParams {
-                    block_value,
-                    ..UniformParams::default()
-                },
-                1,
-            )
-            .unwrap()
-        };
-        let reps: Vec<(&str, &dyn KernelRepresentation)> = vec![("hr", &hr), ("uniform", &uniform)];
-        for (name, rep) in reps {
-            let c = solve_against(rep, &mesh, &truth, &params, &never).unwrap();
-            assert!(c.solution.radiosity.iter().all(|b| b.is_finite()), "{name}");
-            assert!(
-                c.errors.rel_l2_reflected.is_finite()
-                    && c.errors.rel_l2_reflected > exact_b.errors.rel_l2_reflected,
-                "{name}: {:?}",
-                c.errors
-            );
-            println!("fig3, {name} at 400: {:?}", c.errors);
-        }
-        for block_value in [BlockValue::ExactZetaMean, BlockValue::ExactKernelMean] {
-            let grid = exact_means(block_value);
-            let c = solve_against(&grid, &mesh, &truth, &params, &never).unwrap();
-            println!("fig3, uniform {block_value:?} 20×20: {:?}", c.errors);
-            assert!(c.errors.rel_l2_reflected.is_finite());
-        }
-    }
-
-    #[test]
-    fn piecewise_constant_operators_equal_brute_force_integration_of_their_own_zeta() {
-        // HR's gather/push–pull and the uniform grid's blocks against ∫ ζ̃(s, t_i) / E' L ds by
-        // dense midpoint sampling of their own ζ̃ (which jumps where a link or block ends inside
-        // an element, so the sampling error is below jump / samples per element).
-        let kernel = Kernel::new(bundled("fig3"));
-        let mesh = Mesh::new(&kernel, 60).unwrap();
-        let params = SolveParams::default();
-        let hr = run_hr_at_budget(&kernel, 200, 1, &HrParams::default())
-            .unwrap()
-            .approx;
-        let grid = UniformGrid::build(&kernel, 12, &UniformParams::default(), 1).unwrap();
-        let k_grid = UniformGrid::build(
-            &kernel,
-            12,
-            &UniformParams {
-                block_value: BlockValue::ExactKernelMean,
-                ..UniformParams::default()
-            },
-            1,
-        )
-        .unwrap();
-        let inverse = inverse_source_weights(&mesh).unwrap();
-        let reps: [&dyn KernelRepresentation; 3] = [&hr, &grid, &k_grid];
-        let samples = 4000;
-        for rep in reps {
-            let fast = solve(rep, &mesh, &params, &never).unwrap();
-            let els = mesh.elements();
-            let brute = DenseOperator::assemble(
-                mesh.len(),
-                |i, row| {
-                    for (j, e) in els.iter().enumerate() {
-                        let sum: f64 = (0..samples)
-                            .map(|q| {
-                                let s =
-                                    e.s[0] + (e.s[1] - e.s[0]) * (q as f64 + 0.5) / samples as f64;
-                                rep.zeta(s, els[i].s_mid)
-                            })
-                            .sum();
-                        row[j] = sum / samples as f64 * e.length * inverse[e.mesh_edge];
-                    }
-                },
-                &never,
-            )
-            .unwrap();
-            let slow = solve_operator(&brute, &mesh, &params, &never).unwrap();
-            let e = solve_errors(&mesh, &fast.radiosity, &slow.radiosity);
-            assert!(e.rel_l2_reflected < 1e-3, "{e:?}");
-        }
-    }
-
-    #[test]
     fn the_default_quadrature_of_the_exact_zeta_approaches_the_exact_operator() {
         // The generic path (ζ̃ / E' by Gauss–Legendre) fed the exact ζ: what it loses is only
         // quadrature at shadow edges and next to corners, and it shrinks with more points.
@@ -666,48 +493,6 @@ mod tests {
     }
 
     #[test]
-    fn representations_of_zeta_refuse_zero_source_weights_and_other_scenes() {
-        let scene = bundled("fig3");
-        let kernel = Kernel::with_params(
-            scene.clone(),
-            KernelParams {
-                emission_floor: 0.0,
-            },
-        )
-        .unwrap();
-        let mesh = Mesh::new(&kernel, 64).unwrap();
-        let grid = UniformGrid::build(&kernel, 4, &UniformParams::default(), 1).unwrap();
-        let err = solve(&grid, &mesh, &SolveParams::default(), &never)
-            .unwrap_err()
-            .to_string();
-        assert!(
-            err.contains("surface edge 0 has source weight E' = 0"),
-            "{err}"
-        );
-        // The exact kernel needs no E'.
-        assert!(solve(&kernel, &mesh, &SolveParams::default(), &never).is_ok());
-        // A mesh of another scene.
-        let other = Mesh::new(&Kernel::new(bundled("box")), 64).unwrap();
-        let err = solve(&kernel, &other, &SolveParams::default(), &never)
-            .unwrap_err()
-            .to_string();
-        assert!(err.contains("fingerprint"), "{err}");
-        // Stop.
-        let err = solve(&kernel, &mesh, &SolveParams::default(), &|| true).unwrap_err();
-        assert!(matches!(err, FitError::Interrupted), "{err}");
-        let bad = SolveParams {
-            tolerance: 0.0,
-            ..SolveParams::default()
-        };
-        assert!(
-            solve(&kernel, &mesh, &bad, &never)
-                .unwrap_err()
-                .to_string()
-                .contains("tolerance")
-        );
-    }
-
-    #[test]
     fn a_closed_white_room_with_a_light_is_refused_not_nan() {
         let p = [v(0.0, 0.0), v(1.0, 0.0), v(1.0, 1.0), v(0.0, 1.0)];
         let scene = room(&p, 1.0, 1.0);
@@ -718,7 +503,7 @@ mod tests {
             ..SolveParams::default()
         };
         let err = solve(&kernel, &mesh, &params, &never).unwrap_err();
-        assert!(matches!(err, FitError::NotConverged { .. }), "{err}");
+        assert!(matches!(err, SolveError::NotConverged { .. }), "{err}");
     }
 
     #[test]
