@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use anyhow::Result;
-use kernel_fit::bench::{BenchPlan, Method};
+use flatland_lab::bench::{BenchPlan, Method};
 
 use super::SceneArgs;
 use crate::report::bench::{OUTPUTS, run_kept, table, write_outputs};

@@ -7,8 +7,8 @@ use std::path::Path;
 use std::sync::Arc;
 
 use anyhow::Result;
+use flatland_lab::bench::{BenchPlan, BenchRow, Method, run_bench};
 use flatland_solve::Reference;
-use kernel_fit::bench::{BenchPlan, BenchRow, Method, run_bench};
 
 use crate::cmd::{Defined, error_text};
 use crate::interrupt;

@@ -3,9 +3,9 @@
 
 use anyhow::{Result, anyhow};
 use flatland_geom::{Role, Scene};
+use flatland_lab::colormap::Scale;
 use flatland_solve::Reference;
 use kernel_fit::Fit;
-use kernel_fit::colormap::Scale;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 

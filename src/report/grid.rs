@@ -5,7 +5,7 @@ use std::path::Path;
 
 use anyhow::{Context, bail};
 use flatland_geom::write_atomic;
-use kernel_fit::colormap::Scale;
+use flatland_lab::colormap::Scale;
 
 use crate::interrupt;
 use crate::plot::{Heatmap, heatmap_png};

@@ -26,7 +26,7 @@ const HEIGHT: u32 = 760;
 const SCENE_WIDTH: u32 = 760;
 
 fn inferno(x: f64) -> RGBColor {
-    let [r, g, b] = kernel_fit::colormap::inferno(x);
+    let [r, g, b] = flatland_lab::colormap::inferno(x);
     RGBColor(r, g, b)
 }
 
@@ -63,7 +63,7 @@ fn draw_scene(area: &Area<'_>, p: &Picture<'_>) -> DrawResult {
             (centre.x - span / 2.0)..(centre.x + span / 2.0),
             (centre.y - span / 2.0)..(centre.y + span / 2.0),
         )?;
-    let top = kernel_fit::colormap::radiosity_top(p.mesh, p.b);
+    let top = flatland_lab::colormap::radiosity_top(p.mesh, p.b);
     for edge in p.scene.edges().iter().filter(|e| e.role == Role::Blocker) {
         chart.draw_series(LineSeries::new(
             [(edge.a.x, edge.a.y), (edge.b.x, edge.b.y)],

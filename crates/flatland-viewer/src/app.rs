@@ -24,7 +24,7 @@ use crate::worker::{
     APPROX_RES, Approx, Command, Lit, LitState, REFERENCE_RES, Status, WorkerHandle, World,
     error_text, format_errors,
 };
-use kernel_fit::colormap::Scale;
+use flatland_lab::colormap::Scale;
 
 /// How [`crate::run_with`] starts the viewer. The default starts learning at once.
 #[derive(Clone, Debug, Default)]

@@ -14,7 +14,7 @@ use flatland_geom::{DVec2, GeomError, Role, Scene};
 use flatland_solve::Mesh;
 use kernel_fit::Snapshot;
 
-use kernel_fit::colormap::Scale;
+use flatland_lab::colormap::Scale;
 
 use crate::colormap::colour;
 use crate::lit::LitPoint;
@@ -480,7 +480,7 @@ fn scale_bar(painter: &Painter, frame: &PlotFrame, scale: Scale, text: Color32) 
         text,
     );
     let ticks: Vec<f64> = if scale.log {
-        let decades = kernel_fit::colormap::LOG_DECADES;
+        let decades = flatland_lab::colormap::LOG_DECADES;
         (0..=decades as usize).map(|d| d as f64 / decades).collect()
     } else {
         vec![0.0, 0.5, 1.0]

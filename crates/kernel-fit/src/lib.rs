@@ -64,16 +64,12 @@
 
 #![deny(missing_docs)]
 
-pub mod ablation;
 pub mod baselines;
-pub mod bench;
-pub mod colormap;
 mod error;
 mod fit;
 pub mod limits;
 mod model;
 mod params;
-pub mod rooms;
 pub mod seeds;
 mod versioned;
 mod visibility;

@@ -10,8 +10,6 @@ pub const FIT_INITIAL: u64 = 1;
 pub const FIT_RESAMPLE: u64 = 2;
 /// The order a fit presents its samples in.
 pub const FIT_TRAIN: u64 = 3;
-/// The random validation rooms ([`crate::rooms`]).
-pub const ROOMS: u64 = 0x5ce7e;
 
 /// A seed for item `item` of a run with `seed` (the baselines' per-link and per-grid draws):
 /// the SplitMix64 finaliser, so neighbouring items get unrelated seeds.

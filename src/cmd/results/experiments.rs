@@ -6,10 +6,10 @@ use std::time::Instant;
 
 use anyhow::Result;
 use flatland_geom::Kernel;
+use flatland_lab::ablation::{self, VariantRow};
+use flatland_lab::bench::{BenchPlan, BenchRow, Method, run_bench};
 use flatland_solve::{Errors, Reference, SolveErrors, density_ratio, discontinuity_mask};
-use kernel_fit::ablation::{self, VariantRow};
 use kernel_fit::baselines::{BlockValue, HrParams, Oracle, count_initial_links, run_hr_at_budget};
-use kernel_fit::bench::{BenchPlan, BenchRow, Method, run_bench};
 use kernel_fit::{Fit, FitParams, FitSummary, Preset, Resampling};
 
 use crate::cmd::Defined;
@@ -249,7 +249,7 @@ pub fn bench(
 
 /// Random rooms the project was never tuned on: every method at [`HEADLINE_BUDGET`], one seed.
 pub fn room(seed: u64) -> Result<SceneBench> {
-    let kernel = Arc::new(Kernel::new(kernel_fit::rooms::random_room(seed)?));
+    let kernel = Arc::new(Kernel::new(flatland_lab::rooms::random_room(seed)?));
     let reference = Arc::new(reference_of(&kernel));
     let plan = plan(vec![HEADLINE_BUDGET], 1);
     let rows = run_bench(&kernel, &reference, &plan, |_, _| {})?;

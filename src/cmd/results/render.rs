@@ -3,7 +3,7 @@
 use std::fmt::Write as _;
 
 use anyhow::Result;
-use kernel_fit::bench::{BenchRow, Method};
+use flatland_lab::bench::{BenchRow, Method};
 use kernel_fit::{FitParams, FitSummary, Resampling};
 
 use super::Findings;
@@ -133,7 +133,7 @@ fn verdict(doc: &mut String, f: &Findings) -> Result<()> {
         doc,
         "Seed means; ratios are learned / HR (below 1: the learned kernel wins; the paper's \
          claim reads ≤ {PAPER_RATIO}, our goal is ≤ {GOAL_RATIO}). The random rooms are \
-         generated from a seed (`kernel_fit::rooms::random_room`) and were never used to choose \
+         generated from a seed (`flatland_lab::rooms::random_room`) and were never used to choose \
          a default. \"Blocks\" is the solve with exact 20 × 20 block means of k, the best \
          piecewise-constant kernel of that size.\n"
     )?;
@@ -521,7 +521,7 @@ fn rooms(doc: &mut String, f: &Findings) -> Result<()> {
     writeln!(
         doc,
         "Every method at {HEADLINE_BUDGET} basis functions, seed 1, on rooms drawn by \
-         `kernel_fit::rooms::random_room(seed)`:\n"
+         `flatland_lab::rooms::random_room(seed)`:\n"
     )?;
     for b in &f.rooms {
         writeln!(doc, "### {}\n", b.scene)?;

@@ -1,15 +1,15 @@
 //! What each idea of the default learner earns on some scenes, against hierarchical radiosity:
-//! `cargo run --release -p kernel-fit --example ablation -- [CELLS] [SEEDS] [SCENES]` where
+//! `cargo run --release -p flatland-lab --example ablation -- [CELLS] [SEEDS] [SCENES]` where
 //! SCENES is a comma-separated list of bundled scene names and `roomN` (random room N), e.g.
 //! `fig3,maze,room3`. `flatland results` writes the same tables into RESULTS.md.
 
 use std::sync::Arc;
 
 use flatland_geom::{Kernel, Scene};
+use flatland_lab::ablation::{leave_one_out, path, run_variants};
+use flatland_lab::rooms::random_room;
 use flatland_solve::Reference;
-use kernel_fit::ablation::{leave_one_out, path, run_variants};
 use kernel_fit::baselines::{HrParams, run_hr_at_budget};
-use kernel_fit::rooms::random_room;
 
 fn scene(name: &str) -> Scene {
     match name.strip_prefix("room") {

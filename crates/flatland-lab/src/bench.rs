@@ -6,23 +6,24 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use flatland_geom::Kernel;
-use serde::{Deserialize, Serialize};
-
-use crate::baselines::{BaselineRun, HrParams, UniformParams, run_hr_at_budget, run_uniform};
 use flatland_solve::{
     Errors, ExactReference, Mesh, Reference, Representation, SolveErrors, SolveParams, never,
     solve_against,
 };
+use kernel_fit::baselines::{BaselineRun, HrParams, UniformParams, run_hr_at_budget, run_uniform};
+use serde::{Deserialize, Serialize};
 
-use crate::{Fit, FitError, FitParams};
+use kernel_fit::{Fit, FitParams};
+
+use crate::LabError;
 
 /// A method the benchmark compares.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Method {
-    /// The project's learner ([`Preset::Default`](crate::Preset::Default)).
+    /// The project's learner ([`Preset::Default`](kernel_fit::Preset::Default)).
     Sgcs,
-    /// The paper's network with the least-squares output refit ([`Preset::Paper`](crate::Preset::Paper); one fit
+    /// The paper's network with the least-squares output refit ([`Preset::Paper`](kernel_fit::Preset::Paper); one fit
     /// gives this row and the next).
     SgcsPaper,
     /// The paper's network with its delta-rule output weights only.
@@ -55,11 +56,11 @@ impl Method {
     }
 
     /// Parses a name as [`Method::name`] writes it.
-    pub fn parse(name: &str) -> Result<Method, FitError> {
+    pub fn parse(name: &str) -> Result<Method, LabError> {
         Method::ALL
             .into_iter()
             .find(|m| m.name() == name)
-            .ok_or_else(|| FitError::InvalidParameter {
+            .ok_or_else(|| LabError::InvalidParameter {
                 name: "methods",
                 value: name.to_owned(),
                 valid: "a comma-separated list of sgcs, sgcs-paper, sgcs-paper-norefit, hr, uniform",
@@ -133,9 +134,9 @@ impl BenchPlan {
     }
 
     /// Checks the plan; errors name the parameter and the valid range.
-    pub fn validate(&self) -> Result<(), FitError> {
+    pub fn validate(&self) -> Result<(), LabError> {
         let bad =
-            |name, value: String, valid| Err(FitError::InvalidParameter { name, value, valid });
+            |name, value: String, valid| Err(LabError::InvalidParameter { name, value, valid });
         if self.methods.is_empty() {
             return bad(
                 "methods",
@@ -155,7 +156,8 @@ impl BenchPlan {
         self.fit.validate()?;
         self.paper.validate()?;
         self.hr.check()?;
-        self.uniform.check()
+        self.uniform.check()?;
+        Ok(())
     }
 }
 
@@ -168,7 +170,7 @@ pub fn run_bench(
     reference: &Arc<Reference>,
     plan: &BenchPlan,
     mut progress: impl FnMut(usize, usize),
-) -> Result<Vec<BenchRow>, FitError> {
+) -> Result<Vec<BenchRow>, LabError> {
     plan.validate()?;
     let total = plan.methods.len() * plan.budgets.len() * plan.seeds as usize;
     let mut rows = Vec::with_capacity(total);
@@ -234,7 +236,7 @@ struct Solver {
 }
 
 impl Solver {
-    fn new(kernel: &Kernel, elements: usize) -> Result<Solver, FitError> {
+    fn new(kernel: &Kernel, elements: usize) -> Result<Solver, LabError> {
         let mesh = Mesh::new(kernel, elements)?;
         let reference = ExactReference::new(
             kernel,
@@ -247,7 +249,7 @@ impl Solver {
     }
 
     /// The errors of B solved with `rep`, and the solve's wall time.
-    fn score(&self, rep: &dyn Representation) -> Result<(SolveErrors, f64), FitError> {
+    fn score(&self, rep: &dyn Representation) -> Result<(SolveErrors, f64), LabError> {
         let started = Instant::now();
         let c = solve_against(
             rep,
@@ -270,7 +272,7 @@ fn row(
     rays: u64,
     wall_s: f64,
     solver: Option<&Solver>,
-) -> Result<BenchRow, FitError> {
+) -> Result<BenchRow, LabError> {
     let (solve, solve_s) = match solver {
         Some(solver) => {
             let (errors, s) = solver.score(approx)?;
@@ -300,7 +302,7 @@ fn baseline_row<A: Representation>(
     run: BaselineRun<A>,
     reference: &Reference,
     solver: Option<&Solver>,
-) -> Result<BenchRow, FitError> {
+) -> Result<BenchRow, LabError> {
     let wall_s = run.wall.as_secs_f64();
     row(
         method,
@@ -322,7 +324,7 @@ fn learner_row(
     budget: usize,
     seed: u64,
     solver: Option<&Solver>,
-) -> Result<BenchRow, FitError> {
+) -> Result<BenchRow, LabError> {
     let params = FitParams {
         target_cells: budget,
         seed,
@@ -357,7 +359,7 @@ fn paper_rows(
     budget: usize,
     seed: u64,
     solver: Option<&Solver>,
-) -> Result<(BenchRow, BenchRow), FitError> {
+) -> Result<(BenchRow, BenchRow), LabError> {
     let params = FitParams {
         target_cells: budget,
         seed,

@@ -10,9 +10,13 @@
 use flatland_geom::{DVec2, Edge, GeomError, Scene};
 use rand::RngExt;
 
+/// The seed stream of the rooms (`flatland_solve::seeds::stream`): no other draw of a seed
+/// shares it.
+const ROOMS_STREAM: u64 = 0x5ce7e;
+
 /// The random room of `seed` (see the module docs).
 pub fn random_room(seed: u64) -> Result<Scene, GeomError> {
-    let mut r = crate::seeds::stream(seed, crate::seeds::ROOMS);
+    let mut r = flatland_solve::seeds::stream(seed, ROOMS_STREAM);
     let v = DVec2::new;
     let (w, h) = (r.random_range(2.0..8.0), r.random_range(2.0..5.0));
     let kind = r.random_range(0..3);

@@ -7,11 +7,9 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use flatland_geom::Kernel;
-use serde::{Deserialize, Serialize};
-
 use flatland_solve::Reference;
-
-use crate::{Fit, FitError, FitParams, FitSummary, Gating, Target};
+use kernel_fit::{Fit, FitError, FitParams, FitSummary, Gating, Target};
+use serde::{Deserialize, Serialize};
 
 /// One configuration of the learner.
 #[derive(Clone, Copy, Debug, PartialEq)]
