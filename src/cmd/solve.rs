@@ -7,11 +7,11 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
+use flatland_baselines::{BlockValue, HrParams, UniformParams, run_hr_at_budget, run_uniform};
 use flatland_geom::{Kernel, Scene, write_atomic};
 use flatland_solve::{
     Comparison, ExactReference, Mesh, Representation, SolveError, SolveParams, Stop, solve_against,
 };
-use kernel_fit::baselines::{BlockValue, HrParams, UniformParams, run_hr_at_budget, run_uniform};
 use kernel_fit::{Fit, ModelFile};
 
 use super::SceneArgs;

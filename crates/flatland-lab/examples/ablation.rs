@@ -5,11 +5,11 @@
 
 use std::sync::Arc;
 
+use flatland_baselines::{HrParams, run_hr_at_budget};
 use flatland_geom::{Kernel, Scene};
 use flatland_lab::ablation::{leave_one_out, path, run_variants};
 use flatland_lab::rooms::random_room;
 use flatland_solve::Reference;
-use kernel_fit::baselines::{HrParams, run_hr_at_budget};
 
 fn scene(name: &str) -> Scene {
     match name.strip_prefix("room") {

@@ -5,12 +5,12 @@ use std::ops::ControlFlow;
 use std::sync::Arc;
 use std::time::Instant;
 
+use flatland_baselines::{BaselineRun, HrParams, UniformParams, run_hr_at_budget, run_uniform};
 use flatland_geom::Kernel;
 use flatland_solve::{
     Errors, ExactReference, Mesh, Reference, Representation, SolveErrors, SolveParams, never,
     solve_against,
 };
-use kernel_fit::baselines::{BaselineRun, HrParams, UniformParams, run_hr_at_budget, run_uniform};
 use serde::{Deserialize, Serialize};
 
 use kernel_fit::{Fit, FitParams};

@@ -17,6 +17,9 @@ pub enum LabError {
     /// The learner refused something or stopped (its message, unchanged).
     #[error(transparent)]
     Fit(#[from] kernel_fit::FitError),
+    /// A baseline refused its parameters (its message, unchanged).
+    #[error(transparent)]
+    Baseline(#[from] flatland_baselines::BaselineError),
     /// The solver refused something or stopped (its message, unchanged).
     #[error(transparent)]
     Solve(#[from] flatland_solve::SolveError),

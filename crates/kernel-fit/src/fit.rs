@@ -883,11 +883,11 @@ mod tests {
         }
         fit.model().check_invariants().unwrap();
         let learned = fit.finish().unwrap().errors;
-        let hr = crate::baselines::run_hr_at_budget(
+        let hr = flatland_baselines::run_hr_at_budget(
             &kernel,
             150,
             1,
-            &crate::baselines::HrParams::default(),
+            &flatland_baselines::HrParams::default(),
         )
         .unwrap();
         let hr = fit.reference().errors(&hr.approx);

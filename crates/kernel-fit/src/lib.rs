@@ -64,7 +64,6 @@
 
 #![deny(missing_docs)]
 
-pub mod baselines;
 mod error;
 mod fit;
 pub mod limits;

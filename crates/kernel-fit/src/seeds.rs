@@ -11,19 +11,6 @@ pub const FIT_RESAMPLE: u64 = 2;
 /// The order a fit presents its samples in.
 pub const FIT_TRAIN: u64 = 3;
 
-/// A seed for item `item` of a run with `seed` (the baselines' per-link and per-grid draws):
-/// the SplitMix64 finaliser, so neighbouring items get unrelated seeds.
-#[must_use]
-pub fn item(seed: u64, item: u64) -> u64 {
-    let mut z = seed
-        ^ item
-            .wrapping_mul(0x9e37_79b9_7f4a_7c15)
-            .wrapping_add(0x632b_e59b_d9b4_e019);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -35,7 +22,5 @@ mod tests {
         let draw = |mut r: ChaCha8Rng| -> Vec<u64> { (0..4).map(|_| r.random()).collect() };
         assert_eq!(draw(stream(7, FIT_TRAIN)), draw(stream(7, FIT_TRAIN)));
         assert_ne!(draw(stream(7, FIT_TRAIN)), draw(stream(7, FIT_RESAMPLE)));
-        assert_ne!(item(7, 0), item(7, 1));
-        assert_eq!(item(7, 3), item(7, 3));
     }
 }

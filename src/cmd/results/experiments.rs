@@ -5,11 +5,11 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::Result;
+use flatland_baselines::{BlockValue, HrParams, Oracle, count_initial_links, run_hr_at_budget};
 use flatland_geom::Kernel;
 use flatland_lab::ablation::{self, VariantRow};
 use flatland_lab::bench::{BenchPlan, BenchRow, Method, run_bench};
 use flatland_solve::{Errors, Reference, SolveErrors, density_ratio, discontinuity_mask};
-use kernel_fit::baselines::{BlockValue, HrParams, Oracle, count_initial_links, run_hr_at_budget};
 use kernel_fit::{Fit, FitParams, FitSummary, Preset, Resampling};
 
 use crate::cmd::Defined;

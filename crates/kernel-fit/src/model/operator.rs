@@ -124,8 +124,8 @@ mod tests {
     use std::sync::Arc;
 
     use super::*;
-    use crate::baselines::{BlockValue, HrParams, UniformParams, run_hr_at_budget, run_uniform};
     use crate::{Fit, FitParams};
+    use flatland_baselines::{BlockValue, HrParams, UniformParams, run_hr_at_budget, run_uniform};
     use flatland_solve::{
         ExactReference, Reference, Representation, SolveParams, never, quadrature_operator,
         solve_against,

@@ -6,9 +6,7 @@
 //! boundaries and shadow edges alike, which is what makes it the floor every adaptive method must
 //! beat.
 
-use super::BaselineRun;
-use crate::FitError;
-use crate::seeds;
+use crate::{BaselineError, BaselineRun, seeds};
 use flatland_geom::Kernel;
 use flatland_solve::{
     KernelRectangle, Mesh, RectangleOperator, Representation, SolveError, SolveParams, Stop,
@@ -57,9 +55,9 @@ pub enum BlockValue {
 
 impl UniformParams {
     /// The one place these values are checked.
-    pub fn check(&self) -> Result<(), FitError> {
+    pub fn check(&self) -> Result<(), BaselineError> {
         if self.rays_per_block == 0 {
-            return Err(FitError::InvalidParameter {
+            return Err(BaselineError::InvalidParameter {
                 name: "rays_per_block",
                 value: self.rays_per_block.to_string(),
                 valid: "at least 1",
@@ -89,10 +87,10 @@ impl UniformGrid {
         g: usize,
         params: &UniformParams,
         seed: u64,
-    ) -> Result<UniformGrid, FitError> {
+    ) -> Result<UniformGrid, BaselineError> {
         params.check()?;
         if g == 0 {
-            return Err(FitError::InvalidParameter {
+            return Err(BaselineError::InvalidParameter {
                 name: "grid",
                 value: g.to_string(),
                 valid: "at least 1",
@@ -263,9 +261,9 @@ pub fn run_uniform(
     budget: usize,
     seed: u64,
     params: &UniformParams,
-) -> Result<BaselineRun<UniformGrid>, FitError> {
+) -> Result<BaselineRun<UniformGrid>, BaselineError> {
     if budget == 0 {
-        return Err(FitError::InvalidParameter {
+        return Err(BaselineError::InvalidParameter {
             name: "budget",
             value: budget.to_string(),
             valid: "at least 1 basis function",
@@ -282,7 +280,7 @@ pub fn run_uniform(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::baselines::test_support::{blocker_kernel, box_kernel};
+    use crate::test_support::{blocker_kernel, box_kernel};
     use flatland_solve::{Reference, grid_point};
 
     #[test]

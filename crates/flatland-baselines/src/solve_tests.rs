@@ -7,7 +7,7 @@ use flatland_solve::{
     inverse_source_weights, never, solve, solve_against, solve_errors, solve_operator,
 };
 
-use super::{BlockValue, HrParams, UniformGrid, UniformParams, run_hr_at_budget};
+use crate::{BlockValue, HrParams, UniformGrid, UniformParams, run_hr_at_budget};
 
 fn bundled(name: &str) -> Scene {
     flatland_geom::bundled::scene(name).expect("bundled scene")

@@ -44,9 +44,7 @@
 //! the receiver among the sender's linked edges, then a descent of that pair's refinement tree
 //! (depth ≤ 2 log₂(edge length / min length)).
 
-use super::BaselineRun;
-use crate::FitError;
-use crate::seeds;
+use crate::{BaselineError, BaselineRun, seeds};
 use flatland_geom::{Kernel, PairClass};
 use flatland_solve::{
     KernelRectangle, Mesh, RectangleOperator, Representation, SolveError, SolveParams, Stop,
@@ -114,30 +112,30 @@ impl Default for HrParams {
 
 impl HrParams {
     /// The one place these values are checked.
-    pub fn check(&self) -> Result<(), FitError> {
+    pub fn check(&self) -> Result<(), BaselineError> {
         if !(self.f_eps.is_finite() && self.f_eps > 0.0) {
-            return Err(FitError::InvalidParameter {
+            return Err(BaselineError::InvalidParameter {
                 name: "f_eps",
                 value: self.f_eps.to_string(),
                 valid: "positive and finite",
             });
         }
         if !(self.min_length > 0.0 && self.min_length < 1.0) {
-            return Err(FitError::InvalidParameter {
+            return Err(BaselineError::InvalidParameter {
                 name: "min_length",
                 value: self.min_length.to_string(),
                 valid: "a fraction of the total surface length in (0, 1)",
             });
         }
         if self.rays_per_link == 0 {
-            return Err(FitError::InvalidParameter {
+            return Err(BaselineError::InvalidParameter {
                 name: "rays_per_link",
                 value: self.rays_per_link.to_string(),
                 valid: "at least 1",
             });
         }
         if self.max_links == 0 {
-            return Err(FitError::InvalidParameter {
+            return Err(BaselineError::InvalidParameter {
                 name: "max_links",
                 value: self.max_links.to_string(),
                 valid: "at least 1",
@@ -528,7 +526,7 @@ pub fn f_eps_for_budget(
     kernel: &Kernel,
     budget: usize,
     params: &HrParams,
-) -> Result<(f64, usize), FitError> {
+) -> Result<(f64, usize), BaselineError> {
     params.check()?;
     let surfaces = Surfaces::new(kernel);
     search_f_eps(&surfaces, budget, params)
@@ -538,7 +536,7 @@ fn search_f_eps(
     surfaces: &Surfaces,
     budget: usize,
     params: &HrParams,
-) -> Result<(f64, usize), FitError> {
+) -> Result<(f64, usize), BaselineError> {
     let cap = budget.saturating_mul(8).max(64).min(params.max_links);
     let count = |f_eps: f64| count_links(surfaces, &HrParams { f_eps, ..*params }, cap);
     // Form factors never exceed 1: above it no link is refined.
@@ -590,7 +588,7 @@ pub fn hr_params_for_budget(
     kernel: &Kernel,
     budget: usize,
     params: &HrParams,
-) -> Result<(HrParams, usize), FitError> {
+) -> Result<(HrParams, usize), BaselineError> {
     params.check()?;
     let surfaces = Surfaces::new(kernel);
     let tolerance = (budget / 20).max(1);
@@ -615,8 +613,8 @@ pub fn hr_params_for_budget(
     Ok(best.expect("the first minimum length is below 1 (checked)"))
 }
 
-fn too_many_links(params: &HrParams) -> FitError {
-    FitError::InvalidParameter {
+fn too_many_links(params: &HrParams) -> BaselineError {
+    BaselineError::InvalidParameter {
         name: "max_links",
         value: params.max_links.to_string(),
         valid: "at least the number of links HR needs (the initial linking alone exceeds it)",
@@ -630,7 +628,7 @@ impl HierarchicalRadiosity {
         kernel: &Kernel,
         params: &HrParams,
         seed: u64,
-    ) -> Result<HierarchicalRadiosity, FitError> {
+    ) -> Result<HierarchicalRadiosity, BaselineError> {
         params.check()?;
         let surfaces = Surfaces::new(kernel);
         let n = surfaces.len();
@@ -886,7 +884,7 @@ pub fn run_hr(
     kernel: &Kernel,
     params: &HrParams,
     seed: u64,
-) -> Result<BaselineRun<HierarchicalRadiosity>, FitError> {
+) -> Result<BaselineRun<HierarchicalRadiosity>, BaselineError> {
     params.check()?;
     if count_initial_links(kernel) > params.max_links as u64 {
         return Err(too_many_links(params));
@@ -906,7 +904,7 @@ pub fn run_hr_at_budget(
     budget: usize,
     seed: u64,
     params: &HrParams,
-) -> Result<BaselineRun<HierarchicalRadiosity>, FitError> {
+) -> Result<BaselineRun<HierarchicalRadiosity>, BaselineError> {
     params.check()?;
     if count_initial_links(kernel) > params.max_links as u64 {
         return Err(too_many_links(params));
@@ -918,7 +916,7 @@ pub fn run_hr_at_budget(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::baselines::test_support::{blocker_kernel, box_edges, box_kernel, kernel, surface};
+    use crate::test_support::{blocker_kernel, box_edges, box_kernel, kernel, surface};
     use flatland_solve::{Reference, grid_point, relative_l2};
 
     #[test]
