@@ -15,7 +15,7 @@ use flatland_solve::{
 use kernel_fit::{Fit, ModelFile};
 
 use super::SceneArgs;
-use crate::interrupt;
+use flatland_lab::interrupt;
 
 /// Arguments of `flatland solve`.
 #[derive(clap::Args, Debug)]
@@ -132,7 +132,7 @@ pub fn run(args: &Args) -> Result<()> {
         if let Choice::Model(model) = &choice {
             inputs.push(model);
         }
-        crate::output::file(out, &inputs)?;
+        flatland_lab::output::file(out, &inputs)?;
     }
     if choice != Choice::Exact && args.basis == 0 {
         bail!("--basis must be at least 1, got 0");
@@ -174,9 +174,9 @@ pub fn run(args: &Args) -> Result<()> {
             Output::Csv => interrupt::writing(|| {
                 write_atomic(path, csv(&mesh, &comparison.solution.radiosity).as_bytes())
             })?,
-            Output::Png => crate::report::lit::lit_scene_png(
+            Output::Png => flatland_lab::report::lit::lit_scene_png(
                 path,
-                &crate::report::lit::Picture {
+                &flatland_lab::report::lit::Picture {
                     scene: &scene,
                     label: &label,
                     kernel: &choice.label(),
@@ -266,7 +266,7 @@ fn build(choice: &Choice, kernel: &Kernel, args: &Args) -> Result<Built> {
             fit_params.validate().context("--basis")?;
             let kernel = Arc::new(Kernel::new(kernel.scene().clone()));
             // The fit's own errors are not reported here: a small reference will do.
-            let reference = Arc::new(super::reference(&kernel, 16, &fit_params));
+            let reference = Arc::new(flatland_lab::reference(&kernel, 16, &fit_params));
             let mut fit = Fit::new(kernel, reference, fit_params)?;
             let bar = super::progress_bar(fit_params.target_cells as u64, "cells");
             fit.train(1000, |f| {

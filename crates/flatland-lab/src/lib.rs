@@ -24,6 +24,14 @@ pub mod ablation;
 pub mod bench;
 pub mod colormap;
 mod error;
+pub mod interrupt;
+mod measure;
+pub mod output;
+pub mod plot;
+pub mod report;
+pub mod results;
 pub mod rooms;
+pub mod stress;
 
 pub use error::LabError;
+pub use measure::{Defined, error_text, reference};

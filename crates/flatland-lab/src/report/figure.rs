@@ -1,9 +1,9 @@
 //! The paper's Fig. 3 panels (geometry, kernel, cells, approximation, error), shared by
 //! `flatland figure` and `flatland results`.
 
+use crate::colormap::Scale;
 use anyhow::{Result, anyhow};
 use flatland_geom::{Role, Scene};
-use flatland_lab::colormap::Scale;
 use flatland_solve::Reference;
 use kernel_fit::Fit;
 use plotters::prelude::*;

@@ -2,8 +2,8 @@
 
 use std::fmt::Write as _;
 
+use crate::bench::{BenchRow, Method};
 use anyhow::Result;
-use flatland_lab::bench::{BenchRow, Method};
 use kernel_fit::{FitParams, FitSummary, Resampling};
 
 use super::Findings;
@@ -561,7 +561,7 @@ mod tests {
     fn the_verdict_names_every_scene_where_the_learner_misses_the_goal() {
         let bench = |scene: &str, ours: f64| SceneBench {
             scene: scene.to_owned(),
-            defined: crate::cmd::Defined {
+            defined: crate::Defined {
                 grid: true,
                 heldout: true,
             },

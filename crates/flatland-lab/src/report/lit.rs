@@ -12,12 +12,19 @@ use crate::plot::{register_font, write_rgb_png};
 
 /// What the PNG shows.
 pub struct Picture<'a> {
+    /// The scene lit.
     pub scene: &'a Scene,
+    /// The scene's name in the title.
     pub label: &'a str,
+    /// The kernel it was solved with, in words.
     pub kernel: &'a str,
+    /// The mesh `b` is on.
     pub mesh: &'a Mesh,
+    /// The solved B per element of `mesh`.
     pub b: &'a [f64],
+    /// The exact solution B(s) is drawn against.
     pub reference: &'a ExactReference,
+    /// The relative L2 error of the reflected part, for the title.
     pub rel_l2_reflected: f64,
 }
 
@@ -26,10 +33,11 @@ const HEIGHT: u32 = 760;
 const SCENE_WIDTH: u32 = 760;
 
 fn inferno(x: f64) -> RGBColor {
-    let [r, g, b] = flatland_lab::colormap::inferno(x);
+    let [r, g, b] = crate::colormap::inferno(x);
     RGBColor(r, g, b)
 }
 
+/// Draws `p` and writes it to `path` as a PNG (atomically, under Ctrl-C protection).
 pub fn lit_scene_png(path: &Path, p: &Picture<'_>) -> Result<()> {
     register_font();
     let mut rgb = vec![255u8; (WIDTH * HEIGHT * 3) as usize];
@@ -63,7 +71,7 @@ fn draw_scene(area: &Area<'_>, p: &Picture<'_>) -> DrawResult {
             (centre.x - span / 2.0)..(centre.x + span / 2.0),
             (centre.y - span / 2.0)..(centre.y + span / 2.0),
         )?;
-    let top = flatland_lab::colormap::radiosity_top(p.mesh, p.b);
+    let top = crate::colormap::radiosity_top(p.mesh, p.b);
     for edge in p.scene.edges().iter().filter(|e| e.role == Role::Blocker) {
         chart.draw_series(LineSeries::new(
             [(edge.a.x, edge.a.y), (edge.b.x, edge.b.y)],

@@ -5,10 +5,11 @@
 //! [`Interrupted`] error that says what was kept; `main` prints it and exits with 130.
 //!
 //! Some phases cannot poll: a reference grid being computed, the least-squares refit, one
-//! baseline run. So the handler also waits [`GRACE`]: if no loop has taken the interrupt by then,
-//! it exits itself, printing the command's last [`keep`] note (what is on disk right now). Writes
-//! go through [`writing`], which the handler waits for, so an exit never cuts a file in half or
-//! leaves a temporary file behind. A second Ctrl-C exits at once (still after a running write).
+//! baseline run. So the handler also waits a grace period (0.7 s): if no loop has taken the
+//! interrupt by then, it exits itself, printing the command's last [`keep`] note (what is on disk
+//! right now). Writes go through [`writing`], which the handler waits for, so an exit never cuts a
+//! file in half or leaves a temporary file behind. A second Ctrl-C exits at once (still after a
+//! running write). [`train_to_end`] trains a fit under the same flag.
 
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, AtomicU8, Ordering};
@@ -123,4 +124,18 @@ pub fn writing<T>(write: impl FnOnce() -> T) -> T {
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
     write()
+}
+
+/// Trains `fit` to its end and finishes it (the refit, the final errors), stopping within a
+/// progress period on Ctrl-C.
+pub fn train_to_end(fit: &mut kernel_fit::Fit) -> anyhow::Result<kernel_fit::FitSummary> {
+    fit.train(1000, |_| {
+        if requested() {
+            std::ops::ControlFlow::Break(())
+        } else {
+            std::ops::ControlFlow::Continue(())
+        }
+    });
+    check()?;
+    Ok(fit.finish()?)
 }

@@ -30,6 +30,7 @@ const PALETTE: [RGBColor; 6] = [
     RGBColor(140, 86, 75),
 ];
 
+/// Registers the one font every picture uses (once per process; later calls do nothing).
 pub fn register_font() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {

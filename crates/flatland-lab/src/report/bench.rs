@@ -6,13 +6,12 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::sync::Arc;
 
+use crate::bench::{BenchPlan, BenchRow, Method, run_bench};
 use anyhow::Result;
-use flatland_lab::bench::{BenchPlan, BenchRow, Method, run_bench};
 use flatland_solve::Reference;
 
-use crate::cmd::{Defined, error_text};
-use crate::interrupt;
 use crate::plot::{Series, log_log};
+use crate::{Defined, error_text, interrupt};
 
 /// Files `flatland bench` writes into its folder.
 pub const OUTPUTS: [&str; 6] = [

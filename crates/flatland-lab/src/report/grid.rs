@@ -3,9 +3,9 @@
 
 use std::path::Path;
 
+use crate::colormap::Scale;
 use anyhow::{Context, bail};
 use flatland_geom::write_atomic;
-use flatland_lab::colormap::Scale;
 
 use crate::interrupt;
 use crate::plot::{Heatmap, heatmap_png};
@@ -19,6 +19,7 @@ pub enum Output {
     Png,
 }
 
+/// The output format of `path`, by its extension (`.csv` or `.png`, any case).
 pub fn output_of(path: &Path) -> anyhow::Result<Output> {
     match path
         .extension()

@@ -1,9 +1,9 @@
 //! `flatland results`: regenerate the results document (RESULTS.md and its plots) by running
-//! every experiment the paper reports, and ours. [`experiments`] measure and return data;
-//! [`render`] writes the document from it. Nothing in it is typed by hand.
+//! every experiment the paper reports, and ours. `experiments` measure and return data;
+//! `render` writes the document from it. Nothing in it is typed by hand.
 
-pub mod experiments;
-pub mod render;
+mod experiments;
+mod render;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -16,21 +16,18 @@ use kernel_fit::Preset;
 use crate::report::bench::{OUTPUTS, write_outputs};
 use crate::report::figure::PANELS;
 use crate::{interrupt, output};
-use experiments::{
-    Ablation, Density, SceneBench, Subdivision, ThetaRow, fit, preset_params, reference_of,
-};
+use experiments::{Ablation, Density, SceneBench, Subdivision, ThetaRow, fit, preset_params};
 
-/// Arguments of `flatland results`.
-#[derive(clap::Args, Debug)]
-pub struct Args {
+pub use experiments::{RES, reference_of};
+
+/// What `flatland results` writes and how long it takes.
+#[derive(Clone, Debug)]
+pub struct Options {
     /// The document to write; plots go to `<its folder>/docs/results/`.
-    #[arg(long, default_value = "RESULTS.md")]
     pub out: PathBuf,
     /// Fewer seeds, budgets and rooms (minutes instead of tens of minutes).
-    #[arg(long)]
     pub quick: bool,
     /// Folder of the bundled scenes.
-    #[arg(long, default_value = "scenes")]
     pub scenes: PathBuf,
 }
 
@@ -38,7 +35,7 @@ pub struct Args {
 const SCENES: [&str; 3] = ["fig3", "maze", "corners"];
 
 /// Everything the document reports.
-pub struct Findings {
+pub(crate) struct Findings {
     pub quick: bool,
     pub seeds: u64,
     pub cores: usize,
@@ -76,7 +73,7 @@ impl Progress {
 }
 
 /// Runs `flatland results`.
-pub fn run(args: &Args) -> Result<()> {
+pub fn run(args: &Options) -> Result<()> {
     let seeds: u64 = if args.quick { 1 } else { 3 };
     let budgets: Vec<usize> = if args.quick {
         vec![50, 100, 200, 400]
@@ -156,7 +153,7 @@ pub fn run(args: &Args) -> Result<()> {
     for (i, name) in SCENES.iter().enumerate() {
         progress.next(&format!("flatland bench on {name}"))?;
         let dir = plots.join(name);
-        let defined = crate::cmd::Defined::of(&references[i]);
+        let defined = crate::Defined::of(&references[i]);
         benches.push(experiments::bench(
             name,
             &kernels[i],
@@ -198,28 +195,4 @@ fn figure_dirs(plots: &Path) -> Vec<PathBuf> {
         .iter()
         .map(|p| plots.join(format!("figure-{}", p.name())))
         .collect()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::experiments::{RES, reference_of};
-    use flatland_geom::Kernel;
-
-    /// RESULTS.md reported 0.536 held out for the default fit where `flatland fit` printed
-    /// 0.406: its held-out points were drawn with seed 0, the command's with the fit's seed.
-    #[test]
-    fn results_measures_on_the_points_flatland_fit_measures_on() {
-        let kernel = Kernel::new(flatland_geom::bundled::scene("fig3").unwrap());
-        let args = crate::cmd::fit::Args::for_scene(None);
-        assert_eq!(args.res, RES, "the default grid of `flatland fit`");
-        let fit = crate::cmd::reference(&kernel, args.res, &args.params().unwrap());
-        let results = reference_of(&kernel);
-        assert_eq!(fit.heldout(), results.heldout());
-        assert_eq!(fit.grid(), results.grid());
-        // And the rule does not depend on the fit's seed.
-        let mut other = args.params().unwrap();
-        other.seed = 7;
-        let seeded = crate::cmd::reference(&kernel, args.res, &other);
-        assert_eq!(seeded.heldout(), results.heldout());
-    }
 }

@@ -4,17 +4,16 @@
 use std::sync::Arc;
 use std::time::Instant;
 
+use crate::ablation::{self, VariantRow};
+use crate::bench::{BenchPlan, BenchRow, Method, run_bench};
 use anyhow::Result;
 use flatland_baselines::{BlockValue, HrParams, Oracle, count_initial_links, run_hr_at_budget};
 use flatland_geom::Kernel;
-use flatland_lab::ablation::{self, VariantRow};
-use flatland_lab::bench::{BenchPlan, BenchRow, Method, run_bench};
 use flatland_solve::{Errors, Reference, SolveErrors, density_ratio, discontinuity_mask};
 use kernel_fit::{Fit, FitParams, FitSummary, Preset, Resampling};
 
-use crate::cmd::Defined;
-use crate::interrupt;
 use crate::report::bench::run_kept;
+use crate::{Defined, interrupt};
 
 /// The reference grid's resolution.
 pub const RES: usize = 256;
@@ -28,7 +27,7 @@ pub const SOLVE_ELEMENTS: usize = 256;
 /// The reference of every experiment: the one `flatland fit` builds (same grid, same held-out
 /// points), so the documented command prints the number the document reports.
 pub fn reference_of(kernel: &Kernel) -> Reference {
-    crate::cmd::reference(kernel, RES, &FitParams::default())
+    crate::reference(kernel, RES, &FitParams::default())
 }
 
 /// A finished fit: its summary, its cells' re-projected (s, t) and the fit itself.
@@ -41,7 +40,7 @@ pub struct Fitted {
 /// Fits `params` to `kernel`, stopping promptly on Ctrl-C.
 pub fn fit(kernel: &Arc<Kernel>, reference: &Arc<Reference>, params: FitParams) -> Result<Fitted> {
     let mut fit = Fit::new(Arc::clone(kernel), Arc::clone(reference), params)?;
-    let summary = crate::cmd::train_to_end(&mut fit)?;
+    let summary = interrupt::train_to_end(&mut fit)?;
     let cells = fit.cell_st().into_iter().flatten().collect();
     Ok(Fitted {
         summary,
@@ -249,7 +248,7 @@ pub fn bench(
 
 /// Random rooms the project was never tuned on: every method at [`HEADLINE_BUDGET`], one seed.
 pub fn room(seed: u64) -> Result<SceneBench> {
-    let kernel = Arc::new(Kernel::new(flatland_lab::rooms::random_room(seed)?));
+    let kernel = Arc::new(Kernel::new(crate::rooms::random_room(seed)?));
     let reference = Arc::new(reference_of(&kernel));
     let plan = plan(vec![HEADLINE_BUDGET], 1);
     let rows = run_bench(&kernel, &reference, &plan, |_, _| {})?;

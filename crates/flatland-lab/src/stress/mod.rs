@@ -36,6 +36,7 @@ pub const TINY_ERROR: f64 = 0.005;
 pub const FIT_CELLS: usize = 60;
 /// Reference used by every small fit: grid resolution and held-out points.
 pub const REF_RES: usize = 64;
+/// See [`REF_RES`].
 pub const REF_HELDOUT: usize = 1024;
 /// Seed of every small fit.
 pub const SEED: u64 = 7;

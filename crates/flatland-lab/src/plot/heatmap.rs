@@ -8,7 +8,7 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::{register_font, short_number};
-use flatland_lab::colormap::{LOG_DECADES, Scale, inferno};
+use crate::colormap::{LOG_DECADES, Scale, inferno};
 
 /// Smallest side of the plotted square in pixels: small grids are scaled up (nearest
 /// neighbour), so labels fit and a cell stays a crisp square.
