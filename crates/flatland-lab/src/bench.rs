@@ -23,8 +23,8 @@ use crate::LabError;
 pub enum Method {
     /// The project's learner ([`Preset::Default`](kernel_fit::Preset::Default)).
     Sgcs,
-    /// The paper's network with the least-squares output refit ([`Preset::Paper`](kernel_fit::Preset::Paper); one fit
-    /// gives this row and the next).
+    /// The paper's network with the least-squares output refit
+    /// ([`Preset::Paper`](kernel_fit::Preset::Paper); one fit gives this row and the next).
     SgcsPaper,
     /// The paper's network with its delta-rule output weights only.
     SgcsPaperNoRefit,

@@ -1,4 +1,5 @@
-//! From parameters to network inputs: `γ(s, t) = (x₁, y₁, x₂, y₂)` in a scale-free frame.
+//! A scene's scale-free unit frame: the mesh computes its geometry in it, and the learner's
+//! network inputs `γ(s, t) = (x₁, y₁, x₂, y₂)` are points of it.
 
 use flatland_geom::{DVec2, Scene};
 use serde::{Deserialize, Serialize};
