@@ -1,18 +1,20 @@
 //! Learn a Flatland scene's radiosity kernel with supervised growing cell structures
 //! (C.-A. Bohn, *Efficiently Representing the Radiosity Kernel through Learning*, EGRW 1996).
 //!
-//! The job: turn an exact but expensive kernel ([`flatland_geom::Kernel`], one visibility query
-//! per value) into a compact learned one, spending rays where the network is poor or absent.
-//! Two learners share one driver ([`Fit`]), chosen by [`Preset`]:
+//! The job, the learner only: turn an exact but expensive kernel ([`flatland_geom::Kernel`], one
+//! visibility query per value) into a compact learned one, spending rays where the network is
+//! poor or absent; its parameters, training, model and files. It is measured by `flatland_solve`
+//! (below it) and compared with the baselines by `flatland_lab` (above it). Two learners share
+//! one driver ([`Fit`]), chosen by [`Preset`]:
 //!
 //! - **The paper's network** ([`FitParams::paper`]). A sample is `(γ(s, t), ζ(s, t))` with
 //!   `γ = (x₁, y₁, x₂, y₂)`, the sender point `x = point(s)` and receiver point `y = point(t)`,
 //!   mapped into the scene's unit box by an [`InputFrame`](flatland_solve::InputFrame) so that
-//!   nothing depends on units or origin; `ζ = E'(sender) · k(s, t)`. `S₀` is uniform random. Whenever `|A| / |S| > ψ` a new
-//!   set is made by scanning candidates with `θ(ξ) = ρ_ACC(ξ) ∨ ¬ρ_A(ξ)` (the printed `∧` is an
-//!   erratum): a candidate costs a ray only if it falls in a critical zone or outside the
-//!   network. Training draws a set uniformly, then a sample from it; the [`sgcs::Network`]
-//!   inserts a cell every λ steps.
+//!   nothing depends on units or origin; `ζ = E'(sender) · k(s, t)`. `S₀` is uniform random.
+//!   Whenever `|A| / |S| > ψ` a new set is made by scanning candidates with
+//!   `θ(ξ) = ρ_ACC(ξ) ∨ ¬ρ_A(ξ)` (the printed `∧` is an erratum): a candidate costs a ray only if
+//!   it falls in a critical zone or outside the network. Training draws a set uniformly, then a
+//!   sample from it; the [`sgcs::Network`] inserts a cell every λ steps.
 //! - **The default** ([`FitParams::default`], [`Target::Visibility`]). `ζ = E' ρ G · V`, and
 //!   everything but `V` is known in closed form, as is `V` itself on every pair of surface
 //!   edges the geometry proves unoccluded or fully blocked. So the network learns only `V`,
@@ -31,10 +33,6 @@
 //!   implements [`flatland_solve::Representation`], the one trait the solver and the error
 //!   measures take; a visibility model brings its own operator, the closed-form transfer times
 //!   its `Ṽ` on each face, integrated exactly.
-//!
-//! The crate's one job is the learner: parameters, sampling, training, the model and its files.
-//! It is measured by `flatland_solve` (below it) and compared with the baselines by
-//! `flatland_lab` (above it).
 //!
 //! ```
 //! use std::sync::Arc;
