@@ -15,7 +15,8 @@ use std::sync::Arc;
 
 use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
 use flatland_geom::{Kernel, Scene};
-use kernel_fit::{Fit, FitParams, Reference};
+use flatland_solve::Reference;
+use kernel_fit::{Fit, FitParams};
 
 fn kernel(name: &str) -> Arc<Kernel> {
     let path = format!("{}/scenes/{name}.ron", env!("CARGO_MANIFEST_DIR"));

@@ -2,8 +2,8 @@
 //! whole build (refinement + 20 rays per link) at the F_ε that gives about 400 links.
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use flatland_baselines::{HierarchicalRadiosity, HrParams, f_eps_for_budget};
 use flatland_geom::{Kernel, Scene};
-use kernel_fit::baselines::{HierarchicalRadiosity, HrParams, f_eps_for_budget};
 use std::hint::black_box;
 
 fn fig3() -> Kernel {

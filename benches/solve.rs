@@ -8,10 +8,10 @@ use std::ops::ControlFlow;
 use std::sync::Arc;
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use flatland_baselines::{HrParams, UniformParams, run_hr_at_budget, run_uniform};
 use flatland_geom::Kernel;
-use kernel_fit::baselines::{HrParams, UniformParams, run_hr_at_budget, run_uniform};
-use kernel_fit::solve::{Mesh, SolveParams, exact_operator, never, solve, solve_operator};
-use kernel_fit::{Fit, FitParams, Reference};
+use flatland_solve::{Mesh, Reference, SolveParams, exact_operator, never, solve, solve_operator};
+use kernel_fit::{Fit, FitParams};
 use std::hint::black_box;
 
 const ELEMENTS: usize = 1024;

@@ -1,8 +1,8 @@
 //! The uniform baseline on `fig3`: a 20 × 20 grid (400 basis functions), 20 rays per block.
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use flatland_baselines::{UniformGrid, UniformParams};
 use flatland_geom::{Kernel, Scene};
-use kernel_fit::baselines::{UniformGrid, UniformParams};
 use std::hint::black_box;
 
 fn fig3() -> Kernel {

@@ -10,7 +10,8 @@ use std::path::Path;
 use std::sync::Arc;
 
 use flatland_geom::{Kernel, Scene};
-use kernel_fit::{Approximation, Fit, FitParams, FitSummary, ModelFile, REFERENCE_SEED, Reference};
+use flatland_solve::{Reference, Representation};
+use kernel_fit::{Fit, FitParams, FitSummary, ModelFile, REFERENCE_SEED};
 
 fn main() -> Result<(), Box<dyn Error>> {
     let mut args = std::env::args().skip(1);

@@ -10,10 +10,10 @@ use std::ops::ControlFlow;
 use std::sync::Arc;
 
 use flatland_geom::{Kernel, Scene};
-use kernel_fit::solve::{
-    ExactReference, KernelRepresentation, Mesh, SolveParams, never, solve_against,
+use flatland_solve::{
+    ExactReference, Mesh, Reference, Representation, SolveParams, never, solve_against,
 };
-use kernel_fit::{Fit, FitParams, Reference};
+use kernel_fit::{Fit, FitParams};
 
 fn main() -> Result<(), Box<dyn Error>> {
     let mut args = std::env::args().skip(1);
@@ -43,7 +43,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     let fine = ExactReference::default_elements(mesh.len());
     let exact =
         ExactReference::new(&kernel, fine, &solve_params, &never)?.radiosity_on(&mesh, &never)?;
-    let kernels: [(&str, &dyn KernelRepresentation); 2] =
+    let kernels: [(&str, &dyn Representation); 2] =
         [("exact", kernel.as_ref()), ("learned", fit.model())];
     for (name, rep) in kernels {
         let lit = solve_against(rep, &mesh, &exact, &solve_params, &never)?;

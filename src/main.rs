@@ -4,11 +4,8 @@ use anyhow::Result;
 use clap::{Parser, Subcommand};
 
 mod cmd;
-mod interrupt;
-mod output;
-mod plot;
-mod report;
-mod stress;
+
+use flatland_lab::interrupt;
 
 /// Learn the Flatland radiosity kernel with supervised growing cell structures (Bohn 1996).
 #[derive(Parser)]

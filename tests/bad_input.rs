@@ -513,7 +513,8 @@ fn tool_written_files() -> &'static [(&'static str, serde_json::Value)] {
     use std::ops::ControlFlow;
     use std::sync::{Arc, OnceLock};
 
-    use kernel_fit::{Fit, FitParams, ModelFile, REFERENCE_SEED, Reference, Target};
+    use flatland_solve::Reference;
+    use kernel_fit::{Fit, FitParams, ModelFile, REFERENCE_SEED, Target};
 
     static FILES: OnceLock<Vec<(&'static str, serde_json::Value)>> = OnceLock::new();
     FILES.get_or_init(|| {
@@ -664,7 +665,8 @@ fn edit(value: &mut serde_json::Value, path: &[Step], op: u8, pick: usize) {
 
 /// Loads the edited file as the tools do and checks the property.
 fn check_edited(name: &str, value: &serde_json::Value) {
-    use kernel_fit::{Approximation, Fit, ModelFile, REFERENCE_SEED, Reference};
+    use flatland_solve::{Reference, Representation};
+    use kernel_fit::{Fit, ModelFile, REFERENCE_SEED};
 
     let dir = temp_dir("edited");
     let path = dir.join(name);

@@ -4,11 +4,11 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use anyhow::Result;
-use kernel_fit::bench::{BenchPlan, Method};
+use flatland_lab::bench::{BenchPlan, Method};
 
 use super::SceneArgs;
-use crate::report::bench::{OUTPUTS, run_kept, table, write_outputs};
-use crate::{interrupt, output};
+use flatland_lab::report::bench::{OUTPUTS, run_kept, table, write_outputs};
+use flatland_lab::{interrupt, output};
 
 /// Arguments of `flatland bench`.
 #[derive(clap::Args, Debug)]
@@ -70,8 +70,8 @@ pub fn run(args: &Args) -> Result<()> {
         &args.scene.path().into_iter().collect::<Vec<_>>(),
     )?;
     let kernel = Arc::new(kernel);
-    let reference = Arc::new(super::reference(&kernel, args.res, &plan.fit));
-    let defined = super::Defined::of(&reference);
+    let reference = Arc::new(flatland_lab::reference(&kernel, args.res, &plan.fit));
+    let defined = flatland_lab::Defined::of(&reference);
     let total = plan.methods.len() * plan.budgets.len() * plan.seeds as usize;
     eprintln!(
         "bench of {label}: {total} runs (Ctrl-C stops; the rows so far are kept in {})",

@@ -4,9 +4,9 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use flatland_geom::{Kernel, Scene};
-use kernel_fit::{Approximation, ModelFile};
+use kernel_fit::ModelFile;
 
-use crate::{interrupt, output};
+use flatland_lab::{interrupt, output};
 
 /// Arguments of `flatland eval`.
 #[derive(clap::Args, Debug)]
@@ -59,27 +59,27 @@ pub fn run(args: &Args) -> Result<()> {
         r = args.res
     );
     let kernel = Kernel::new(scene);
-    let reference = super::reference(&kernel, args.res, &file.params);
+    let reference = flatland_lab::reference(&kernel, args.res, &file.params);
     interrupt::check()?;
     let values = reference.approximate_grid(&file.model);
     interrupt::check()?;
-    let cells = file.model.basis_functions();
+    let cells = file.model.network().len();
     let title = format!(
         "learned ζ of {} ({cells} cells), {r}×{r} grid",
         args.model.display(),
         r = args.res
     );
-    let map = crate::report::grid::heatmap(
+    let map = flatland_lab::report::grid::heatmap(
         title,
         "learned ζ",
         kernel.scene(),
         reference.grid(),
         args.log,
     );
-    crate::report::grid::write_grid(&args.out, args.res, &values, &map)
+    flatland_lab::report::grid::write_grid(&args.out, args.res, &values, &map)
         .with_context(|| format!("writing {}", args.out.display()))?;
     let errors = reference.errors(&file.model);
-    let defined = super::Defined::of(&reference);
+    let defined = flatland_lab::Defined::of(&reference);
     if args.json {
         let json = serde_json::json!({
             "cells": cells,
@@ -96,12 +96,12 @@ pub fn run(args: &Args) -> Result<()> {
         println!(
             "{cells} cells; on the {r}×{r} grid relative L2 {}, L1 {}; held out relative L2 {} \
              (bootstrap 90 %: {} – {}), L1 {}; wrote {}",
-            super::error_text(errors.grid, defined.grid, 4),
-            super::error_text(errors.l1_grid, defined.grid, 4),
-            super::error_text(errors.heldout, defined.heldout, 4),
-            super::error_text(errors.heldout_spread[0], defined.heldout, 4),
-            super::error_text(errors.heldout_spread[1], defined.heldout, 4),
-            super::error_text(errors.l1_heldout, defined.heldout, 4),
+            flatland_lab::error_text(errors.grid, defined.grid, 4),
+            flatland_lab::error_text(errors.l1_grid, defined.grid, 4),
+            flatland_lab::error_text(errors.heldout, defined.heldout, 4),
+            flatland_lab::error_text(errors.heldout_spread[0], defined.heldout, 4),
+            flatland_lab::error_text(errors.heldout_spread[1], defined.heldout, 4),
+            flatland_lab::error_text(errors.l1_heldout, defined.heldout, 4),
             args.out.display(),
             r = args.res
         );

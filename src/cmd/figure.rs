@@ -5,11 +5,11 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use anyhow::Result;
-use kernel_fit::{Approximation, Fit, FitParams};
+use kernel_fit::{Fit, FitParams};
 
 use super::SceneArgs;
-use crate::report::figure::{PANELS, panels};
-use crate::{interrupt, output};
+use flatland_lab::report::figure::{PANELS, panels};
+use flatland_lab::{interrupt, output};
 
 /// Arguments of `flatland figure`.
 #[derive(clap::Args, Debug)]
@@ -53,13 +53,13 @@ pub fn run(args: &Args) -> Result<()> {
         &PANELS,
         &args.scene.path().into_iter().collect::<Vec<_>>(),
     )?;
-    let reference = Arc::new(super::reference(&kernel, args.res, &params));
+    let reference = Arc::new(flatland_lab::reference(&kernel, args.res, &params));
     let mut fit = Fit::new(Arc::clone(&kernel), Arc::clone(&reference), params)?;
     eprintln!(
         "figure of {label}: fitting {} cells (Ctrl-C stops; nothing is written before the fit ends)",
         args.cells
     );
-    let summary = super::train_to_end(&mut fit)?;
+    let summary = flatland_lab::interrupt::train_to_end(&mut fit)?;
     interrupt::check()?;
 
     let pictures = panels(&fit, &reference, &label, args.log)?;
@@ -73,11 +73,11 @@ pub fn run(args: &Args) -> Result<()> {
             args.out.display()
         ));
     }
-    let defined = super::Defined::of(&reference);
+    let defined = flatland_lab::Defined::of(&reference);
     println!(
         "{label}: {} cells, relative L2 {}; wrote a_geometry, b_kernel, c_cells, \
          d_approximation, e_error (.png) to {}",
-        fit.basis_functions(),
+        fit.network().len(),
         defined.format(&summary.errors),
         args.out.display()
     );

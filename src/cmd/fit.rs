@@ -9,7 +9,7 @@ use flatland_geom::KernelParams;
 use kernel_fit::{Fit, FitParams, FitSummary, ModelFile, Preset, Resampling, StopReason, Target};
 
 use super::SceneArgs;
-use crate::{interrupt, output};
+use flatland_lab::{interrupt, output};
 
 /// `--resampling` values.
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
@@ -169,7 +169,7 @@ pub fn run(args: &Args) -> Result<()> {
             let (kernel, label) = args.scene.kernel()?;
             let params = args.params()?;
             params.validate()?;
-            let reference = Arc::new(super::reference(&kernel, args.res, &params));
+            let reference = Arc::new(flatland_lab::reference(&kernel, args.res, &params));
             interrupt::check()?;
             (Fit::new(Arc::new(kernel), reference, params)?, label)
         }
@@ -223,7 +223,7 @@ pub fn run(args: &Args) -> Result<()> {
     }
     let summary = finish(&mut fit)?;
     interrupt::check()?;
-    let defined = super::Defined::of(fit.reference());
+    let defined = flatland_lab::Defined::of(fit.reference());
     if let Some(out) = &args.out {
         interrupt::writing(|| {
             ModelFile::new(fit.model().clone(), params, Some(summary.clone())).save(out)
@@ -297,7 +297,11 @@ fn save_checkpoint(fit: &Fit, path: &Path) -> Result<(), kernel_fit::FitError> {
 
 /// The `--json` object: flat figures first, then the details. An undefined error (the exact ζ
 /// is 0 everywhere it was measured) is `null`.
-pub fn summary_json(s: &FitSummary, scene: &str, defined: super::Defined) -> serde_json::Value {
+pub fn summary_json(
+    s: &FitSummary,
+    scene: &str,
+    defined: flatland_lab::Defined,
+) -> serde_json::Value {
     let (grid, heldout) = (defined.grid, defined.heldout);
     let or_null = |ok: bool, v: f64| ok.then_some(v);
     serde_json::json!({
@@ -327,7 +331,7 @@ pub fn summary_json(s: &FitSummary, scene: &str, defined: super::Defined) -> ser
 }
 
 /// The human-readable summary table.
-pub fn print_summary(s: &FitSummary, scene: &str, defined: super::Defined) {
+pub fn print_summary(s: &FitSummary, scene: &str, defined: flatland_lab::Defined) {
     let row = |k: &str, v: String| println!("  {k:<24} {v}");
     println!("fit of {scene}");
     row("cells", s.cells.to_string());
@@ -350,8 +354,8 @@ pub fn print_summary(s: &FitSummary, scene: &str, defined: super::Defined) {
         "rel. L1",
         format!(
             "grid {}   held out {}",
-            super::error_text(s.errors.l1_grid, defined.grid, 4),
-            super::error_text(s.errors.l1_heldout, defined.heldout, 4)
+            flatland_lab::error_text(s.errors.l1_grid, defined.grid, 4),
+            flatland_lab::error_text(s.errors.l1_heldout, defined.heldout, 4)
         ),
     );
     if let Some(why) = defined.note() {

@@ -6,8 +6,8 @@ use flatland_geom::Kernel;
 use rayon::prelude::*;
 
 use super::SceneArgs;
-use crate::report::grid::{heatmap, output_of, write_grid};
-use crate::{interrupt, output};
+use flatland_lab::report::grid::{heatmap, output_of, write_grid};
+use flatland_lab::{interrupt, output};
 
 /// Arguments of `flatland kernel`.
 #[derive(clap::Args, Debug)]

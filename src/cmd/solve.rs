@@ -7,15 +7,15 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
+use flatland_baselines::{BlockValue, HrParams, UniformParams, run_hr_at_budget, run_uniform};
 use flatland_geom::{Kernel, Scene, write_atomic};
-use kernel_fit::baselines::{BlockValue, HrParams, UniformParams, run_hr_at_budget, run_uniform};
-use kernel_fit::solve::{
-    Comparison, ExactReference, KernelRepresentation, Mesh, SolveParams, Stop, solve_against,
+use flatland_solve::{
+    Comparison, ExactReference, Mesh, Representation, SolveError, SolveParams, Stop, solve_against,
 };
-use kernel_fit::{Fit, FitError, ModelFile};
+use kernel_fit::{Fit, ModelFile};
 
 use super::SceneArgs;
-use crate::interrupt;
+use flatland_lab::interrupt;
 
 /// Arguments of `flatland solve`.
 #[derive(clap::Args, Debug)]
@@ -119,7 +119,7 @@ fn output_of(path: &Path) -> Result<Output> {
 
 /// A built representation and what building it cost.
 struct Built {
-    rep: Box<dyn KernelRepresentation>,
+    rep: Box<dyn Representation>,
     build_s: f64,
 }
 
@@ -132,7 +132,7 @@ pub fn run(args: &Args) -> Result<()> {
         if let Choice::Model(model) = &choice {
             inputs.push(model);
         }
-        crate::output::file(out, &inputs)?;
+        flatland_lab::output::file(out, &inputs)?;
     }
     if choice != Choice::Exact && args.basis == 0 {
         bail!("--basis must be at least 1, got 0");
@@ -152,9 +152,9 @@ pub fn run(args: &Args) -> Result<()> {
 
     // Every long loop below polls Ctrl-C; nothing is written before the end.
     let stop: &Stop = &interrupt::requested;
-    let interrupted = |e: FitError| -> anyhow::Error {
+    let interrupted = |e: SolveError| -> anyhow::Error {
         match e {
-            FitError::Interrupted => interrupt::stopped().into(),
+            SolveError::Interrupted => interrupt::stopped().into(),
             other => other.into(),
         }
     };
@@ -174,9 +174,9 @@ pub fn run(args: &Args) -> Result<()> {
             Output::Csv => interrupt::writing(|| {
                 write_atomic(path, csv(&mesh, &comparison.solution.radiosity).as_bytes())
             })?,
-            Output::Png => crate::report::lit::lit_scene_png(
+            Output::Png => flatland_lab::report::lit::lit_scene_png(
                 path,
-                &crate::report::lit::Picture {
+                &flatland_lab::report::lit::Picture {
                     scene: &scene,
                     label: &label,
                     kernel: &choice.label(),
@@ -241,7 +241,7 @@ fn scene_for(args: &Args, choice: &Choice) -> Result<(Scene, String)> {
 /// Builds the representation `choice` names (fits, baselines) on `kernel`.
 fn build(choice: &Choice, kernel: &Kernel, args: &Args) -> Result<Built> {
     let started = Instant::now();
-    let rep: Box<dyn KernelRepresentation> = match choice {
+    let rep: Box<dyn Representation> = match choice {
         Choice::Exact => Box::new(Kernel::new(kernel.scene().clone())),
         Choice::Model(path) => Box::new(ModelFile::load(path)?.model),
         Choice::Hr => {
@@ -266,7 +266,7 @@ fn build(choice: &Choice, kernel: &Kernel, args: &Args) -> Result<Built> {
             fit_params.validate().context("--basis")?;
             let kernel = Arc::new(Kernel::new(kernel.scene().clone()));
             // The fit's own errors are not reported here: a small reference will do.
-            let reference = Arc::new(super::reference(&kernel, 16, &fit_params));
+            let reference = Arc::new(flatland_lab::reference(&kernel, 16, &fit_params));
             let mut fit = Fit::new(kernel, reference, fit_params)?;
             let bar = super::progress_bar(fit_params.target_cells as u64, "cells");
             fit.train(1000, |f| {

@@ -1,4 +1,4 @@
-//! `flatland stress`: runs the adversarial suite of [`crate::stress`].
+//! `flatland stress`: runs the adversarial suite of [`flatland_lab::stress`].
 
 use anyhow::Result;
 
@@ -18,5 +18,5 @@ pub struct Args {
 
 /// Runs `flatland stress`.
 pub fn run(args: &Args) -> Result<()> {
-    crate::stress::run(args.quick, args.soak_steps, args.only.clone())
+    flatland_lab::stress::run(args.quick, args.soak_steps, args.only.clone())
 }

@@ -14,7 +14,8 @@ use egui::{
     TextureHandle, TextureOptions, UiBuilder, Vec2,
 };
 use flatland_geom::{DVec2, Kernel, PairClass, Scene, bundled};
-use kernel_fit::{Approximation, FitParams, LearnedKernel, Preset, StopReason};
+use flatland_solve::Representation;
+use kernel_fit::{FitParams, LearnedKernel, Preset, StopReason};
 
 use crate::colormap::{grid_image, samples_image};
 use crate::settings::{SETTINGS_KEY, SceneChoice, Settings, live_params};
@@ -23,7 +24,7 @@ use crate::worker::{
     APPROX_RES, Approx, Command, Lit, LitState, REFERENCE_RES, Status, WorkerHandle, World,
     error_text, format_errors,
 };
-use kernel_fit::colormap::Scale;
+use flatland_lab::colormap::Scale;
 
 /// How [`crate::run_with`] starts the viewer. The default starts learning at once.
 #[derive(Clone, Debug, Default)]
@@ -274,7 +275,7 @@ impl ViewerApp {
         self.fps_now
     }
     /// Final errors of the finished fit (after the refit), once the learner has them.
-    pub fn final_errors(&self) -> Option<kernel_fit::Errors> {
+    pub fn final_errors(&self) -> Option<flatland_solve::Errors> {
         self.status
             .as_ref()
             .and_then(|s| s.summary.as_ref())

@@ -12,10 +12,10 @@
 use std::time::Duration;
 
 use flatland_geom::Kernel;
-use kernel_fit::solve::{
-    ExactReference, MAX_ELEMENTS, Mesh, SolveErrors, SolveParams, Stop, solve_against,
+use flatland_solve::{
+    ExactReference, MAX_ELEMENTS, Mesh, SolveError, SolveErrors, SolveParams, Stop, solve_against,
 };
-use kernel_fit::{FitError, LearnedKernel, Target};
+use kernel_fit::{LearnedKernel, Target};
 
 /// Shortest time between two solves while the network learns.
 pub const LIT_EVERY: Duration = Duration::from_millis(500);
@@ -66,13 +66,13 @@ pub struct LitSetup {
 
 impl LitSetup {
     /// The mesh for a learner of `target` on `kernel`'s scene and the exact `B` on it.
-    /// `stop` is polled in the long loops ([`FitError::Interrupted`]).
+    /// `stop` is polled in the long loops ([`SolveError::Interrupted`]).
     pub fn build(
         world: u64,
         kernel: &Kernel,
         target: Target,
         stop: &Stop,
-    ) -> Result<LitSetup, FitError> {
+    ) -> Result<LitSetup, SolveError> {
         let started = std::time::Instant::now();
         let mesh = Mesh::new(kernel, lit_elements(kernel, target))?;
         let fine = ExactReference::default_elements(mesh.len());
@@ -90,7 +90,7 @@ impl LitSetup {
     }
 
     /// Solves `model` on the mesh and measures it against the exact `B`.
-    pub fn solve(&self, model: &LearnedKernel, stop: &Stop) -> Result<LitSolve, FitError> {
+    pub fn solve(&self, model: &LearnedKernel, stop: &Stop) -> Result<LitSolve, SolveError> {
         let started = std::time::Instant::now();
         let c = solve_against(
             model,
@@ -134,15 +134,15 @@ pub struct LitPoint {
 /// nothing is lit; never 0.
 #[must_use]
 pub fn colour_top(mesh: &Mesh, b: &[f64]) -> f64 {
-    kernel_fit::colormap::radiosity_top(mesh, b)
+    flatland_lab::colormap::radiosity_top(mesh, b)
 }
 
 #[cfg(test)]
 mod tests {
     use std::sync::Arc;
 
-    use kernel_fit::solve::never;
-    use kernel_fit::{Fit, FitParams, Reference, StopReason};
+    use flatland_solve::{Reference, never};
+    use kernel_fit::{Fit, FitParams, StopReason};
 
     use super::*;
 
@@ -215,6 +215,6 @@ mod tests {
         assert!(last.errors.rel_l2_reflected < 1e-3, "{:?}", last.errors);
         // Interrupted on request.
         let err = setup.solve(fit.model(), &|| true).unwrap_err();
-        assert!(matches!(err, FitError::Interrupted), "{err}");
+        assert!(matches!(err, SolveError::Interrupted), "{err}");
     }
 }

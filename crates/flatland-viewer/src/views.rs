@@ -11,10 +11,10 @@ use egui::{
 };
 use egui_plot::{Legend, Line, LineStyle, Plot, PlotPoints, Polygon};
 use flatland_geom::{DVec2, GeomError, Role, Scene};
+use flatland_solve::Mesh;
 use kernel_fit::Snapshot;
-use kernel_fit::solve::Mesh;
 
-use kernel_fit::colormap::Scale;
+use flatland_lab::colormap::Scale;
 
 use crate::colormap::colour;
 use crate::lit::LitPoint;
@@ -480,7 +480,7 @@ fn scale_bar(painter: &Painter, frame: &PlotFrame, scale: Scale, text: Color32) 
         text,
     );
     let ticks: Vec<f64> = if scale.log {
-        let decades = kernel_fit::colormap::LOG_DECADES;
+        let decades = flatland_lab::colormap::LOG_DECADES;
         (0..=decades as usize).map(|d| d as f64 / decades).collect()
     } else {
         vec![0.0, 0.5, 1.0]
@@ -1175,7 +1175,7 @@ mod drag_tests {
     use egui::{Event, PointerButton};
     use egui_kittest::Harness;
     use flatland_geom::Kernel;
-    use kernel_fit::Reference;
+    use flatland_solve::Reference;
 
     #[test]
     fn dragging_an_end_point_reports_the_move() {

@@ -16,10 +16,8 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use flatland_geom::{Kernel, Scene};
-use kernel_fit::{
-    Approximation, Errors, Fit, FitParams, FitSummary, LearnedKernel, Reference, Snapshot,
-    StopReason,
-};
+use flatland_solve::{Errors, Reference, Representation};
+use kernel_fit::{Fit, FitParams, FitSummary, LearnedKernel, Snapshot, StopReason};
 use rayon::prelude::*;
 
 use crate::lit::{LitPoint, LitSetup, LitSolve, solve_interval};
@@ -730,7 +728,7 @@ impl Learner {
                     self.lit.setup = Some(Arc::clone(&s));
                     s
                 }
-                Err(kernel_fit::FitError::Interrupted) => return,
+                Err(flatland_solve::SolveError::Interrupted) => return,
                 Err(e) => {
                     self.lit.failed = Some(world_id);
                     let why = format!("no lit scene: {e}");
@@ -746,7 +744,7 @@ impl Learner {
         self.lit.last = Instant::now();
         self.lit.cost = started.elapsed();
         let state = match solved {
-            Err(kernel_fit::FitError::Interrupted) => return,
+            Err(flatland_solve::SolveError::Interrupted) => return,
             Err(e) => LitState::Failed(format!("the learned kernel did not solve: {e}")),
             Ok(solve) => {
                 if self.lit.history.last().is_none_or(|p| p.steps != steps) {
@@ -777,7 +775,7 @@ pub fn approx_grid(model: &LearnedKernel, res: usize) -> Vec<f64> {
         .into_par_iter()
         .with_min_len(512)
         .map(|k| {
-            let (s, t) = kernel_fit::grid_point(res, k);
+            let (s, t) = flatland_solve::grid_point(res, k);
             model.zeta(s, t)
         })
         .collect()

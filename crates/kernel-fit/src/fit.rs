@@ -5,6 +5,10 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use flatland_geom::{Kernel, Scene};
+use flatland_solve::{
+    Errors, InputFrame, Mesh, Reference, Representation, SolveError, SolveParams, Stop,
+    TransferOperator,
+};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -13,9 +17,7 @@ use sgcs::Network;
 
 use crate::seeds;
 use crate::visibility::{FaceId, FaceKey, Faces, Labeller, Sampler};
-use crate::{
-    Approximation, Errors, FitError, FitParams, Gating, InputFrame, Reference, Resampling, Target,
-};
+use crate::{FitError, FitParams, Gating, Resampling, Target};
 
 mod checkpoint;
 pub(crate) mod checks;
@@ -575,7 +577,7 @@ impl Fit {
             rays: self.state.rays,
             cells: self.state.model.network.len(),
             samples: self.state.samples.len(),
-            rel_l2_heldout: crate::relative_l2(&predicted, &values[..n]),
+            rel_l2_heldout: flatland_solve::relative_l2(&predicted, &values[..n]),
         });
     }
 
@@ -720,22 +722,35 @@ impl Fit {
     }
 }
 
-impl Approximation for Fit {
+/// A fit is its model: every method asks the [`LearnedKernel`] it trains.
+impl Representation for Fit {
     fn zeta(&self, s: f64, t: f64) -> f64 {
         self.state.model.zeta(s, t)
     }
-    fn basis_functions(&self) -> usize {
+    fn basis_functions(&self) -> Option<usize> {
         self.state.model.basis_functions()
     }
     fn memory_bytes(&self) -> usize {
         self.state.model.memory_bytes()
+    }
+    fn scene_fingerprint(&self) -> Option<u64> {
+        self.state.model.scene_fingerprint()
+    }
+    fn operator(
+        &self,
+        mesh: &Mesh,
+        params: &SolveParams,
+        stop: &Stop,
+    ) -> Result<Box<dyn TransferOperator>, SolveError> {
+        self.state.model.operator(mesh, params, stop)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Preset, density_ratio, discontinuity_mask};
+    use crate::Preset;
+    use flatland_solve::{density_ratio, discontinuity_mask};
 
     const FIG3: &str = flatland_geom::bundled::SCENES[0].2;
     const MAZE: &str = flatland_geom::bundled::SCENES[2].2;
@@ -868,11 +883,11 @@ mod tests {
         }
         fit.model().check_invariants().unwrap();
         let learned = fit.finish().unwrap().errors;
-        let hr = crate::baselines::run_hr_at_budget(
+        let hr = flatland_baselines::run_hr_at_budget(
             &kernel,
             150,
             1,
-            &crate::baselines::HrParams::default(),
+            &flatland_baselines::HrParams::default(),
         )
         .unwrap();
         let hr = fit.reference().errors(&hr.approx);

@@ -1,18 +1,20 @@
 //! Learn a Flatland scene's radiosity kernel with supervised growing cell structures
 //! (C.-A. Bohn, *Efficiently Representing the Radiosity Kernel through Learning*, EGRW 1996).
 //!
-//! The job: turn an exact but expensive kernel ([`flatland_geom::Kernel`], one visibility query
-//! per value) into a compact learned one, spending rays where the network is poor or absent.
-//! Two learners share one driver ([`Fit`]), chosen by [`Preset`]:
+//! The job, the learner only: turn an exact but expensive kernel ([`flatland_geom::Kernel`], one
+//! visibility query per value) into a compact learned one, spending rays where the network is
+//! poor or absent; its parameters, training, model and files. It is measured by `flatland_solve`
+//! (below it) and compared with the baselines by `flatland_lab` (above it). Two learners share
+//! one driver ([`Fit`]), chosen by [`Preset`]:
 //!
 //! - **The paper's network** ([`FitParams::paper`]). A sample is `(γ(s, t), ζ(s, t))` with
 //!   `γ = (x₁, y₁, x₂, y₂)`, the sender point `x = point(s)` and receiver point `y = point(t)`,
-//!   mapped into the scene's unit box by an [`InputFrame`] so that nothing depends on units or
-//!   origin; `ζ = E'(sender) · k(s, t)`. `S₀` is uniform random. Whenever `|A| / |S| > ψ` a new
-//!   set is made by scanning candidates with `θ(ξ) = ρ_ACC(ξ) ∨ ¬ρ_A(ξ)` (the printed `∧` is an
-//!   erratum): a candidate costs a ray only if it falls in a critical zone or outside the
-//!   network. Training draws a set uniformly, then a sample from it; the [`sgcs::Network`]
-//!   inserts a cell every λ steps.
+//!   mapped into the scene's unit box by an [`InputFrame`](flatland_solve::InputFrame) so that
+//!   nothing depends on units or origin; `ζ = E'(sender) · k(s, t)`. `S₀` is uniform random.
+//!   Whenever `|A| / |S| > ψ` a new set is made by scanning candidates with
+//!   `θ(ξ) = ρ_ACC(ξ) ∨ ¬ρ_A(ξ)` (the printed `∧` is an erratum): a candidate costs a ray only if
+//!   it falls in a critical zone or outside the network. Training draws a set uniformly, then a
+//!   sample from it; the [`sgcs::Network`] inserts a cell every λ steps.
 //! - **The default** ([`FitParams::default`], [`Target::Visibility`]). `ζ = E' ρ G · V`, and
 //!   everything but `V` is known in closed form, as is `V` itself on every pair of surface
 //!   edges the geometry proves unoccluded or fully blocked. So the network learns only `V`,
@@ -23,18 +25,20 @@
 //!   is exact and the error lives only in faces no cell has found yet. Samples are drawn where
 //!   the unoccluded ζ is large, errors weighted accordingly, and new cells go to the worst
 //!   sample. Same sets, θ and growth schedule as the paper.
-//! - **Errors** are measured only against a [`Reference`] the fit never trains on: the exact ζ on
-//!   a midpoint grid and at held-out random points ([`relative_l2`]).
+//! - **Errors** are measured only against a [`Reference`](flatland_solve::Reference) the fit
+//!   never trains on: the exact ζ on a midpoint grid and at held-out random points
+//!   ([`relative_l2`](flatland_solve::relative_l2)).
 //! - **Rays** counted are exact kernel evaluations made for training; evaluation is not counted.
-//! - **Solving.** A kernel is learned to be used: [`solve`] solves the radiosity equation
-//!   `B = E + K B` with any representation through one trait,
-//!   [`solve::KernelRepresentation`] (the exact kernel, the learned model, HR, the uniform grid),
-//!   and measures the solved B against the exact kernel's on a fine mesh.
+//! - **Solving.** A kernel is learned to be used: [`LearnedKernel`] (and a running [`Fit`])
+//!   implements [`flatland_solve::Representation`], the one trait the solver and the error
+//!   measures take; a visibility model brings its own operator, the closed-form transfer times
+//!   its `Ṽ` on each face, integrated exactly.
 //!
 //! ```
 //! use std::sync::Arc;
 //! use flatland_geom::{DVec2, Edge, Kernel, Scene};
-//! use kernel_fit::{Approximation, Fit, FitParams, Reference, StopReason};
+//! use flatland_solve::{Reference, Representation};
+//! use kernel_fit::{Fit, FitParams, StopReason};
 //!
 //! // A lit floor, a ceiling, and a blocker between them casting a shadow.
 //! let v = DVec2::new;
@@ -58,28 +62,16 @@
 
 #![deny(missing_docs)]
 
-pub mod ablation;
-pub mod baselines;
-pub mod bench;
-pub mod colormap;
 mod error;
-mod eval;
 mod fit;
 pub mod limits;
 mod model;
 mod params;
-pub mod rooms;
-mod sampling;
 pub mod seeds;
-pub mod solve;
 mod versioned;
 mod visibility;
 
 pub use error::FitError;
-pub use eval::{
-    Approximation, BOOTSTRAP_RESAMPLES, Errors, Reference, bootstrap_l2, density_ratio,
-    discontinuity_mask, grid_point, relative_l1, relative_l2,
-};
 pub use fit::{
     CellSnapshot, Fit, FitSummary, HistoryPoint, INPUT_DIM, LearnedKernel, RefitChoice, Snapshot,
     StopReason,
@@ -87,5 +79,4 @@ pub use fit::{
 pub use limits::REFERENCE_SEED;
 pub use model::{MODEL_FORMAT, MODEL_VERSION, ModelFile, fingerprint_hex};
 pub use params::{FitParams, Gating, Preset, Resampling, Target, parameter_table};
-pub use sampling::InputFrame;
 pub use sgcs::schema::{self, Schema, Spec};

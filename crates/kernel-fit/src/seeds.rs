@@ -1,9 +1,8 @@
-//! Every seed stream of the library in one place. Each random choice draws from its own ChaCha8
-//! stream of the run's seed, so adding draws to one never shifts another, and a run is the same
-//! for a seed on any machine and thread count.
+//! The learner's seed streams. Each random choice draws from its own ChaCha8 stream of the
+//! run's seed ([`stream`], the rule of `flatland_solve::seeds`), so adding draws to one never
+//! shifts another, and a run is the same for a seed on any machine and thread count.
 
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
+pub use flatland_solve::seeds::stream;
 
 /// A fit's initial sample set S₀.
 pub const FIT_INITIAL: u64 = 1;
@@ -11,49 +10,17 @@ pub const FIT_INITIAL: u64 = 1;
 pub const FIT_RESAMPLE: u64 = 2;
 /// The order a fit presents its samples in.
 pub const FIT_TRAIN: u64 = 3;
-/// The random validation rooms ([`crate::rooms`]).
-pub const ROOMS: u64 = 0x5ce7e;
-
-/// Stream `stream` of `seed`.
-#[must_use]
-pub fn stream(seed: u64, stream: u64) -> ChaCha8Rng {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    rng.set_stream(stream);
-    rng
-}
-
-/// The held-out points of a reference drawn with `seed` (an offset seed, so they never
-/// coincide with a training stream of the same seed).
-#[must_use]
-pub fn heldout(seed: u64) -> ChaCha8Rng {
-    ChaCha8Rng::seed_from_u64(seed ^ 0x9e37_79b9_7f4a_7c15)
-}
-
-/// A seed for item `item` of a run with `seed` (the baselines' per-link and per-grid draws):
-/// the SplitMix64 finaliser, so neighbouring items get unrelated seeds.
-#[must_use]
-pub fn item(seed: u64, item: u64) -> u64 {
-    let mut z = seed
-        ^ item
-            .wrapping_mul(0x9e37_79b9_7f4a_7c15)
-            .wrapping_add(0x632b_e59b_d9b4_e019);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
-}
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use rand::RngExt;
+    use rand_chacha::ChaCha8Rng;
 
     #[test]
     fn streams_of_one_seed_differ_and_repeat() {
         let draw = |mut r: ChaCha8Rng| -> Vec<u64> { (0..4).map(|_| r.random()).collect() };
         assert_eq!(draw(stream(7, FIT_TRAIN)), draw(stream(7, FIT_TRAIN)));
         assert_ne!(draw(stream(7, FIT_TRAIN)), draw(stream(7, FIT_RESAMPLE)));
-        assert_ne!(draw(heldout(7)), draw(stream(7, 0)));
-        assert_ne!(item(7, 0), item(7, 1));
-        assert_eq!(item(7, 3), item(7, 3));
     }
 }

@@ -11,10 +11,11 @@
 use foldhash::HashMap;
 
 use flatland_geom::{DVec2, Kernel, PairClass, PairEvents, Unoccluded};
+use flatland_solve::InputFrame;
 use rand::{Rng, RngExt};
 use sgcs::{CellId, Gate};
 
-use crate::{Gating, InputFrame};
+use crate::Gating;
 
 /// One face of a pair's visibility structure: the ordered pair of surface edges (sender rank,
 /// receiver rank), the sub-pair, and the side of each of the sub-pair's event points (bits).

@@ -285,7 +285,7 @@ impl ViewerApp {
             &mut self.settings.log_scale,
             format!(
                 "log colour scale ({} decades)",
-                kernel_fit::colormap::LOG_DECADES
+                flatland_lab::colormap::LOG_DECADES
             ),
         );
         ui.checkbox(

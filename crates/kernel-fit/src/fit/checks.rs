@@ -288,7 +288,8 @@ mod tests {
     use flatland_geom::{Kernel, KernelParams, Scene};
     use serde_json::{Value, json};
 
-    use crate::{Fit, FitParams, ModelFile, Reference, Target};
+    use crate::{Fit, FitParams, ModelFile, Target};
+    use flatland_solve::Reference;
 
     const FIG3: &str = flatland_geom::bundled::SCENES[0].2;
 

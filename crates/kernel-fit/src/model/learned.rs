@@ -11,7 +11,12 @@ use sgcs::Network;
 
 use crate::fit::Sample;
 use crate::visibility::{FaceGate, FaceId, FaceKey, Faces, Labeller};
-use crate::{Approximation, FitError, Gating, InputFrame, Target};
+use flatland_solve::{
+    InputFrame, Mesh, Representation, SolveError, SolveParams, Stop, TransferOperator,
+    check_fingerprint, quadrature_operator,
+};
+
+use crate::{FitError, Gating, Target};
 
 /// Input dimension of the kernel's network: `γ(s, t) = (x₁, y₁, x₂, y₂)`.
 pub const INPUT_DIM: usize = 4;
@@ -264,7 +269,10 @@ impl LearnedKernel {
     }
 }
 
-impl Approximation for LearnedKernel {
+/// The learned model. A visibility model (the default learner) integrates its own `Ṽ` exactly
+/// against the closed-form transfer, asking `Ṽ` once per face (the `operator` module); the
+/// paper's network, which learns ζ itself, uses the quadrature default.
+impl Representation for LearnedKernel {
     fn zeta(&self, s: f64, t: f64) -> f64 {
         if let Some(geometry) = &self.geometry {
             let kernel = &geometry.kernel;
@@ -288,8 +296,8 @@ impl Approximation for LearnedKernel {
             kappa * self.emission_factor[self.scene.point(s).edge]
         }
     }
-    fn basis_functions(&self) -> usize {
-        self.network.len()
+    fn basis_functions(&self) -> Option<usize> {
+        Some(self.network.len())
     }
     fn memory_bytes(&self) -> usize {
         // Per cell: position (4), output (1), width (1) as f64; per edge two u32 ids.
@@ -315,5 +323,29 @@ impl Approximation for LearnedKernel {
             self.network.len() * 4 + n * n + events * 16
         });
         network + geometry
+    }
+
+    fn scene_fingerprint(&self) -> Option<u64> {
+        Some(self.scene().fingerprint())
+    }
+
+    fn operator(
+        &self,
+        mesh: &Mesh,
+        params: &SolveParams,
+        stop: &Stop,
+    ) -> Result<Box<dyn TransferOperator>, SolveError> {
+        check_fingerprint(self.scene_fingerprint(), mesh)?;
+        match self.geometry_kernel() {
+            Some(kernel) => Ok(Box::new(super::operator::visibility_operator(
+                self, kernel, mesh, stop,
+            )?)),
+            None => Ok(Box::new(quadrature_operator(
+                self,
+                mesh,
+                params.quadrature_points,
+                stop,
+            )?)),
+        }
     }
 }

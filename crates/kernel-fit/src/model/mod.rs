@@ -1,14 +1,16 @@
-//! The learned model: [`LearnedKernel`] (in `learned`), and model files — scene fingerprint,
+//! The learned model: [`LearnedKernel`] (in `learned`; its transfer operator in `operator`),
+//! and model files — scene fingerprint,
 //! parameters and network in one versioned JSON, written atomically.
 
 pub(crate) mod learned;
+mod operator;
 
 use std::path::Path;
 
 use flatland_geom::{Scene, write_atomic};
 use serde::{Deserialize, Serialize};
 
-use crate::{Approximation, FitError, FitParams, FitSummary, LearnedKernel};
+use crate::{FitError, FitParams, FitSummary, LearnedKernel};
 
 /// The `format` field every model file carries.
 pub const MODEL_FORMAT: &str = "flatland-model";
@@ -95,7 +97,7 @@ impl ModelFile {
         checks::params(&self.params)?;
         checks::learned_kernel(&self.model, self.params.target)?;
         if let Some(summary) = &self.summary {
-            checks::summary(summary, self.model.basis_functions())?;
+            checks::summary(summary, self.model.network().len())?;
         }
         Ok(())
     }

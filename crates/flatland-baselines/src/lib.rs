@@ -1,0 +1,146 @@
+//! Baselines the SGCS fit is compared against: a uniform grid and hierarchical radiosity.
+//!
+//! Both approximate the same target as the network, ζ(s, t) over `[0, 1)²` (s = sender,
+//! t = receiver, docs/ALGORITHM.md §1), and both implement [`Representation`], so
+//! [`Reference::errors`](flatland_solve::Reference::errors) measures them exactly as it measures
+//! SGCS and [`flatland_solve::solve`] lights a scene with them.
+//!
+//! - [`UniformGrid`]: a g × g piecewise-constant grid over (s, t); each block holds the mean ζ
+//!   of `m` random rays inside it. g² basis functions, g²·m rays.
+//! - [`HierarchicalRadiosity`]: Hanrahan, Salzman & Aupperle (1991) in Flatland. Elements are
+//!   intervals of surface edges, refined by halving; each final link is one basis function holding
+//!   the mean ζ over its (s, t) rectangle. See the `hr` module docs below for the linking rule, the
+//!   oracle and the link estimate.
+//!
+//! The `run_*` functions are what `flatland bench` loops over: each returns a [`BaselineRun`] with
+//! the approximation, rays cast, wall time, basis-function count and memory.
+//!
+//! **Rays.** Every kernel evaluation a baseline makes counts as one ray, whether or not the
+//! geometry layer needed to trace it (it may skip back-facing or unoccludable pairs): that is the
+//! same accounting the SGCS fit uses for its samples.
+//!
+//! The crate's one job: the methods the learner is compared against, as representations of ζ.
+//! It knows the solver and the error measures (`flatland_solve`) but not the learner.
+//!
+//! ```
+//! use flatland_baselines::{HrParams, UniformParams, run_hr_at_budget, run_uniform};
+//! use flatland_geom::Kernel;
+//! use flatland_solve::Reference;
+//!
+//! let kernel = Kernel::new(flatland_geom::bundled::scene("fig3")?);
+//! let reference = Reference::new(&kernel, 64, 1024, 1);
+//! let hr = run_hr_at_budget(&kernel, 100, 7, &HrParams::default())?;
+//! let uniform = run_uniform(&kernel, 100, 7, &UniformParams::default())?;
+//! assert_eq!(uniform.basis_functions, 100);
+//! // At the same budget the adaptive links beat the blind grid.
+//! let (hr_error, uniform_error) = (
+//!     reference.errors(&hr.approx).grid,
+//!     reference.errors(&uniform.approx).grid,
+//! );
+//! assert!(hr_error < uniform_error, "HR {hr_error}, uniform {uniform_error}");
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+#![deny(missing_docs)]
+
+mod error;
+mod hr;
+mod seeds;
+#[cfg(test)]
+mod solve_tests;
+mod uniform;
+
+pub use error::BaselineError;
+
+pub use hr::{
+    HierarchicalRadiosity, HrLink, HrParams, HrStats, LinkEstimate, Oracle, count_initial_links,
+    f_eps_for_budget, hr_params_for_budget, run_hr, run_hr_at_budget,
+};
+pub use uniform::{BlockValue, UniformGrid, UniformParams, run_uniform};
+
+use flatland_solve::Representation;
+use std::time::Duration;
+
+/// One baseline run: what `flatland bench` records per method, budget and seed.
+#[derive(Clone, Debug)]
+pub struct BaselineRun<A> {
+    /// The approximation built.
+    pub approx: A,
+    /// Kernel evaluations (rays) spent building it.
+    pub rays: u64,
+    /// Wall time of the build (not of any parameter search that chose its settings).
+    pub wall: Duration,
+    /// Number of basis functions (blocks, links).
+    pub basis_functions: usize,
+    /// Bytes of the representation.
+    pub memory_bytes: usize,
+}
+
+impl<A: Representation> BaselineRun<A> {
+    fn new(approx: A, rays: u64, wall: Duration) -> Self {
+        let basis_functions = approx
+            .basis_functions()
+            .expect("a baseline counts its basis functions");
+        let memory_bytes = approx.memory_bytes();
+        BaselineRun {
+            approx,
+            rays,
+            wall,
+            basis_functions,
+            memory_bytes,
+        }
+    }
+}
+
+/// Shared by the tests of both baselines: small scenes built in code, seeded.
+#[cfg(test)]
+pub(crate) mod test_support {
+    use flatland_geom::{Edge, Kernel, Role, Scene};
+    use glam::DVec2;
+
+    /// A surface edge from `a` to `b` (front = left of a→b).
+    pub fn surface(a: [f64; 2], b: [f64; 2], reflectance: f64, emission: f64) -> Edge {
+        Edge {
+            a: DVec2::from(a),
+            b: DVec2::from(b),
+            reflectance,
+            emission,
+            role: Role::Surface,
+            two_sided: false,
+        }
+    }
+
+    /// The closed unit box, counter-clockwise (facing in), the floor emitting.
+    pub fn box_edges() -> Vec<Edge> {
+        vec![
+            surface([0.0, 0.0], [1.0, 0.0], 0.5, 1.0),
+            surface([1.0, 0.0], [1.0, 1.0], 0.7, 0.0),
+            surface([1.0, 1.0], [0.0, 1.0], 0.6, 0.0),
+            surface([0.0, 1.0], [0.0, 0.0], 0.8, 0.0),
+        ]
+    }
+
+    /// The closed unit box.
+    pub fn box_kernel() -> Kernel {
+        kernel(box_edges())
+    }
+
+    /// The unit box with a floating two-sided blocker casting shadows (like the paper's Fig. 3).
+    pub fn blocker_kernel() -> Kernel {
+        let mut edges = box_edges();
+        edges.push(Edge {
+            a: DVec2::new(0.3, 0.45),
+            b: DVec2::new(0.65, 0.55),
+            reflectance: 0.5,
+            emission: 0.0,
+            role: Role::Blocker,
+            two_sided: true,
+        });
+        kernel(edges)
+    }
+
+    /// A kernel over `edges` (which must be valid).
+    pub fn kernel(edges: Vec<Edge>) -> Kernel {
+        Kernel::new(Scene::new(edges).expect("valid test scene"))
+    }
+}

@@ -1,0 +1,503 @@
+//! Run time against error: every method at every budget (number of basis functions), on the
+//! same kernel, target and error measure, several seeds where random.
+
+use std::ops::ControlFlow;
+use std::sync::Arc;
+use std::time::Instant;
+
+use flatland_baselines::{BaselineRun, HrParams, UniformParams, run_hr_at_budget, run_uniform};
+use flatland_geom::Kernel;
+use flatland_solve::{
+    Errors, ExactReference, Mesh, Reference, Representation, SolveErrors, SolveParams, never,
+    solve_against,
+};
+use serde::{Deserialize, Serialize};
+
+use kernel_fit::{Fit, FitParams};
+
+use crate::LabError;
+
+/// A method the benchmark compares.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// The project's learner ([`Preset::Default`](kernel_fit::Preset::Default)).
+    Sgcs,
+    /// The paper's network with the least-squares output refit
+    /// ([`Preset::Paper`](kernel_fit::Preset::Paper); one fit gives this row and the next).
+    SgcsPaper,
+    /// The paper's network with its delta-rule output weights only.
+    SgcsPaperNoRefit,
+    /// Hierarchical radiosity (Hanrahan, Salzman, Aupperle 1991).
+    Hr,
+    /// Piecewise constant on a g × g grid.
+    Uniform,
+}
+
+impl Method {
+    /// Every method, in the order tables list them.
+    pub const ALL: [Method; 5] = [
+        Method::Sgcs,
+        Method::SgcsPaper,
+        Method::SgcsPaperNoRefit,
+        Method::Hr,
+        Method::Uniform,
+    ];
+
+    /// The name used in files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Sgcs => "sgcs",
+            Method::SgcsPaper => "sgcs-paper",
+            Method::SgcsPaperNoRefit => "sgcs-paper-norefit",
+            Method::Hr => "hr",
+            Method::Uniform => "uniform",
+        }
+    }
+
+    /// Parses a name as [`Method::name`] writes it.
+    pub fn parse(name: &str) -> Result<Method, LabError> {
+        Method::ALL
+            .into_iter()
+            .find(|m| m.name() == name)
+            .ok_or_else(|| LabError::InvalidParameter {
+                name: "methods",
+                value: name.to_owned(),
+                valid: "a comma-separated list of sgcs, sgcs-paper, sgcs-paper-norefit, hr, uniform",
+            })
+    }
+}
+
+/// One method at one budget and seed.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BenchRow {
+    /// The method.
+    pub method: Method,
+    /// The budget asked for (basis functions).
+    pub budget: usize,
+    /// The seed.
+    pub seed: u64,
+    /// Basis functions actually used (HR and uniform land near, not on, the budget).
+    pub basis_functions: usize,
+    /// Relative L2 errors against the reference.
+    pub errors: Errors,
+    /// Rays (exact kernel evaluations) spent building the representation.
+    pub rays: u64,
+    /// Wall time to build it, seconds (errors excluded).
+    pub wall_s: f64,
+    /// Bytes of the representation.
+    pub memory_bytes: usize,
+    /// The radiosity solved with it against the exact kernel's, when the plan asks
+    /// ([`BenchPlan::solve_elements`]).
+    #[serde(default)]
+    pub solve: Option<SolveErrors>,
+    /// Wall time of that solve (operator and linear solve), seconds.
+    #[serde(default)]
+    pub solve_s: f64,
+}
+
+/// What to run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BenchPlan {
+    /// Methods, in the order rows are produced.
+    pub methods: Vec<Method>,
+    /// Budgets (basis functions).
+    pub budgets: Vec<usize>,
+    /// Seeds 1..=seeds.
+    pub seeds: u64,
+    /// The learner's parameters (target cells and seed are set per row).
+    pub fit: FitParams,
+    /// The paper network's parameters (target cells and seed are set per row).
+    pub paper: FitParams,
+    /// HR parameters (F_ε is searched per budget).
+    pub hr: HrParams,
+    /// Uniform-grid parameters.
+    pub uniform: UniformParams,
+    /// Solve the radiosity with every representation on this many elements and report the
+    /// error of B against the exact kernel's (`None`: no solve).
+    pub solve_elements: Option<usize>,
+}
+
+impl BenchPlan {
+    /// A plan with every method's default parameters.
+    pub fn new(methods: Vec<Method>, budgets: Vec<usize>, seeds: u64) -> BenchPlan {
+        BenchPlan {
+            methods,
+            budgets,
+            seeds,
+            fit: FitParams::default(),
+            paper: FitParams::paper(),
+            hr: HrParams::default(),
+            uniform: UniformParams::default(),
+            solve_elements: None,
+        }
+    }
+
+    /// Checks the plan; errors name the parameter and the valid range.
+    pub fn validate(&self) -> Result<(), LabError> {
+        let bad =
+            |name, value: String, valid| Err(LabError::InvalidParameter { name, value, valid });
+        if self.methods.is_empty() {
+            return bad(
+                "methods",
+                "(none)".into(),
+                "at least one of sgcs, sgcs-paper, sgcs-paper-norefit, hr, uniform",
+            );
+        }
+        if let Some(b) = self.budgets.iter().find(|&&b| b < 3) {
+            return bad("budgets", b.to_string(), "each ≥ 3");
+        }
+        if self.budgets.is_empty() {
+            return bad("budgets", "(none)".into(), "at least one budget ≥ 3");
+        }
+        if self.seeds == 0 {
+            return bad("seeds", "0".into(), "≥ 1");
+        }
+        self.fit.validate()?;
+        self.paper.validate()?;
+        self.hr.check()?;
+        self.uniform.check()?;
+        Ok(())
+    }
+}
+
+/// Runs the plan on one kernel; `progress(done, total)` after each row. The paper's network
+/// with and without its refit come from one fit (the error before and after the refit), so
+/// asking for both costs one fit; its wall time is the training time (plus the refit for
+/// `sgcs-paper`).
+pub fn run_bench(
+    kernel: &Arc<Kernel>,
+    reference: &Arc<Reference>,
+    plan: &BenchPlan,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<Vec<BenchRow>, LabError> {
+    plan.validate()?;
+    let total = plan.methods.len() * plan.budgets.len() * plan.seeds as usize;
+    let mut rows = Vec::with_capacity(total);
+    let solver = plan
+        .solve_elements
+        .map(|n| Solver::new(kernel, n))
+        .transpose()?;
+    for &budget in &plan.budgets {
+        for seed in 1..=plan.seeds {
+            let wants_paper = plan
+                .methods
+                .iter()
+                .any(|m| matches!(m, Method::SgcsPaper | Method::SgcsPaperNoRefit));
+            let paper = if wants_paper {
+                Some(paper_rows(
+                    kernel,
+                    reference,
+                    &plan.paper,
+                    budget,
+                    seed,
+                    solver.as_ref(),
+                )?)
+            } else {
+                None
+            };
+            for &method in &plan.methods {
+                let s = solver.as_ref();
+                let row = match method {
+                    Method::Sgcs => learner_row(kernel, reference, &plan.fit, budget, seed, s)?,
+                    Method::SgcsPaper => paper.as_ref().map(|r| r.0.clone()).expect("fitted above"),
+                    Method::SgcsPaperNoRefit => {
+                        paper.as_ref().map(|r| r.1.clone()).expect("fitted above")
+                    }
+                    Method::Hr => baseline_row(
+                        method,
+                        budget,
+                        seed,
+                        run_hr_at_budget(kernel, budget, seed, &plan.hr)?,
+                        reference,
+                        s,
+                    )?,
+                    Method::Uniform => baseline_row(
+                        method,
+                        budget,
+                        seed,
+                        run_uniform(kernel, budget, seed, &plan.uniform)?,
+                        reference,
+                        s,
+                    )?,
+                };
+                rows.push(row);
+                progress(rows.len(), total);
+            }
+        }
+    }
+    Ok(rows)
+}
+
+/// The radiosity solve every row is scored with: one mesh and the exact kernel's B on it.
+struct Solver {
+    mesh: Mesh,
+    exact: Vec<f64>,
+}
+
+impl Solver {
+    fn new(kernel: &Kernel, elements: usize) -> Result<Solver, LabError> {
+        let mesh = Mesh::new(kernel, elements)?;
+        let reference = ExactReference::new(
+            kernel,
+            ExactReference::default_elements(elements),
+            &SolveParams::default(),
+            &never,
+        )?;
+        let exact = reference.radiosity_on(&mesh, &never)?;
+        Ok(Solver { mesh, exact })
+    }
+
+    /// The errors of B solved with `rep`, and the solve's wall time.
+    fn score(&self, rep: &dyn Representation) -> Result<(SolveErrors, f64), LabError> {
+        let started = Instant::now();
+        let c = solve_against(
+            rep,
+            &self.mesh,
+            &self.exact,
+            &SolveParams::default(),
+            &never,
+        )?;
+        Ok((c.errors, started.elapsed().as_secs_f64()))
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn row(
+    method: Method,
+    budget: usize,
+    seed: u64,
+    approx: &impl Representation,
+    reference: &Reference,
+    rays: u64,
+    wall_s: f64,
+    solver: Option<&Solver>,
+) -> Result<BenchRow, LabError> {
+    let (solve, solve_s) = match solver {
+        Some(solver) => {
+            let (errors, s) = solver.score(approx)?;
+            (Some(errors), s)
+        }
+        None => (None, 0.0),
+    };
+    Ok(BenchRow {
+        method,
+        budget,
+        seed,
+        basis_functions: approx.basis_functions().unwrap_or_default(),
+        errors: reference.errors(approx),
+        rays,
+        wall_s,
+        memory_bytes: approx.memory_bytes(),
+        solve,
+        solve_s,
+    })
+}
+
+/// The row of a baseline run.
+fn baseline_row<A: Representation>(
+    method: Method,
+    budget: usize,
+    seed: u64,
+    run: BaselineRun<A>,
+    reference: &Reference,
+    solver: Option<&Solver>,
+) -> Result<BenchRow, LabError> {
+    let wall_s = run.wall.as_secs_f64();
+    row(
+        method,
+        budget,
+        seed,
+        &run.approx,
+        reference,
+        run.rays,
+        wall_s,
+        solver,
+    )
+}
+
+/// The learner at `budget` cells (it may stop with fewer when it has converged).
+fn learner_row(
+    kernel: &Arc<Kernel>,
+    reference: &Arc<Reference>,
+    fit: &FitParams,
+    budget: usize,
+    seed: u64,
+    solver: Option<&Solver>,
+) -> Result<BenchRow, LabError> {
+    let params = FitParams {
+        target_cells: budget,
+        seed,
+        eval_every: 0,
+        ..*fit
+    };
+    let mut learner = Fit::new(Arc::clone(kernel), Arc::clone(reference), params)?;
+    let started = Instant::now();
+    learner.train(u64::MAX, |_| ControlFlow::Continue(()));
+    if params.refit {
+        learner.refit()?;
+    }
+    let wall_s = started.elapsed().as_secs_f64();
+    row(
+        Method::Sgcs,
+        budget,
+        seed,
+        learner.model(),
+        reference,
+        learner.rays(),
+        wall_s,
+        solver,
+    )
+}
+
+/// One fit of the paper's network at `budget` cells: the row after the refit and the row
+/// before it.
+fn paper_rows(
+    kernel: &Arc<Kernel>,
+    reference: &Arc<Reference>,
+    paper: &FitParams,
+    budget: usize,
+    seed: u64,
+    solver: Option<&Solver>,
+) -> Result<(BenchRow, BenchRow), LabError> {
+    let params = FitParams {
+        target_cells: budget,
+        seed,
+        refit: false,
+        eval_every: 0,
+        ..*paper
+    };
+    let mut fit = Fit::new(Arc::clone(kernel), Arc::clone(reference), params)?;
+    let started = Instant::now();
+    fit.train(u64::MAX, |_| ControlFlow::Continue(()));
+    let train_s = started.elapsed().as_secs_f64();
+    let before = row(
+        Method::SgcsPaperNoRefit,
+        budget,
+        seed,
+        fit.model(),
+        reference,
+        fit.rays(),
+        train_s,
+        solver,
+    )?;
+    let started = Instant::now();
+    fit.refit()?;
+    let refit_s = started.elapsed().as_secs_f64();
+    let after = row(
+        Method::SgcsPaper,
+        budget,
+        seed,
+        fit.model(),
+        reference,
+        fit.rays(),
+        train_s + refit_s,
+        solver,
+    )?;
+    Ok((after, before))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_method_reports_errors_that_recompute() {
+        let scene = flatland_geom::bundled::scene("fig3").unwrap();
+        let kernel = Arc::new(Kernel::new(scene));
+        let reference = Arc::new(Reference::new(&kernel, 48, 512, 3));
+        let mut plan = BenchPlan::new(Method::ALL.to_vec(), vec![30, 60], 2);
+        plan.solve_elements = Some(64);
+        let mut calls = 0;
+        let rows = run_bench(&kernel, &reference, &plan, |done, total| {
+            calls += 1;
+            assert!(done <= total);
+        })
+        .unwrap();
+        assert_eq!((rows.len(), calls), (20, 20));
+        for r in &rows {
+            assert!(
+                r.errors.grid.is_finite() && r.errors.heldout.is_finite(),
+                "{r:?}"
+            );
+            assert!(
+                r.rays > 0 && r.basis_functions > 0 && r.memory_bytes > 0,
+                "{r:?}"
+            );
+            let solve = r.solve.expect("the plan asks for a solve");
+            assert!(
+                solve.rel_l2_reflected.is_finite() && r.solve_s > 0.0,
+                "{r:?}"
+            );
+        }
+        // The uniform row's error equals an independent recomputation from its saved output.
+        let u = rows
+            .iter()
+            .find(|r| r.method == Method::Uniform && r.budget == 60)
+            .unwrap();
+        let grid = run_uniform(&kernel, 60, u.seed, &UniformParams::default()).unwrap();
+        let again = reference.errors(&grid.approx);
+        assert_eq!(again, u.errors);
+        let pick = |m, budget| {
+            rows.iter()
+                .find(|r| r.method == m && r.budget == budget && r.seed == 1)
+                .unwrap()
+        };
+        for budget in [30, 60] {
+            // The refit never makes the paper's network worse on the samples it validates on.
+            assert!(
+                pick(Method::SgcsPaper, budget).errors.heldout
+                    <= pick(Method::SgcsPaperNoRefit, budget).errors.heldout * 1.05
+            );
+            // The learner beats hierarchical radiosity by far at the same budget (R4), and so
+            // does the scene it lights.
+            let (learned, hr) = (pick(Method::Sgcs, budget), pick(Method::Hr, budget));
+            assert!(
+                learned.errors.grid < 0.5 * hr.errors.grid,
+                "{learned:?} vs {hr:?}"
+            );
+            let reflected = |r: &BenchRow| r.solve.unwrap().rel_l2_reflected;
+            assert!(reflected(learned) < reflected(hr), "{learned:?} vs {hr:?}");
+        }
+    }
+
+    #[test]
+    fn bad_plans_are_refused_with_the_parameter_named() {
+        let base = BenchPlan::new(vec![Method::Uniform], vec![10], 1);
+        for (plan, name) in [
+            (
+                BenchPlan {
+                    methods: vec![],
+                    ..base.clone()
+                },
+                "methods",
+            ),
+            (
+                BenchPlan {
+                    budgets: vec![2],
+                    ..base.clone()
+                },
+                "budgets",
+            ),
+            (
+                BenchPlan {
+                    seeds: 0,
+                    ..base.clone()
+                },
+                "seeds",
+            ),
+        ] {
+            let msg = plan.validate().unwrap_err().to_string();
+            assert!(msg.contains(name), "{msg}");
+        }
+        assert!(
+            Method::parse("nope")
+                .unwrap_err()
+                .to_string()
+                .contains("sgcs")
+        );
+        for m in Method::ALL {
+            assert_eq!(Method::parse(m.name()).unwrap(), m);
+        }
+    }
+}

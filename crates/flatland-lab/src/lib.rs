@@ -1,0 +1,49 @@
+//! Flatland's experiments and reports. The crate's one job is to *compare*: it runs the
+//! learner (`kernel_fit`) and the baselines (`flatland_baselines`) side by side, measures them
+//! all with `flatland_solve`, and writes what it finds; nothing below it knows it exists.
+//!
+//! - The experiments: every method at every budget on the same kernel and error measure
+//!   ([`bench`](mod@bench)), the learner's ideas on and off ([`ablation`]), random validation
+//!   rooms ([`rooms`]), the adversarial stability suite ([`stress`]), and RESULTS.md with its
+//!   plots, all of them run and rendered ([`results`]).
+//! - The pictures and tables: the one colour map and scale rule of every picture, CLI and viewer
+//!   ([`colormap`]); log–log charts and heatmaps ([`plot`]); the bench's CSV, plots and tables,
+//!   the Fig. 3 panels, grid images and the lit scene ([`report`]).
+//! - What every command shares with the experiments: the one reference rule and when an error is
+//!   defined ([`reference()`], [`Defined`]), Ctrl-C that keeps what is done ([`interrupt`]), and
+//!   the rule for output paths ([`output`]).
+//!
+//! Errors: the bench plan's checks are a [`LabError`]; the long-running experiments and the
+//! writers end at the command line and return `anyhow` errors with their context as text.
+//!
+//! Conventions as in the crates below: `s` is the sender parameter, `t` the receiver, both in
+//! `[0, 1)`; grids are row-major with row `i ↔ s`; pictures show `t` to the right and `s`
+//! upwards.
+//!
+//! ```
+//! use flatland_lab::bench::Method;
+//!
+//! // The methods every table lists, by the names files and the command line use.
+//! let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
+//! assert_eq!(names, ["sgcs", "sgcs-paper", "sgcs-paper-norefit", "hr", "uniform"]);
+//! assert_eq!(Method::parse("hr")?, Method::Hr);
+//! # Ok::<(), flatland_lab::LabError>(())
+//! ```
+
+#![deny(missing_docs)]
+
+pub mod ablation;
+pub mod bench;
+pub mod colormap;
+mod error;
+pub mod interrupt;
+mod measure;
+pub mod output;
+pub mod plot;
+pub mod report;
+pub mod results;
+pub mod rooms;
+pub mod stress;
+
+pub use error::LabError;
+pub use measure::{Defined, error_text, reference};

@@ -1,0 +1,247 @@
+//! Restarted GMRES for `(I − K) B = E`.
+//!
+//! Why GMRES and not Jacobi or Gauss–Seidel: K's row sums are ρ (≤ 2ρ for a two-sided receiver)
+//! in a closed room, so the Neumann series converges like `(max ρ)^n` at best and not at all for
+//! a two-sided edge with ρ > ½ or a learned kernel that overshoots. GMRES needs only that
+//! `I − K` be invertible, and on the bundled scenes reaches 1e-10 in 10–20 products with K.
+
+use crate::{SolveError, Stop, TransferOperator};
+
+/// Krylov vectors kept before a restart.
+const RESTART: usize = 40;
+
+/// What a converged solve reports.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Converged {
+    /// Products with K (Krylov steps).
+    pub iterations: usize,
+    /// Final true relative residual `‖E − (I − K) B‖ / ‖E‖`.
+    pub residual: f64,
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+fn norm(a: &[f64]) -> f64 {
+    // Scaled, so a radiosity of 1e200 neither overflows nor loses the residual.
+    let scale = a.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    if scale == 0.0 || !scale.is_finite() {
+        return scale;
+    }
+    scale * a.iter().map(|v| (v / scale).powi(2)).sum::<f64>().sqrt()
+}
+
+/// `out = x − K x`.
+fn apply_system(op: &dyn TransferOperator, x: &[f64], out: &mut [f64]) {
+    op.apply(x, out);
+    for (o, xi) in out.iter_mut().zip(x) {
+        *o = xi - *o;
+    }
+}
+
+/// Solves `x − K x = e` to relative residual `tolerance`, starting from `x`. Polls `stop`
+/// before every product with K.
+pub(crate) fn solve(
+    op: &dyn TransferOperator,
+    e: &[f64],
+    x: &mut [f64],
+    tolerance: f64,
+    max_iterations: usize,
+    stop: &Stop,
+) -> Result<Converged, SolveError> {
+    let n = e.len();
+    let norm_e = norm(e);
+    if norm_e == 0.0 {
+        x.fill(0.0);
+        return Ok(Converged {
+            iterations: 0,
+            residual: 0.0,
+        });
+    }
+    let m = RESTART.min(n).max(1);
+    let mut iterations = 0;
+    let mut r = vec![0.0; n];
+    let mut w = vec![0.0; n];
+    let mut basis: Vec<Vec<f64>> = Vec::with_capacity(m + 1);
+    loop {
+        if stop() {
+            return Err(SolveError::Interrupted);
+        }
+        apply_system(op, x, &mut r);
+        for (ri, ei) in r.iter_mut().zip(e) {
+            *ri = ei - *ri;
+        }
+        let beta = norm(&r);
+        let residual = beta / norm_e;
+        if !residual.is_finite() || (residual > tolerance && iterations >= max_iterations) {
+            return Err(SolveError::NotConverged {
+                iterations,
+                residual,
+                tolerance,
+            });
+        }
+        if residual <= tolerance {
+            return Ok(Converged {
+                iterations,
+                residual,
+            });
+        }
+        basis.clear();
+        basis.push(r.iter().map(|v| v / beta).collect());
+        // Hessenberg columns, Givens rotations, and the rotated right-hand side.
+        let mut h = vec![vec![0.0; m + 1]; m];
+        let mut rotations: Vec<(f64, f64)> = Vec::with_capacity(m);
+        let mut g = vec![0.0; m + 1];
+        g[0] = beta;
+        let mut steps = 0;
+        for k in 0..m {
+            if stop() {
+                return Err(SolveError::Interrupted);
+            }
+            apply_system(op, &basis[k], &mut w);
+            iterations += 1;
+            // Modified Gram–Schmidt, twice where it cancelled badly (keeps V orthonormal).
+            let before = norm(&w);
+            for (j, v) in basis.iter().enumerate() {
+                let c = dot(&w, v);
+                h[k][j] = c;
+                w.iter_mut().zip(v).for_each(|(wi, vi)| *wi -= c * vi);
+            }
+            if norm(&w) < 0.5 * before {
+                for (j, v) in basis.iter().enumerate() {
+                    let c = dot(&w, v);
+                    h[k][j] += c;
+                    w.iter_mut().zip(v).for_each(|(wi, vi)| *wi -= c * vi);
+                }
+            }
+            let next = norm(&w);
+            h[k][k + 1] = next;
+            for (j, &(c, s)) in rotations.iter().enumerate() {
+                let (a, b) = (h[k][j], h[k][j + 1]);
+                h[k][j] = c * a + s * b;
+                h[k][j + 1] = -s * a + c * b;
+            }
+            let (a, b) = (h[k][k], h[k][k + 1]);
+            let rho = a.hypot(b);
+            let (c, s) = if rho == 0.0 {
+                (1.0, 0.0)
+            } else {
+                (a / rho, b / rho)
+            };
+            rotations.push((c, s));
+            h[k][k] = rho;
+            h[k][k + 1] = 0.0;
+            g[k + 1] = -s * g[k];
+            g[k] *= c;
+            steps = k + 1;
+            let estimate = g[k + 1].abs() / norm_e;
+            if estimate <= tolerance || iterations >= max_iterations || next == 0.0 {
+                break;
+            }
+            basis.push(w.iter().map(|v| v / next).collect());
+        }
+        // Back substitution for the Krylov coefficients, then update x.
+        let mut y = vec![0.0; steps];
+        for i in (0..steps).rev() {
+            let sum: f64 = (i + 1..steps).map(|j| h[j][i] * y[j]).sum();
+            y[i] = if h[i][i] == 0.0 {
+                0.0
+            } else {
+                (g[i] - sum) / h[i][i]
+            };
+        }
+        for (yi, v) in y.iter().zip(&basis) {
+            x.iter_mut().zip(v).for_each(|(xi, vi)| *xi += yi * vi);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{DenseOperator, never};
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// Gaussian elimination with partial pivoting: the independent answer.
+    fn direct(k: &[f64], e: &[f64]) -> Vec<f64> {
+        let n = e.len();
+        let mut a: Vec<Vec<f64>> = (0..n)
+            .map(|i| {
+                let mut row: Vec<f64> = (0..n)
+                    .map(|j| f64::from(u8::from(i == j)) - k[i * n + j])
+                    .collect();
+                row.push(e[i]);
+                row
+            })
+            .collect();
+        for c in 0..n {
+            let p = (c..n)
+                .max_by(|&i, &j| a[i][c].abs().total_cmp(&a[j][c].abs()))
+                .unwrap();
+            a.swap(c, p);
+            let pivot = a[c].clone();
+            for row in a.iter_mut().skip(c + 1) {
+                let f = row[c] / pivot[c];
+                row.iter_mut()
+                    .zip(&pivot)
+                    .skip(c)
+                    .for_each(|(v, p)| *v -= f * p);
+            }
+        }
+        let mut x = vec![0.0; n];
+        for i in (0..n).rev() {
+            let s: f64 = (i + 1..n).map(|j| a[i][j] * x[j]).sum();
+            x[i] = (a[i][n] - s) / a[i][i];
+        }
+        x
+    }
+
+    #[test]
+    fn gmres_matches_elimination_on_random_systems_including_non_contractive_ones() {
+        let mut rng = ChaCha8Rng::seed_from_u64(9);
+        for (n, scale) in [(1, 0.5), (5, 0.9), (60, 1.5), (130, 3.0)] {
+            // Row sums up to `scale`: beyond 1 the Neumann series diverges, GMRES does not care.
+            let k: Vec<f64> = (0..n * n)
+                .map(|_| rng.random_range(0.0..1.0) * scale / n as f64 * 1.9)
+                .collect();
+            let e: Vec<f64> = (0..n).map(|_| rng.random_range(0.0..1.0)).collect();
+            let op = DenseOperator::assemble(
+                n,
+                |i, row| row.copy_from_slice(&k[i * n..(i + 1) * n]),
+                &never,
+            )
+            .unwrap();
+            let mut x = e.clone();
+            let done = solve(&op, &e, &mut x, 1e-12, 1000, &never).unwrap();
+            let expected = direct(&k, &e);
+            for i in 0..n {
+                assert!(
+                    (x[i] - expected[i]).abs() <= 1e-9 * expected[i].abs().max(1.0),
+                    "n = {n}: x[{i}] = {} vs {}",
+                    x[i],
+                    expected[i]
+                );
+            }
+            assert!(done.residual <= 1e-12, "{done:?}");
+        }
+    }
+
+    #[test]
+    fn zero_emission_singular_systems_and_stops() {
+        // Rows of ½ ½: every row sums to exactly 1 in floating point too.
+        let op = DenseOperator::assemble(2, |_, row| row.fill(0.5), &never).unwrap();
+        // E = 0: B = 0 without a product.
+        let mut x = vec![5.0; 2];
+        let done = solve(&op, &[0.0; 2], &mut x, 1e-10, 100, &never).unwrap();
+        assert_eq!((x, done.iterations), (vec![0.0; 2], 0));
+        // Rows summing to exactly 1 and light inside: I − K is singular, no finite answer.
+        let mut x = vec![1.0; 2];
+        let err = solve(&op, &[1.0, 0.0], &mut x, 1e-10, 50, &never).unwrap_err();
+        assert!(matches!(err, SolveError::NotConverged { .. }), "{err}");
+        assert!(x.iter().all(|v| v.is_finite()));
+        let err = solve(&op, &[1.0, 0.0], &mut [1.0; 2], 1e-10, 50, &|| true).unwrap_err();
+        assert!(matches!(err, SolveError::Interrupted));
+    }
+}

@@ -1,0 +1,105 @@
+//! Solve the Flatland radiosity equation with any kernel representation, and measure how far a
+//! representation of the kernel is from the exact one. The crate's one job: everything a
+//! representation is *measured with* — the solver and the error measures — so the learner and
+//! the baselines above it are judged by the same code.
+//!
+//! Conventions: points are `glam::DVec2` in scene units, an edge's front is the left of
+//! `a → b`, `s` is the sender parameter and `t` the receiver parameter, both in `[0, 1)`; grids
+//! are row-major with row `i ↔ s = (i + ½)/R`.
+//!
+//! `B(y) = E(y) + ρ(y) ∫ G(x, y) V(x, y) B(x) dl_x` on the surface edges; in the kernel's
+//! parameters, `B(t) = E(t) + ∫ k(s, t) B(s) L ds`. B is the radiosity *leaving* a point,
+//! emission included; `B − E` is the reflected part, the only part a kernel decides.
+//!
+//! **Discretisation.** A [`Mesh`] splits every surface edge into elements (never straddling
+//! two edges, default count from the scene: [`Mesh::default_elements`]); B is constant per
+//! element and the equation is collocated at element midpoints `y_i`:
+//! `B_i = E_i + Σ_j K_ij B_j`, `K_ij = ρ_i ∫_{element j} G(x, y_i) V(x, y_i) dl_x`.
+//! Midpoint collocation is second-order accurate away from corners.
+//!
+//! **Operators.** Each representation supplies its `K` through one trait,
+//! [`Representation`]:
+//! - the exact kernel ([`flatland_geom::Kernel`]): the closed-form point-to-segment transfer
+//!   `(sin φ₂ − sin φ₁) / 2` where the shaft test proves a pair of edges clear, and the exact
+//!   visible part of each element elsewhere — no rays, no quadrature, so the solve converges as
+//!   elements are refined ([`exact_operator`]);
+//! - the default learned model (`kernel_fit::LearnedKernel`, which keeps `G` exact and learns
+//!   `V`): the closed-form transfer of each piece of an element between the faces of the
+//!   visibility structure, times the model's `Ṽ` on that face — its own kernel, integrated
+//!   exactly, with no ray; the paper's network (which learns ζ itself): Gauss–Legendre
+//!   quadrature of `k̃ = ζ̃ / E'` (the default of the trait, [`quadrature_operator`]);
+//! - hierarchical radiosity and the uniform grid (`flatland_baselines`): their own links or
+//!   blocks, gathered and pushed–pulled ([`RectangleOperator`]).
+//!
+//! **Energy.** In a closed room of one-sided surfaces without blockers every sender's light
+//! lands on a surface (`∫ G V dl_y = 1`), so the power the surfaces absorb, `∫ (1 − ρ) H dl`
+//! with H the irradiance `(B − E) / ρ`, equals the power emitted, `∫ E dl` (tested to 0.2 % at
+//! 512 elements). Blockers absorb too. A two-sided surface sends its one B from both sides,
+//! so its emitted power counts twice.
+//!
+//! **Linear solve.** Restarted GMRES on `(I − K) B = E` to a relative residual
+//! [`SolveParams::tolerance`] (default 1e-10); it needs only `I − K` invertible, not `‖K‖ < 1`.
+//!
+//! **Errors of B.** [`ExactReference`] solves the exact kernel on a fine mesh once and gives the
+//! exact B at any mesh's collocation points (by the equation itself: `E + ρ ∫ G V B` with the
+//! fine B, the Nyström interpolation). [`solve_errors`] then measures a solution's relative L2
+//! error (element lengths as weights), of B and of the reflected part `B − E`.
+//! [`solve_against`] does both for one representation: what a view or a benchmark row needs.
+//!
+//! **Errors of ζ.** A [`Reference`] holds the exact ζ on a midpoint grid and at held-out random
+//! points; [`Reference::errors`] gives a representation's relative L2 and L1 on both
+//! ([`Errors`], docs/ALGORITHM.md §5).
+//!
+//! ```
+//! use flatland_geom::{DVec2, Edge, Kernel, Scene};
+//! use flatland_solve::{Mesh, SolveParams, never, solve};
+//!
+//! // A closed square room, uniform ρ = 0.5 and E = 1 everywhere: B = E / (1 − ρ) = 2.
+//! let p = [DVec2::new(0.0, 0.0), DVec2::new(1.0, 0.0), DVec2::new(1.0, 1.0), DVec2::new(0.0, 1.0)];
+//! let edges = (0..4).map(|i| Edge::surface(p[i], p[(i + 1) % 4], 0.5).with_emission(1.0)).collect();
+//! let kernel = Kernel::new(Scene::new(edges)?);
+//! let mesh = Mesh::new(&kernel, 64)?;
+//! let solution = solve(&kernel, &mesh, &SolveParams::default(), &never)?;
+//! assert!(solution.radiosity.iter().all(|b| (b - 2.0).abs() < 1e-9));
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+#![deny(missing_docs)]
+
+mod error;
+mod exact;
+mod frame;
+mod gmres;
+mod mesh;
+mod operator;
+mod quadrature;
+mod reference;
+mod represent;
+mod solve;
+mod transfer;
+
+pub mod seeds;
+
+#[cfg(test)]
+mod independent;
+#[cfg(test)]
+mod test_support;
+
+pub use error::SolveError;
+pub use exact::{check_scene, exact_block_means, exact_operator, receiver, sender};
+pub use frame::InputFrame;
+pub use mesh::{DEFAULT_ELEMENTS, Element, MAX_ELEMENTS, MIN_PER_EDGE, Mesh, MeshEdge};
+pub use operator::{DenseOperator, KernelRectangle, RectangleOperator, TransferOperator};
+pub use quadrature::gauss_legendre;
+pub use reference::{
+    BOOTSTRAP_RESAMPLES, Errors, Reference, bootstrap_l2, density_ratio, discontinuity_mask,
+    grid_point, relative_l1, relative_l2,
+};
+pub use represent::{
+    Representation, check_fingerprint, inverse_source_weights, quadrature_operator,
+};
+pub use solve::{
+    Comparison, ExactReference, Solution, SolveErrors, SolveParams, Stop, never, solve,
+    solve_against, solve_errors, solve_operator,
+};
+pub use transfer::{Receiver, Sender, point_to_segment, point_to_segment_visible};

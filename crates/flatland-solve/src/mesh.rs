@@ -1,0 +1,477 @@
+//! Elements: intervals of the surface edges on which the radiosity is constant.
+
+use std::ops::Range;
+
+use flatland_geom::{DVec2, Kernel, Scene};
+
+use crate::{InputFrame, SolveError};
+
+/// A surface edge as the solver sees it: a whole edge of the scene (all pieces of an edge that
+/// [`Scene::subdivide`] cut, which share one line and one material), with its elements.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshEdge {
+    /// The scene edges (pieces) it is made of; `pieces.start` names it in pair classifications.
+    pub pieces: Range<usize>,
+    /// Its parameter interval `[s0, s1)`.
+    pub s: [f64; 2],
+    /// Start point.
+    pub a: DVec2,
+    /// End point.
+    pub b: DVec2,
+    /// Front normal.
+    pub normal: DVec2,
+    /// Whether it sends and receives on both sides.
+    pub two_sided: bool,
+    /// ρ.
+    pub reflectance: f64,
+    /// E.
+    pub emission: f64,
+    /// E', the weight ζ = E'·k gives its rows (the exact kernel's source weight).
+    pub source_weight: f64,
+    /// Its elements (indices into [`Mesh::elements`]).
+    pub elements: Range<usize>,
+    /// Where other edges touch or cross it, as fractions `u ∈ (0, 1)` from `a` to `b`: B jumps
+    /// there (a partition standing on a floor sees different halves of the room from its two
+    /// sides), so element boundaries are placed there.
+    pub junctions: Vec<f64>,
+}
+
+/// One element: an interval of one surface edge, never straddling two. The unknown `B` is
+/// constant on it and the equation is collocated at its midpoint.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Element {
+    /// Index into [`Mesh::edges`].
+    pub mesh_edge: usize,
+    /// The scene edge (piece) its midpoint lies on.
+    pub edge: usize,
+    /// Its parameter interval `[s0, s1)`.
+    pub s: [f64; 2],
+    /// The parameter of its midpoint (the collocation point).
+    pub s_mid: f64,
+    /// Start point.
+    pub a: DVec2,
+    /// End point.
+    pub b: DVec2,
+    /// The midpoint: where the equation is collocated.
+    pub midpoint: DVec2,
+    /// Arc length `L · (s1 − s0)`.
+    pub length: f64,
+}
+
+/// The elements of a scene, in parameter order, with the materials the solver needs and the
+/// geometry in a unit frame (so no product of coordinates over- or underflows at any scale).
+#[derive(Clone, Debug)]
+pub struct Mesh {
+    edges: Vec<MeshEdge>,
+    elements: Vec<Element>,
+    /// Frame coordinates of each element's end points and midpoint.
+    local: Vec<[DVec2; 3]>,
+    frame: InputFrame,
+    total_length: f64,
+    fingerprint: u64,
+}
+
+/// Most elements a mesh may have: the dense operators hold N² numbers (8192² · 8 B = 512 MiB).
+pub const MAX_ELEMENTS: usize = 8192;
+
+/// The default element count: about this many over the whole scene, and at least
+/// [`MIN_PER_EDGE`] per section of a surface edge. Measured against 8192 elements, 512 put the
+/// reflected part of every bundled scene's exact solve within 0.1 % (`flatland solve
+/// --reference-elements 8192`).
+pub const DEFAULT_ELEMENTS: usize = 512;
+
+/// Fewest elements the default gives a section of a surface edge.
+pub const MIN_PER_EDGE: usize = 2;
+
+impl Mesh {
+    /// The default element count for `scene`: [`DEFAULT_ELEMENTS`], raised so every section of
+    /// a surface edge gets [`MIN_PER_EDGE`] elements, capped at [`MAX_ELEMENTS`].
+    #[must_use]
+    pub fn default_elements(scene: &Scene) -> usize {
+        let sections = Mesh::min_elements(scene);
+        DEFAULT_ELEMENTS
+            .max(MIN_PER_EDGE * sections)
+            .min(MAX_ELEMENTS.max(sections))
+    }
+
+    /// `elements` elements over the surfaces of `kernel`'s scene, spread so that their lengths
+    /// are as equal as the sections allow (each section gets at least one, apportioned by
+    /// length). Sections are the parts of a surface edge between its ends and the junctions
+    /// where other edges touch or cross it ([`MeshEdge::junctions`]). Errors name the valid
+    /// range: at least [`Mesh::min_elements`], at most [`MAX_ELEMENTS`].
+    pub fn new(kernel: &Kernel, elements: usize) -> Result<Mesh, SolveError> {
+        let fewest = Mesh::min_elements(kernel.scene());
+        if elements < fewest || elements > MAX_ELEMENTS {
+            return Err(SolveError::InvalidParameter {
+                name: "elements",
+                value: elements.to_string(),
+                valid: if elements > MAX_ELEMENTS {
+                    "at most 8192 (the operator is dense: N² numbers)"
+                } else {
+                    "at least one per section of a surface edge (elements never straddle two \
+                     edges, nor a point where another edge touches or crosses one)"
+                },
+            });
+        }
+        Mesh::build(kernel, elements)
+    }
+
+    fn build(kernel: &Kernel, elements: usize) -> Result<Mesh, SolveError> {
+        let scene = kernel.scene();
+        let runs = surface_runs(scene);
+        let total_length = scene.total_length();
+        let cuts: Vec<Vec<f64>> = runs.iter().map(|r| junctions(scene, r)).collect();
+        let lengths: Vec<f64> = runs
+            .iter()
+            .map(|r| {
+                let e = scene.edges();
+                (e[r.end - 1].b - e[r.start].a).length()
+            })
+            .collect();
+        // Sections: the parts of each edge between its ends and junctions, in order.
+        let sections: Vec<(usize, f64, f64)> = cuts
+            .iter()
+            .enumerate()
+            .flat_map(|(k, c)| c.windows(2).map(move |w| (k, w[0], w[1])))
+            .collect();
+        let section_lengths: Vec<f64> = sections
+            .iter()
+            .map(|&(k, u0, u1)| (u1 - u0) * lengths[k])
+            .collect();
+        let counts = apportion(&section_lengths, elements);
+        let frame = InputFrame::of(scene);
+        let local_point = |p: DVec2| DVec2::from(frame.map(p));
+        let mut edges: Vec<MeshEdge> = Vec::with_capacity(runs.len());
+        let mut out = Vec::with_capacity(elements);
+        let mut local = Vec::with_capacity(elements);
+        for (&(k, u_start, u_end), &count) in sections.iter().zip(&counts) {
+            let run = &runs[k];
+            let first = scene.edges()[run.start];
+            let (a, b) = (first.a, scene.edges()[run.end - 1].b);
+            let s0 = scene
+                .edge_param_range(run.start)
+                .expect("a surface edge has a parameter range")
+                .0;
+            let s1 = scene
+                .edge_param_range(run.end - 1)
+                .expect("a surface edge has a parameter range")
+                .1;
+            if edges.len() == k {
+                edges.push(MeshEdge {
+                    pieces: run.clone(),
+                    s: [s0, s1],
+                    a,
+                    b,
+                    normal: first.normal(),
+                    two_sided: first.two_sided,
+                    reflectance: first.reflectance,
+                    emission: first.emission,
+                    source_weight: kernel.source_weight(run.start),
+                    elements: out.len()..out.len(),
+                    junctions: cuts[k][1..cuts[k].len() - 1].to_vec(),
+                });
+            }
+            // Positions as Scene::point computes them (a + (b − a) u), so a midpoint's `s`
+            // names that very point.
+            let at = |u: f64| if u >= 1.0 { b } else { a + (b - a) * u };
+            let param = |u: f64| if u >= 1.0 { s1 } else { s0 + (s1 - s0) * u };
+            let along = |e: f64| {
+                if e >= count as f64 {
+                    u_end
+                } else {
+                    u_start + (u_end - u_start) * e / count as f64
+                }
+            };
+            let pieces = run.len();
+            for e in 0..count {
+                let (u0, u1, um) = (
+                    along(e as f64),
+                    along(e as f64 + 1.0),
+                    along(e as f64 + 0.5),
+                );
+                let (pa, pb, pm) = (at(u0), at(u1), at(um));
+                out.push(Element {
+                    mesh_edge: k,
+                    edge: run.start + ((um * pieces as f64) as usize).min(pieces - 1),
+                    s: [param(u0), param(u1)],
+                    s_mid: param(um),
+                    a: pa,
+                    b: pb,
+                    midpoint: pm,
+                    length: (u1 - u0) * lengths[k],
+                });
+                local.push([local_point(pa), local_point(pb), local_point(pm)]);
+            }
+            edges[k].elements.end = out.len();
+        }
+        Ok(Mesh {
+            edges,
+            elements: out,
+            local,
+            frame,
+            total_length,
+            fingerprint: scene.fingerprint(),
+        })
+    }
+
+    /// One element per section of a surface edge: the coarsest mesh (no limit on the count).
+    pub fn coarsest(kernel: &Kernel) -> Result<Mesh, SolveError> {
+        Mesh::build(kernel, Mesh::min_elements(kernel.scene()))
+    }
+
+    /// The fewest elements a mesh of `scene` can have: one per section, the parts of a surface
+    /// edge between its ends and the points where other edges touch or cross it.
+    #[must_use]
+    pub fn min_elements(scene: &Scene) -> usize {
+        surface_runs(scene)
+            .iter()
+            .map(|r| junctions(scene, r).len() - 1)
+            .sum()
+    }
+
+    /// The elements, in parameter order.
+    #[must_use]
+    pub fn elements(&self) -> &[Element] {
+        &self.elements
+    }
+
+    /// Number of elements.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.elements.len()
+    }
+
+    /// Whether there are no elements (never, for a valid mesh).
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.elements.is_empty()
+    }
+
+    /// The surface edges (whole edges, in parameter order).
+    #[must_use]
+    pub fn edges(&self) -> &[MeshEdge] {
+        &self.edges
+    }
+
+    /// The surface edge of element `i`.
+    #[must_use]
+    pub fn edge_of(&self, i: usize) -> &MeshEdge {
+        &self.edges[self.elements[i].mesh_edge]
+    }
+
+    /// E per element.
+    #[must_use]
+    pub fn emission(&self) -> Vec<f64> {
+        (0..self.len()).map(|i| self.edge_of(i).emission).collect()
+    }
+
+    /// Total surface length `L`.
+    #[must_use]
+    pub fn total_length(&self) -> f64 {
+        self.total_length
+    }
+
+    /// `Scene::fingerprint` of the scene it was made for.
+    #[must_use]
+    pub fn fingerprint(&self) -> u64 {
+        self.fingerprint
+    }
+
+    /// The unit frame the solver computes geometry in.
+    #[must_use]
+    pub fn frame(&self) -> InputFrame {
+        self.frame
+    }
+
+    /// A scene point in the unit frame.
+    #[must_use]
+    pub fn to_local(&self, p: DVec2) -> DVec2 {
+        DVec2::from(self.frame.map(p))
+    }
+
+    /// Element `i`'s end points and midpoint in the unit frame.
+    pub fn local(&self, i: usize) -> [DVec2; 3] {
+        self.local[i]
+    }
+
+    /// The element whose `[s0, s1)` holds `s` (`s` clamped into `[0, 1)`).
+    #[must_use]
+    pub fn element_at(&self, s: f64) -> usize {
+        let k = self.elements.partition_point(|e| e.s[0] <= s);
+        k.saturating_sub(1)
+    }
+}
+
+/// The surface edges of `scene` as runs of pieces, in parameter order.
+fn surface_runs(scene: &Scene) -> Vec<Range<usize>> {
+    let mut runs: Vec<Range<usize>> = Vec::new();
+    for &e in scene.surface_edges() {
+        let run = scene.parent_pieces(e).expect("a surface edge has a parent");
+        if runs.last() != Some(&run) {
+            runs.push(run);
+        }
+    }
+    runs
+}
+
+/// `0`, the junctions of surface run `run` (see [`MeshEdge::junctions`]) and `1`, ascending.
+fn junctions(scene: &Scene, run: &Range<usize>) -> Vec<f64> {
+    let all = scene.edges();
+    let (a, b) = (all[run.start].a, all[run.end - 1].b);
+    let d = b - a;
+    // Parameters within this of an end are the end (the edge meets another at a corner).
+    let tol = 1e-9;
+    let mut cuts = vec![0.0, 1.0];
+    for (i, e) in all.iter().enumerate() {
+        if run.contains(&i) {
+            continue;
+        }
+        let q = e.b - e.a;
+        let den = d.perp_dot(q);
+        if den == 0.0 {
+            continue; // parallel: collinear neighbours meet at an end, overlaps have no point
+        }
+        let w = e.a - a;
+        let (u, v) = (w.perp_dot(q) / den, w.perp_dot(d) / den);
+        if u > tol && u < 1.0 - tol && (-tol..=1.0 + tol).contains(&v) {
+            cuts.push(u);
+        }
+    }
+    cuts.sort_by(f64::total_cmp);
+    cuts.dedup_by(|x, y| (*x - *y).abs() <= tol);
+    cuts
+}
+
+/// `total` elements over edges of `lengths`: at least one each, otherwise as close to equal
+/// element lengths as whole numbers allow (each step gives one more element to the edge whose
+/// elements are longest, or takes one from the edge whose elements are shortest).
+fn apportion(lengths: &[f64], total: usize) -> Vec<usize> {
+    let sum: f64 = lengths.iter().sum();
+    let mut counts: Vec<usize> = lengths
+        .iter()
+        .map(|&l| ((l / sum * total as f64).floor() as usize).max(1))
+        .collect();
+    let mut assigned: usize = counts.iter().sum();
+    let element = |k: usize, c: &[usize]| lengths[k] / c[k] as f64;
+    while assigned < total {
+        let k = (0..lengths.len())
+            .max_by(|&p, &q| element(p, &counts).total_cmp(&element(q, &counts)))
+            .expect("at least one edge");
+        counts[k] += 1;
+        assigned += 1;
+    }
+    while assigned > total {
+        let k = (0..lengths.len())
+            .filter(|&k| counts[k] > 1)
+            .min_by(|&p, &q| element(p, &counts).total_cmp(&element(q, &counts)))
+            .expect("total ≥ number of edges");
+        counts[k] -= 1;
+        assigned -= 1;
+    }
+    counts
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_support::bundled;
+
+    #[test]
+    fn elements_tile_the_parameter_range_in_order_and_never_straddle_edges() {
+        for name in ["fig3", "box", "maze", "corners"] {
+            let kernel = Kernel::new(bundled(name));
+            let scene = kernel.scene();
+            for n in [Mesh::min_elements(scene), 100, 513] {
+                let mesh = Mesh::new(&kernel, n).unwrap();
+                assert_eq!(mesh.len(), n, "{name}");
+                let els = mesh.elements();
+                assert_eq!(els[0].s[0], 0.0);
+                assert_eq!(els[n - 1].s[1], 1.0);
+                for w in els.windows(2) {
+                    assert_eq!(w[0].s[1], w[1].s[0], "{name}: a gap or overlap");
+                }
+                let total: f64 = els.iter().map(|e| e.length).sum();
+                assert!((total - scene.total_length()).abs() < 1e-12 * total);
+                for (i, e) in els.iter().enumerate() {
+                    let p = scene.point(e.s_mid);
+                    assert_eq!(p.edge, e.edge, "{name}: element {i}");
+                    assert!(
+                        p.position.distance(e.midpoint) < 1e-12,
+                        "{name}: element {i}"
+                    );
+                    let edge = mesh.edge_of(i);
+                    assert!(edge.s[0] <= e.s[0] && e.s[1] <= edge.s[1]);
+                    assert_eq!(mesh.element_at(e.s_mid), i);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn subdivided_scenes_mesh_whole_edges() {
+        let scene = bundled("fig3");
+        let coarse = Mesh::new(&Kernel::new(scene.clone()), 60).unwrap();
+        let fine = Mesh::new(&Kernel::new(scene.subdivide(7).unwrap()), 60).unwrap();
+        assert_eq!(coarse.edges().len(), fine.edges().len());
+        for (a, b) in coarse.elements().iter().zip(fine.elements()) {
+            assert!((a.s_mid - b.s_mid).abs() < 1e-15);
+            assert!(a.midpoint.distance(b.midpoint) < 1e-12);
+        }
+        // Fewer elements than (whole) surface edges is an error naming the rule.
+        let err = Mesh::new(&Kernel::new(scene), 5).unwrap_err().to_string();
+        assert!(
+            err.contains("elements") && err.contains("at least one per section"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn elements_never_straddle_a_junction() {
+        // maze: a partition stands on the floor at x = 1.5 and hangs from the ceiling at x = 5.2;
+        // corners: a blocker stands on the right floor piece at x = 3.2.
+        let maze = Kernel::new(bundled("maze"));
+        let mesh = Mesh::new(&maze, 300).unwrap();
+        assert_eq!(mesh.edges()[0].junctions, vec![0.25]);
+        assert!((mesh.edges()[2].junctions[0] - 0.8 / 1.5).abs() < 1e-15);
+        assert_eq!(Mesh::min_elements(maze.scene()), 12 + 2);
+        let corners = Kernel::new(bundled("corners"));
+        let mesh = Mesh::new(&corners, 100).unwrap();
+        assert!((mesh.edges()[1].junctions[0] - 0.6).abs() < 1e-15);
+        for m in [&mesh, &Mesh::new(&maze, 77).unwrap()] {
+            for edge in m.edges() {
+                for &u in &edge.junctions {
+                    let x = edge.a + (edge.b - edge.a) * u;
+                    assert!(
+                        m.elements()[edge.elements.clone()]
+                            .iter()
+                            .any(|e| e.a.distance(x) < 1e-12),
+                        "no element starts at the junction {x}"
+                    );
+                }
+            }
+        }
+        assert!(Mesh::new(&maze, 13).is_err());
+        assert_eq!(Mesh::coarsest(&maze).unwrap().len(), 14);
+    }
+
+    #[test]
+    fn apportionment_is_exact_and_near_uniform() {
+        let lengths = [4.0, 3.0, 1.5, 1.0, 1.5, 3.0];
+        for total in 6..200 {
+            let c = apportion(&lengths, total);
+            assert_eq!(c.iter().sum::<usize>(), total);
+            assert!(c.iter().all(|&k| k >= 1));
+        }
+        assert_eq!(apportion(&lengths, 28), vec![8, 6, 3, 2, 3, 6]);
+        // A tiny edge still gets one element.
+        let c = apportion(&[1.0, 1e-6, 1.0], 10);
+        assert_eq!(c[1], 1);
+    }
+
+    #[test]
+    fn default_element_count_follows_the_scene() {
+        assert_eq!(Mesh::default_elements(&bundled("fig3")), DEFAULT_ELEMENTS);
+        let many = bundled("box").subdivide(1).unwrap();
+        assert!(Mesh::default_elements(&many) >= MIN_PER_EDGE * 6);
+    }
+}

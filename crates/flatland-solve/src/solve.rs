@@ -1,0 +1,524 @@
+//! The solve itself: its settings, the solution, `B = E + K B` by GMRES with any
+//! representation's operator, a solution's errors, and the exact reference every solved B is
+//! compared with.
+
+use std::time::Instant;
+
+use flatland_geom::Kernel;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::exact::{self, PairTable};
+use crate::{MAX_ELEMENTS, Mesh, Representation, SolveError, TransferOperator, gmres};
+
+/// The stop flag of every long loop here: polled between rows and iterations; when it returns
+/// `true` the work ends with [`SolveError::Interrupted`].
+pub type Stop = dyn Fn() -> bool + Sync;
+
+/// A [`Stop`] that never stops.
+#[must_use]
+pub fn never() -> bool {
+    false
+}
+
+/// Settings of a solve, checked by [`SolveParams::validate`].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct SolveParams {
+    /// Relative residual `‖E − (I − K) B‖ / ‖E‖` the linear solve must reach. Valid: (0, 0.1].
+    pub tolerance: f64,
+    /// Most products with K before giving up. Valid: ≥ 1.
+    pub max_iterations: usize,
+    /// Gauss–Legendre points per element for the default (quadrature) operator. Valid: [1, 16].
+    pub quadrature_points: usize,
+}
+
+impl Default for SolveParams {
+    fn default() -> Self {
+        SolveParams {
+            tolerance: 1e-10,
+            max_iterations: 2000,
+            quadrature_points: 2,
+        }
+    }
+}
+
+impl SolveParams {
+    /// Checks every field; the error names it and its valid range.
+    pub fn validate(&self) -> Result<(), SolveError> {
+        let bad =
+            |name, value: String, valid| Err(SolveError::InvalidParameter { name, value, valid });
+        if !(self.tolerance > 0.0 && self.tolerance <= 0.1) {
+            return bad("tolerance", self.tolerance.to_string(), "in (0, 0.1]");
+        }
+        if self.max_iterations == 0 {
+            return bad("max_iterations", "0".into(), "at least 1");
+        }
+        if !(1..=16).contains(&self.quadrature_points) {
+            return bad(
+                "quadrature_points",
+                self.quadrature_points.to_string(),
+                "in [1, 16]",
+            );
+        }
+        Ok(())
+    }
+}
+
+/// A solved radiosity.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Solution {
+    /// B per element (emission included), in the mesh's order.
+    pub radiosity: Vec<f64>,
+    /// Products with K the linear solve made.
+    pub iterations: usize,
+    /// Its final relative residual.
+    pub residual: f64,
+    /// Seconds spent building the operator.
+    pub assembly_s: f64,
+    /// Seconds spent in the linear solve.
+    pub solve_s: f64,
+}
+
+impl Solution {
+    /// Seconds for the whole solve (operator and linear solve).
+    #[must_use]
+    pub fn wall_s(&self) -> f64 {
+        self.assembly_s + self.solve_s
+    }
+}
+
+/// Solves `B = E + K B` on `mesh` with `rep`'s operator.
+pub fn solve<R: Representation + ?Sized>(
+    rep: &R,
+    mesh: &Mesh,
+    params: &SolveParams,
+    stop: &Stop,
+) -> Result<Solution, SolveError> {
+    params.validate()?;
+    let started = Instant::now();
+    let op = rep.operator(mesh, params, stop)?;
+    let assembly_s = started.elapsed().as_secs_f64();
+    let mut solution = solve_operator(op.as_ref(), mesh, params, stop)?;
+    solution.assembly_s = assembly_s;
+    Ok(solution)
+}
+
+/// Solves `B = E + K B` with an operator already built on `mesh` (`assembly_s` is 0).
+pub fn solve_operator(
+    op: &dyn TransferOperator,
+    mesh: &Mesh,
+    params: &SolveParams,
+    stop: &Stop,
+) -> Result<Solution, SolveError> {
+    params.validate()?;
+    if op.len() != mesh.len() {
+        return Err(SolveError::InvalidParameter {
+            name: "operator",
+            value: format!("{} elements", op.len()),
+            valid: "an operator built on the mesh being solved",
+        });
+    }
+    let started = Instant::now();
+    let e = mesh.emission();
+    let mut b = e.clone();
+    let done = gmres::solve(
+        op,
+        &e,
+        &mut b,
+        params.tolerance,
+        params.max_iterations,
+        stop,
+    )?;
+    Ok(Solution {
+        radiosity: b,
+        iterations: done.iterations,
+        residual: done.residual,
+        assembly_s: 0.0,
+        solve_s: started.elapsed().as_secs_f64(),
+    })
+}
+
+/// Relative L2 errors of a solved B against the exact one, on the same elements, weighted by
+/// element length: `sqrt(Σ l (b̃ − b)² / Σ l b²)`, and the same for the reflected part `B − E`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SolveErrors {
+    /// Of B.
+    pub rel_l2_b: f64,
+    /// Of `B − E`: the part the kernel decides.
+    pub rel_l2_reflected: f64,
+}
+
+/// [`SolveErrors`] of `b` against `exact` on `mesh`. Scale-safe; where the exact value is 0
+/// everywhere the absolute RMS is returned instead, so the number is always finite.
+#[must_use]
+pub fn solve_errors(mesh: &Mesh, b: &[f64], exact: &[f64]) -> SolveErrors {
+    assert_eq!(b.len(), mesh.len(), "solve_errors: b is not on the mesh");
+    assert_eq!(
+        exact.len(),
+        mesh.len(),
+        "solve_errors: exact is not on the mesh"
+    );
+    let e = mesh.emission();
+    let weights: Vec<f64> = mesh.elements().iter().map(|el| el.length).collect();
+    let reflected = |v: &[f64]| -> Vec<f64> { v.iter().zip(&e).map(|(x, ei)| x - ei).collect() };
+    SolveErrors {
+        rel_l2_b: weighted_relative_l2(b, exact, &weights),
+        rel_l2_reflected: weighted_relative_l2(&reflected(b), &reflected(exact), &weights),
+    }
+}
+
+fn weighted_relative_l2(approx: &[f64], exact: &[f64], weights: &[f64]) -> f64 {
+    let scale = crate::reference::largest_finite(approx, exact);
+    if scale == 0.0 {
+        return 0.0;
+    }
+    let total: f64 = weights.iter().sum();
+    let (mut num, mut den) = (0.0, 0.0);
+    for ((a, x), w) in approx.iter().zip(exact).zip(weights) {
+        let w = w / total;
+        num += w * ((a - x) / scale).powi(2);
+        den += w * (x / scale).powi(2);
+    }
+    if den == 0.0 {
+        num.sqrt() * scale
+    } else {
+        (num / den).sqrt()
+    }
+}
+
+/// The exact kernel solved on a fine mesh: the reference every solved B is compared with.
+#[derive(Clone, Debug)]
+pub struct ExactReference {
+    mesh: Mesh,
+    table: PairTable,
+    solution: Solution,
+}
+
+impl ExactReference {
+    /// Solves `kernel` exactly on `elements` elements.
+    pub fn new(
+        kernel: &Kernel,
+        elements: usize,
+        params: &SolveParams,
+        stop: &Stop,
+    ) -> Result<ExactReference, SolveError> {
+        params.validate()?;
+        let mesh = Mesh::new(kernel, elements)?;
+        let started = Instant::now();
+        let table = PairTable::new(kernel, &mesh)?;
+        let op = exact::exact_operator_with(&table, &mesh, stop)?;
+        let assembly_s = started.elapsed().as_secs_f64();
+        let mut solution = solve_operator(&op, &mesh, params, stop)?;
+        solution.assembly_s = assembly_s;
+        Ok(ExactReference {
+            mesh,
+            table,
+            solution,
+        })
+    }
+
+    /// The default fine resolution for comparing solutions on `elements` elements: four times
+    /// finer, at least 2048, at most [`MAX_ELEMENTS`].
+    #[must_use]
+    pub fn default_elements(elements: usize) -> usize {
+        (4 * elements).clamp(2048, MAX_ELEMENTS)
+    }
+
+    /// The fine mesh.
+    #[must_use]
+    pub fn mesh(&self) -> &Mesh {
+        &self.mesh
+    }
+
+    /// The fine solution.
+    #[must_use]
+    pub fn solution(&self) -> &Solution {
+        &self.solution
+    }
+
+    /// The exact B at the collocation points of `mesh` (a mesh of the same scene): the
+    /// equation itself evaluated there, `E + ρ Σ_j B_j ∫_{fine element j} G V`, with the
+    /// exact transfer. Rows in parallel; `stop` polled per point.
+    pub fn radiosity_on(&self, mesh: &Mesh, stop: &Stop) -> Result<Vec<f64>, SolveError> {
+        if mesh.fingerprint() != self.mesh.fingerprint() {
+            return Err(SolveError::SceneMismatch {
+                representation: format!("{:016x}", self.mesh.fingerprint()),
+                mesh: format!("{:016x}", mesh.fingerprint()),
+            });
+        }
+        let b = &self.solution.radiosity;
+        (0..mesh.len())
+            .into_par_iter()
+            .with_min_len(8)
+            .map_init(
+                || vec![0.0; self.mesh.len()],
+                |row, i| {
+                    if stop() {
+                        return Err(SolveError::Interrupted);
+                    }
+                    let edge = mesh.edge_of(i);
+                    let k = mesh.elements()[i].mesh_edge;
+                    if edge.reflectance == 0.0 {
+                        return Ok(edge.emission);
+                    }
+                    exact::transfer_row(
+                        &self.mesh,
+                        &self.table,
+                        k,
+                        mesh.local(i)[2],
+                        row,
+                        &exact::visible,
+                    );
+                    let gathered: f64 = row.iter().zip(b).map(|(t, bj)| t * bj).sum();
+                    Ok(edge.emission + edge.reflectance * gathered)
+                },
+            )
+            .collect()
+    }
+}
+
+/// One representation solved and compared: what a lit-scene view or a benchmark row needs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Comparison {
+    /// The solution with the representation.
+    pub solution: Solution,
+    /// Its errors against the exact B on the same elements.
+    pub errors: SolveErrors,
+}
+
+/// Solves with `rep` on `mesh` and measures the errors against `exact` (the exact B at the
+/// mesh's collocation points, from [`ExactReference::radiosity_on`]).
+pub fn solve_against<R: Representation + ?Sized>(
+    rep: &R,
+    mesh: &Mesh,
+    exact: &[f64],
+    params: &SolveParams,
+    stop: &Stop,
+) -> Result<Comparison, SolveError> {
+    if exact.len() != mesh.len() {
+        return Err(SolveError::InvalidParameter {
+            name: "exact",
+            value: format!("{} values", exact.len()),
+            valid: "one exact B per element of the mesh",
+        });
+    }
+    let solution = solve(rep, mesh, params, stop)?;
+    let errors = solve_errors(mesh, &solution.radiosity, exact);
+    Ok(Comparison { solution, errors })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_support::{bundled, l_room, room};
+    use crate::{exact_operator, quadrature_operator};
+    use flatland_geom::{DVec2, Edge, Scene};
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    fn v(x: f64, y: f64) -> DVec2 {
+        DVec2::new(x, y)
+    }
+
+    fn exact(scene: Scene, elements: usize) -> (Kernel, Mesh, Solution) {
+        let kernel = Kernel::new(scene);
+        let mesh = Mesh::new(&kernel, elements).unwrap();
+        let solution = solve(&kernel, &mesh, &SolveParams::default(), &never).unwrap();
+        (kernel, mesh, solution)
+    }
+
+    /// Random convex polygons: sorted angles on an ellipse, counter-clockwise.
+    fn convex_rooms(count: usize, rho: f64, e: f64) -> Vec<Scene> {
+        let mut rng = ChaCha8Rng::seed_from_u64(21);
+        (0..count)
+            .map(|_| {
+                let mut angles: Vec<f64> = (0..rng.random_range(3..9))
+                    .map(|_| rng.random_range(0.0..std::f64::consts::TAU))
+                    .collect();
+                angles.sort_by(f64::total_cmp);
+                angles.dedup_by(|a, b| (*a - *b).abs() < 0.05);
+                let pts: Vec<DVec2> = angles.iter().map(|a| v(2.0 * a.cos(), a.sin())).collect();
+                room(&pts, rho, e)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn uniform_emission_and_reflectance_in_a_closed_convex_room_gives_e_over_one_minus_rho() {
+        // B = E + ρ ∫ G B dl and ∫ G dl = 1 from every point of a closed room: B = E / (1 − ρ).
+        for (k, scene) in convex_rooms(4, 0.0, 0.0).into_iter().enumerate() {
+            for (rho, e) in [(0.3, 1.0), (0.9, 2.5), (0.999, 1e-3)] {
+                let edges: Vec<Edge> = scene
+                    .edges()
+                    .iter()
+                    .map(|edge| Edge {
+                        reflectance: rho,
+                        emission: e,
+                        ..*edge
+                    })
+                    .collect();
+                let (_, _, solution) = exact(Scene::new(edges).unwrap(), 97);
+                let expected = e / (1.0 - rho);
+                for b in &solution.radiosity {
+                    assert!(
+                        (b - expected).abs() <= 1e-8 * expected,
+                        "room {k}, ρ = {rho}: B = {b} vs {expected}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn zero_reflectance_gives_b_equal_to_e() {
+        for name in ["fig3", "maze", "corners"] {
+            let scene = bundled(name);
+            let edges: Vec<Edge> = scene
+                .edges()
+                .iter()
+                .map(|e| Edge {
+                    reflectance: 0.0,
+                    ..*e
+                })
+                .collect();
+            let (_, mesh, solution) = exact(Scene::new(edges).unwrap(), 128);
+            assert_eq!(solution.radiosity, mesh.emission(), "{name}");
+        }
+    }
+
+    /// Emitted and absorbed power of an exact solve in a closed room without blockers (where
+    /// every ray from a surface ends on a surface): `∫ E dl` and `∫ (1 − ρ) H dl`, with H the
+    /// irradiance `(K B)_i / ρ_i`.
+    fn power_balance(scene: Scene, elements: usize) -> (f64, f64) {
+        let kernel = Kernel::new(scene);
+        let mesh = Mesh::new(&kernel, elements).unwrap();
+        let op = exact_operator(&kernel, &mesh, &never).unwrap();
+        let solution = solve_operator(&op, &mesh, &SolveParams::default(), &never).unwrap();
+        let mut gathered = vec![0.0; mesh.len()];
+        op.apply(&solution.radiosity, &mut gathered);
+        let (mut emitted, mut absorbed) = (0.0, 0.0);
+        for (i, el) in mesh.elements().iter().enumerate() {
+            let edge = mesh.edge_of(i);
+            emitted += edge.emission * el.length;
+            absorbed += (1.0 - edge.reflectance) * gathered[i] / edge.reflectance * el.length;
+        }
+        (emitted, absorbed)
+    }
+
+    #[test]
+    fn emitted_power_equals_absorbed_power_in_closed_rooms() {
+        // In a closed room every sender's light lands somewhere (∫ G V dl_y = 1), so what the
+        // surfaces absorb, ∫ (1 − ρ) H, is what they emit, ∫ E. Collocation conserves it up to
+        // the discretisation: the stated tolerance is 0.2 % at 512 elements.
+        let mut rooms = vec![bundled("box"), l_room(0.6)];
+        rooms.extend(convex_rooms(3, 0.0, 0.0).into_iter().map(|scene| {
+            let mut edges = scene.edges().to_vec();
+            for (i, e) in edges.iter_mut().enumerate() {
+                e.reflectance = 0.2 + 0.1 * i as f64 % 0.7;
+            }
+            edges[0].emission = 3.0;
+            Scene::new(edges).unwrap()
+        }));
+        for scene in rooms {
+            let (emitted, absorbed) = power_balance(scene.clone(), 512);
+            assert!(
+                (emitted - absorbed).abs() <= 2e-3 * emitted,
+                "emitted {emitted} vs absorbed {absorbed} in {scene:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn exact_solve_converges_with_refinement() {
+        // Against a 4096-element solve, at the midpoints of a common 64-element probe mesh
+        // (printed as the convergence table): every doubling must gain, the whole range 50×.
+        for name in ["fig3", "maze", "corners"] {
+            let kernel = Kernel::new(bundled(name));
+            let params = SolveParams::default();
+            let fine = ExactReference::new(&kernel, 4096, &params, &never).unwrap();
+            let probes = Mesh::new(&kernel, 64).unwrap();
+            let truth = fine.radiosity_on(&probes, &never).unwrap();
+            let mut errors = Vec::new();
+            for n in [64, 128, 256, 512, 1024, 2048] {
+                let reference = ExactReference::new(&kernel, n, &params, &never).unwrap();
+                let b = reference.radiosity_on(&probes, &never).unwrap();
+                let e = solve_errors(&probes, &b, &truth);
+                println!(
+                    "{name}: {n:>5} elements: rel. L2 of B {:.2e}, of B − E {:.2e}",
+                    e.rel_l2_b, e.rel_l2_reflected
+                );
+                errors.push(e.rel_l2_reflected);
+            }
+            for w in errors.windows(2) {
+                assert!(w[1] < w[0], "{name}: no convergence: {errors:?}");
+            }
+            assert!(errors[5] < errors[0] / 50.0, "{name}: too slow: {errors:?}");
+            assert!(
+                errors[3] < 1e-3,
+                "{name}: 512 elements are not within 0.1 %: {errors:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn subdividing_the_scene_leaves_the_solution_unchanged() {
+        let (_, coarse_mesh, coarse) = exact(bundled("maze"), 300);
+        let (_, fine_mesh, fine) = exact(bundled("maze").subdivide(50).unwrap(), 300);
+        assert_eq!(coarse_mesh.len(), fine_mesh.len());
+        for (a, b) in coarse.radiosity.iter().zip(&fine.radiosity) {
+            assert!((a - b).abs() <= 1e-9 * a.max(1.0), "{a} vs {b}");
+        }
+    }
+
+    #[test]
+    fn the_default_quadrature_of_the_exact_zeta_approaches_the_exact_operator() {
+        // The generic path (ζ̃ / E' by Gauss–Legendre) fed the exact ζ: what it loses is only
+        // quadrature at shadow edges and next to corners, and it shrinks with more points.
+        let kernel = Kernel::new(bundled("fig3"));
+        let mesh = Mesh::new(&kernel, 256).unwrap();
+        let params = SolveParams::default();
+        let exact_b = solve(&kernel, &mesh, &params, &never).unwrap().radiosity;
+        let mut errors = Vec::new();
+        for points in [1, 2, 4, 8] {
+            let op = quadrature_operator(&kernel, &mesh, points, &never).unwrap();
+            let b = solve_operator(&op, &mesh, &params, &never)
+                .unwrap()
+                .radiosity;
+            let e = solve_errors(&mesh, &b, &exact_b);
+            println!("fig3, quadrature of exact ζ, {points} points: {e:?}");
+            errors.push(e.rel_l2_reflected);
+        }
+        assert!(errors[3] < errors[0] && errors[3] < 0.01, "{errors:?}");
+    }
+
+    #[test]
+    fn a_closed_white_room_with_a_light_is_refused_not_nan() {
+        let p = [v(0.0, 0.0), v(1.0, 0.0), v(1.0, 1.0), v(0.0, 1.0)];
+        let scene = room(&p, 1.0, 1.0);
+        let kernel = Kernel::new(scene);
+        let mesh = Mesh::new(&kernel, 40).unwrap();
+        let params = SolveParams {
+            max_iterations: 200,
+            ..SolveParams::default()
+        };
+        let err = solve(&kernel, &mesh, &params, &never).unwrap_err();
+        assert!(matches!(err, SolveError::NotConverged { .. }), "{err}");
+    }
+
+    #[test]
+    fn solve_errors_weigh_by_length_and_stay_finite() {
+        let kernel = Kernel::new(bundled("fig3"));
+        let mesh = Mesh::new(&kernel, 14).unwrap();
+        let e = mesh.emission();
+        let exact: Vec<f64> = e.iter().map(|x| x + 0.5).collect();
+        let same = solve_errors(&mesh, &exact, &exact);
+        assert_eq!((same.rel_l2_b, same.rel_l2_reflected), (0.0, 0.0));
+        let off: Vec<f64> = exact.iter().map(|x| x * 1.1).collect();
+        let err = solve_errors(&mesh, &off, &exact);
+        assert!(err.rel_l2_b > 0.09 && err.rel_l2_b < 0.11, "{err:?}");
+        // Nothing reflected anywhere: absolute RMS instead of a division by zero.
+        let err = solve_errors(&mesh, &e, &e);
+        assert_eq!(err.rel_l2_reflected, 0.0);
+    }
+}
