@@ -117,10 +117,12 @@ fn output_of(path: &Path) -> Result<Output> {
     Ok(output)
 }
 
-/// A built representation and what building it cost.
+/// A built representation, what building it cost, and the baseline's note when it built a
+/// count other than `--basis` (HR below its initial linking, a grid that is not square).
 struct Built {
     rep: Box<dyn Representation>,
     build_s: f64,
+    note: Option<String>,
 }
 
 /// Runs `flatland solve`.
@@ -188,7 +190,6 @@ pub fn run(args: &Args) -> Result<()> {
             )?,
         }
     }
-    let basis = built.rep.basis_functions();
     if args.json {
         println!(
             "{}",
@@ -197,9 +198,8 @@ pub fn run(args: &Args) -> Result<()> {
                 &choice,
                 &mesh,
                 reference_elements,
-                basis,
-                &comparison,
-                built.build_s
+                &built,
+                &comparison
             )
         );
     } else {
@@ -208,9 +208,8 @@ pub fn run(args: &Args) -> Result<()> {
             &choice,
             &mesh,
             reference_elements,
-            basis,
+            &built,
             &comparison,
-            built.build_s,
         );
         if let Some(path) = &args.out {
             println!("wrote {}", path.display());
@@ -241,21 +240,27 @@ fn scene_for(args: &Args, choice: &Choice) -> Result<(Scene, String)> {
 /// Builds the representation `choice` names (fits, baselines) on `kernel`.
 fn build(choice: &Choice, kernel: &Kernel, args: &Args) -> Result<Built> {
     let started = Instant::now();
+    let mut note = None;
     let rep: Box<dyn Representation> = match choice {
         Choice::Exact => Box::new(Kernel::new(kernel.scene().clone())),
         Choice::Model(path) => Box::new(ModelFile::load(path)?.model),
         Choice::Hr => {
-            Box::new(run_hr_at_budget(kernel, args.basis, args.seed, &HrParams::default())?.approx)
+            let run = run_hr_at_budget(kernel, args.basis, args.seed, &HrParams::default())?;
+            note = run.note.map(|n| n.to_string());
+            Box::new(run.approx)
         }
-        Choice::Uniform => {
-            Box::new(run_uniform(kernel, args.basis, args.seed, &UniformParams::default())?.approx)
-        }
-        Choice::UniformExact => {
+        Choice::Uniform | Choice::UniformExact => {
             let params = UniformParams {
-                block_value: BlockValue::ExactKernelMean,
+                block_value: if *choice == Choice::Uniform {
+                    BlockValue::Rays
+                } else {
+                    BlockValue::ExactKernelMean
+                },
                 ..UniformParams::default()
             };
-            Box::new(run_uniform(kernel, args.basis, args.seed, &params)?.approx)
+            let run = run_uniform(kernel, args.basis, args.seed, &params)?;
+            note = run.note.map(|n| n.to_string());
+            Box::new(run.approx)
         }
         Choice::Sgcs => {
             // Exactly what `flatland fit --cells N --seed S` fits.
@@ -288,6 +293,7 @@ fn build(choice: &Choice, kernel: &Kernel, args: &Args) -> Result<Built> {
     Ok(Built {
         rep,
         build_s: started.elapsed().as_secs_f64(),
+        note,
     })
 }
 
@@ -303,29 +309,32 @@ fn csv(mesh: &Mesh, b: &[f64]) -> String {
     out
 }
 
-/// The `--json` object.
+/// The `--json` object; `note` is there only when the baseline built a count other than asked.
 fn summary_json(
     scene: &str,
     choice: &Choice,
     mesh: &Mesh,
     reference_elements: usize,
-    basis: Option<usize>,
+    built: &Built,
     c: &Comparison,
-    build_s: f64,
 ) -> serde_json::Value {
-    serde_json::json!({
+    let mut summary = serde_json::json!({
         "scene": scene,
         "kernel": choice.label(),
         "elements": mesh.len(),
-        "basis_functions": basis,
+        "basis_functions": built.rep.basis_functions(),
         "rel_l2_b": c.errors.rel_l2_b,
         "rel_l2_reflected": c.errors.rel_l2_reflected,
         "iterations": c.solution.iterations,
         "residual": c.solution.residual,
         "wall_s": c.solution.wall_s(),
-        "build_s": build_s,
+        "build_s": built.build_s,
         "reference_elements": reference_elements,
-    })
+    });
+    if let Some(note) = &built.note {
+        summary["note"] = note.as_str().into();
+    }
+    summary
 }
 
 /// The human-readable summary.
@@ -334,16 +343,21 @@ fn print_summary(
     choice: &Choice,
     mesh: &Mesh,
     reference_elements: usize,
-    basis: Option<usize>,
+    built: &Built,
     c: &Comparison,
-    build_s: f64,
 ) {
     let row = |k: &str, v: String| println!("  {k:<26} {v}");
     println!("solve of {scene} with the {} kernel", choice.label());
     row(
         "basis functions",
-        basis.map_or_else(|| "exact (none)".to_owned(), |b| b.to_string()),
+        built
+            .rep
+            .basis_functions()
+            .map_or_else(|| "exact (none)".to_owned(), |b| b.to_string()),
     );
+    if let Some(note) = &built.note {
+        row("note", note.clone());
+    }
     row(
         "elements",
         format!("{} (exact reference: {reference_elements})", mesh.len()),
@@ -369,7 +383,7 @@ fn print_summary(
             c.solution.solve_s
         ),
     );
-    row("building the kernel", format!("{build_s:.3} s"));
+    row("building the kernel", format!("{:.3} s", built.build_s));
 }
 
 #[cfg(test)]
