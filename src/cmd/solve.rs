@@ -22,12 +22,14 @@ use flatland_lab::interrupt;
 pub struct Args {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// The kernel: `exact`, `sgcs` (fit the default learner with --basis cells), `hr`,
+    /// The kernel: `exact`, `default` (fit the default learner with --basis cells; `sgcs` is
+    /// the same), `hr`,
     /// `uniform` (20 rays per block), `uniform-exact` (exact block means of k), or a model file
     /// (.json) written by `flatland fit --out`.
     #[arg(long, value_name = "KERNEL", default_value = "exact")]
     pub kernel: String,
-    /// Basis functions of the representation built: cells (sgcs), links (hr), blocks (uniform).
+    /// Basis functions of the representation built: cells (default), links (hr), blocks
+    /// (uniform).
     #[arg(long, value_name = "N", default_value_t = 400)]
     pub basis: usize,
     /// Elements of the solve (default: chosen from the scene, 512 for the bundled scenes).
@@ -53,7 +55,8 @@ pub struct Args {
 #[derive(Clone, Debug, PartialEq)]
 enum Choice {
     Exact,
-    Sgcs,
+    /// The default learner.
+    Default,
     Hr,
     Uniform,
     UniformExact,
@@ -64,7 +67,8 @@ impl Choice {
     fn parse(text: &str) -> Result<Choice> {
         Ok(match text {
             "exact" => Choice::Exact,
-            "sgcs" => Choice::Sgcs,
+            // `sgcs` was the default learner's name before it was called so.
+            "default" | "sgcs" => Choice::Default,
             "hr" => Choice::Hr,
             "uniform" => Choice::Uniform,
             "uniform-exact" => Choice::UniformExact,
@@ -75,7 +79,7 @@ impl Choice {
                 Choice::Model(PathBuf::from(text))
             }
             _ => bail!(
-                "--kernel `{text}` is not known: expected exact, sgcs, hr, uniform, uniform-exact \
+                "--kernel `{text}` is not known: expected exact, default, hr, uniform, uniform-exact \
                  or a model file (.json) written by `flatland fit --out`"
             ),
         })
@@ -84,7 +88,7 @@ impl Choice {
     fn label(&self) -> String {
         match self {
             Choice::Exact => "exact".into(),
-            Choice::Sgcs => "sgcs".into(),
+            Choice::Default => "default".into(),
             Choice::Hr => "hr".into(),
             Choice::Uniform => "uniform".into(),
             Choice::UniformExact => "uniform-exact".into(),
@@ -262,7 +266,7 @@ fn build(choice: &Choice, kernel: &Kernel, args: &Args) -> Result<Built> {
             note = run.note.map(|n| n.to_string());
             Box::new(run.approx)
         }
-        Choice::Sgcs => {
+        Choice::Default => {
             // Exactly what `flatland fit --cells N --seed S` fits.
             let mut fit_args = super::fit::Args::for_scene(None);
             fit_args.cells = args.basis;
@@ -284,9 +288,7 @@ fn build(choice: &Choice, kernel: &Kernel, args: &Args) -> Result<Built> {
             });
             bar.finish_and_clear();
             interrupt::check()?;
-            if fit_params.refit {
-                fit.refit()?;
-            }
+            fit.finish()?;
             Box::new(fit.model().clone())
         }
     };
@@ -401,9 +403,12 @@ mod tests {
             Choice::parse("runs/m.JSON").unwrap(),
             Choice::Model(PathBuf::from("runs/m.JSON"))
         );
+        // The default learner, also by the name it had before it was called so.
+        assert_eq!(Choice::parse("default").unwrap(), Choice::Default);
+        assert_eq!(Choice::parse("sgcs").unwrap(), Choice::Default);
         let err = Choice::parse("sgsc").unwrap_err().to_string();
         assert!(
-            err.contains("`sgsc`") && err.contains("exact, sgcs, hr"),
+            err.contains("`sgsc`") && err.contains("exact, default, hr"),
             "{err}"
         );
     }

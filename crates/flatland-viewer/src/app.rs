@@ -18,7 +18,7 @@ use flatland_solve::Representation;
 use kernel_fit::{FitParams, LearnedKernel, Preset, StopReason};
 
 use crate::colormap::{grid_image, samples_image};
-use crate::settings::{SETTINGS_KEY, SceneChoice, Settings, live_params};
+use crate::settings::{SETTINGS_KEY, SceneChoice, Settings};
 use crate::views::{self, Hover, LitPaint, PlotFrame, SceneDrag};
 use crate::worker::{
     APPROX_RES, Approx, Command, Lit, LitState, REFERENCE_RES, Status, WorkerHandle, World,
@@ -103,7 +103,7 @@ pub struct ViewerApp {
     settings: Settings,
     /// Parameters of the fit the last Reset started.
     fit_params: FitParams,
-    /// Parameters last sent to the running fit ([`live_params`]).
+    /// Parameters the learner last got: the fit's, with the live part last sent.
     sent_params: FitParams,
     worker: WorkerHandle,
     /// The scene as the user sees and edits it (not subdivided).
@@ -457,25 +457,32 @@ impl ViewerApp {
             .or_else(|| self.world.is_none().then_some("starting…"));
     }
 
-    /// Sends changed parameters (when valid) to the running fit: those it can take
-    /// ([`live_params`]); the rest wait for Reset.
-    fn sync_params(&mut self) {
-        let live = live_params(&self.settings.params, &self.fit_params);
-        if live != self.sent_params {
-            match self.settings.params.validate() {
-                Ok(()) => {
-                    self.sent_params = live;
-                    self.worker.send(Command::Params(live));
-                    if self
-                        .message
-                        .as_ref()
-                        .is_some_and(|(m, _)| m.starts_with("parameter"))
-                    {
-                        self.message = None;
-                    }
-                }
-                Err(e) => self.message = Some((e.to_string(), true)),
-            }
+    /// Sends changed parameters (when valid) to the learner: a change of the live part
+    /// ([`kernel_fit::LiveParams`]) to the running fit, any other as a new fit, once the
+    /// control is let go (a drag does not start a fit per frame).
+    fn sync_params(&mut self, ctx: &egui::Context) {
+        let wanted = self.settings.params;
+        if wanted == self.sent_params {
+            return;
+        }
+        if let Err(e) = wanted.validate() {
+            self.message = Some((e.to_string(), true));
+            return;
+        }
+        if self
+            .message
+            .as_ref()
+            .is_some_and(|(m, _)| m.starts_with("parameter"))
+        {
+            self.message = None;
+        }
+        if self.fit_params.with_live(wanted.live()) == wanted {
+            self.sent_params = wanted;
+            self.worker.send(Command::Params(wanted.live()));
+        } else if ctx.egui_is_using_pointer() {
+            ctx.request_repaint();
+        } else {
+            self.reset();
         }
     }
 
@@ -503,7 +510,7 @@ impl ViewerApp {
                 ScrollArea::vertical().show(ui, |ui| self.controls(ui));
             });
         CentralPanel::default().show(ui, |ui| self.main_area(ui));
-        self.sync_params();
+        self.sync_params(ui.ctx());
         if self.running() || self.busy.is_some() {
             ui.ctx().request_repaint_after(Duration::from_millis(16));
         }

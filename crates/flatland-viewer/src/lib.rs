@@ -21,9 +21,10 @@
 //!   where it is (`Fit::set_kernel`).
 //! - **Curves**: held-out relative L2 of ζ and of the solved `B − E` against steps and rays,
 //!   cells and samples.
-//! - **Controls**: play, pause, step, reset, speed; the learner preset (the project's default
+//! - **Controls**: play, pause, step, reset, speed; the learner preset (the default learner
 //!   or the paper's network) and every parameter of both (docs/ALGORITHM.md §8) with its valid
-//!   range; what only a new fit can change (target, gating, importance, …) waits for Reset.
+//!   range; a live parameter ([`kernel_fit::LiveParams`]) reaches the running fit, any other
+//!   (target, gating, importance, the network's rules, …) starts a new fit with it.
 //!   Settings persist, with the preset chosen; settings saved by an older viewer load with the
 //!   current learner.
 //!
@@ -53,7 +54,7 @@ use std::path::PathBuf;
 
 pub use app::{Options, ViewerApp, stop_text};
 pub use colormap::{colour, grid_image, samples_image, set_color};
-pub use settings::{SceneChoice, Settings, live_params, waiting_for_reset, with_preset};
+pub use settings::{SceneChoice, Settings, with_preset};
 pub use worker::{Lit, LitState};
 
 /// Why the viewer could not run.
