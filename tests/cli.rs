@@ -1234,3 +1234,45 @@ fn meaningless_parameters_are_refused_and_sgcs_still_names_the_default_learner()
         assert_eq!(old[field], new[field], "{field}");
     }
 }
+
+#[test]
+fn scene_generates_a_floor_plan_and_a_hall_of_the_size_asked_for_the_same_each_time() {
+    let dir = temp_dir("scene");
+    for kind in ["floorplan", "hall"] {
+        let (a, b) = (
+            dir.join(format!("{kind}-a.json")),
+            dir.join(format!("{kind}-b.ron")),
+        );
+        for out in [&a, &b] {
+            let run = flatland(&[
+                "scene",
+                kind,
+                "--size",
+                "400",
+                "--seed",
+                "5",
+                "--out",
+                as_str(out),
+            ]);
+            assert!(run.status.success(), "{}", stderr(&run));
+            assert!(stdout(&run).contains("edges"), "{}", stdout(&run));
+        }
+        let (sa, sb) = (Scene::load(&a).unwrap(), Scene::load(&b).unwrap());
+        assert_eq!(sa, sb, "{kind}: the same seed in .json and .ron");
+        let n = sa.edges().len();
+        assert!((320..=480).contains(&n), "{kind}: {n} edges");
+        assert!(
+            sa.edges().iter().any(|e| e.emission > 0.0),
+            "{kind}: nothing emits"
+        );
+    }
+    let out = flatland(&[
+        "scene",
+        "hall",
+        "--size",
+        "5",
+        "--out",
+        as_str(&dir.join("x.json")),
+    ]);
+    assert_one_line_error(&out, &["edges", "[24, 1000000]", "5"]);
+}
