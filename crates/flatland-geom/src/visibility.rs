@@ -23,7 +23,7 @@ mod predicates;
 mod shaft;
 
 pub(crate) use bvh::{Bvh, Segment};
-pub use events::PairEvents;
+pub use events::{PairEvents, SenderFace};
 pub(crate) use predicates::open_segment_hits;
 #[cfg(test)]
 pub(crate) use predicates::orient;

@@ -100,6 +100,6 @@ pub use represent::{
 };
 pub use solve::{
     Comparison, ExactReference, Solution, SolveErrors, SolveParams, Stop, never, solve,
-    solve_against, solve_errors, solve_operator,
+    solve_against, solve_errors, solve_linear, solve_operator,
 };
 pub use transfer::{Receiver, Sender, point_to_segment, point_to_segment_visible};

@@ -139,6 +139,48 @@ pub fn solve_operator(
     })
 }
 
+/// Solves `x − K x = rhs` by restarted GMRES from `initial` — a warm start, such as the last
+/// solution of a slightly changed `K` — to `params.tolerance` (relative residual). The same
+/// solve as [`solve_operator`], for any right-hand side (`assembly_s` is 0).
+pub fn solve_linear(
+    op: &dyn TransferOperator,
+    rhs: &[f64],
+    initial: Vec<f64>,
+    params: &SolveParams,
+    stop: &Stop,
+) -> Result<Solution, SolveError> {
+    params.validate()?;
+    if op.len() != rhs.len() || initial.len() != rhs.len() {
+        return Err(SolveError::InvalidParameter {
+            name: "operator",
+            value: format!(
+                "{} elements, {} right-hand sides, {} initial values",
+                op.len(),
+                rhs.len(),
+                initial.len()
+            ),
+            valid: "an operator, a right-hand side and a start of the same length",
+        });
+    }
+    let started = Instant::now();
+    let mut x = initial;
+    let done = gmres::solve(
+        op,
+        rhs,
+        &mut x,
+        params.tolerance,
+        params.max_iterations,
+        stop,
+    )?;
+    Ok(Solution {
+        radiosity: x,
+        iterations: done.iterations,
+        residual: done.residual,
+        assembly_s: 0.0,
+        solve_s: started.elapsed().as_secs_f64(),
+    })
+}
+
 /// Relative L2 errors of a solved B against the exact one, on the same elements, weighted by
 /// element length: `sqrt(Σ l (b̃ − b)² / Σ l b²)`, and the same for the reflected part `B − E`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

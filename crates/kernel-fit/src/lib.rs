@@ -67,6 +67,7 @@
 
 mod error;
 mod fit;
+mod light;
 pub mod limits;
 mod model;
 mod params;
