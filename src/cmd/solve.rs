@@ -12,7 +12,7 @@ use flatland_geom::{Kernel, Scene, write_atomic};
 use flatland_solve::{
     Comparison, ExactReference, Mesh, Representation, SolveError, SolveParams, Stop, solve_against,
 };
-use kernel_fit::{Fit, ModelFile};
+use kernel_fit::{Fit, FitError, LightFit, LightParams, LightStop, ModelFile};
 
 use super::SceneArgs;
 use flatland_lab::interrupt;
@@ -22,16 +22,22 @@ use flatland_lab::interrupt;
 pub struct Args {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// The kernel: `exact`, `default` (fit the default learner with --basis cells; `sgcs` is
-    /// the same), `hr`,
-    /// `uniform` (20 rays per block), `uniform-exact` (exact block means of k), or a model file
-    /// (.json) written by `flatland fit --out`.
+    /// The kernel: `exact`, `default` (the light-driven learner: rounds of solving and
+    /// learning on this mesh until --tolerance; `sgcs` is the same), `first-shot` (the
+    /// θ-driven learner `flatland fit` trains, weighted by the first shot, with --basis
+    /// cells), `hr`, `uniform` (20 rays per block), `uniform-exact` (exact block means of k),
+    /// or a model file (.json) written by `flatland fit --out`.
     #[arg(long, value_name = "KERNEL", default_value = "exact")]
     pub kernel: String,
-    /// Basis functions of the representation built: cells (default), links (hr), blocks
-    /// (uniform).
-    #[arg(long, value_name = "N", default_value_t = 400)]
-    pub basis: usize,
+    /// Basis functions of the representation built: links (hr), blocks (uniform), cells
+    /// (first-shot; default 400 for these). For the default learner, the most cells it may
+    /// grow (default: as many as the tolerance takes).
+    #[arg(long, value_name = "N")]
+    pub basis: Option<usize>,
+    /// The default learner stops when its own estimate of the relative L2 error of the
+    /// solved B − E is at most this, in (0, 1).
+    #[arg(long, value_name = "X", default_value_t = LightParams::default().tolerance)]
+    pub tolerance: f64,
     /// Elements of the solve (default: chosen from the scene, 512 for the bundled scenes).
     #[arg(long, value_name = "N")]
     pub elements: Option<usize>,
@@ -51,12 +57,17 @@ pub struct Args {
     pub json: bool,
 }
 
+/// `--basis` of the baselines and of `first-shot` when none is given.
+const DEFAULT_BASIS: usize = 400;
+
 /// What `--kernel` names.
 #[derive(Clone, Debug, PartialEq)]
 enum Choice {
     Exact,
-    /// The default learner.
+    /// The default learner: light-driven rounds on the solve's mesh.
     Default,
+    /// The θ-driven learner of `flatland fit`.
+    FirstShot,
     Hr,
     Uniform,
     UniformExact,
@@ -69,6 +80,7 @@ impl Choice {
             "exact" => Choice::Exact,
             // `sgcs` was the default learner's name before it was called so.
             "default" | "sgcs" => Choice::Default,
+            "first-shot" => Choice::FirstShot,
             "hr" => Choice::Hr,
             "uniform" => Choice::Uniform,
             "uniform-exact" => Choice::UniformExact,
@@ -79,8 +91,8 @@ impl Choice {
                 Choice::Model(PathBuf::from(text))
             }
             _ => bail!(
-                "--kernel `{text}` is not known: expected exact, default, hr, uniform, uniform-exact \
-                 or a model file (.json) written by `flatland fit --out`"
+                "--kernel `{text}` is not known: expected exact, default, first-shot, hr, uniform, \
+                 uniform-exact or a model file (.json) written by `flatland fit --out`"
             ),
         })
     }
@@ -89,6 +101,7 @@ impl Choice {
         match self {
             Choice::Exact => "exact".into(),
             Choice::Default => "default".into(),
+            Choice::FirstShot => "first-shot".into(),
             Choice::Hr => "hr".into(),
             Choice::Uniform => "uniform".into(),
             Choice::UniformExact => "uniform-exact".into(),
@@ -127,6 +140,8 @@ struct Built {
     rep: Box<dyn Representation>,
     build_s: f64,
     note: Option<String>,
+    /// What the default learner says of itself.
+    learned: Option<Learned>,
 }
 
 /// Runs `flatland solve`.
@@ -140,7 +155,7 @@ pub fn run(args: &Args) -> Result<()> {
         }
         flatland_lab::output::file(out, &inputs)?;
     }
-    if choice != Choice::Exact && args.basis == 0 {
+    if choice != Choice::Exact && args.basis == Some(0) {
         bail!("--basis must be at least 1, got 0");
     }
     let (scene, label) = scene_for(args, &choice)?;
@@ -164,7 +179,7 @@ pub fn run(args: &Args) -> Result<()> {
             other => other.into(),
         }
     };
-    let built = build(&choice, &kernel, args)?;
+    let built = build(&choice, &kernel, &mesh, args, stop)?;
     interrupt::check()?;
     let reference = ExactReference::new(&kernel, reference_elements, &params, stop)
         .map_err(interrupted)
@@ -241,15 +256,33 @@ fn scene_for(args: &Args, choice: &Choice) -> Result<(Scene, String)> {
     }
 }
 
-/// Builds the representation `choice` names (fits, baselines) on `kernel`.
-fn build(choice: &Choice, kernel: &Kernel, args: &Args) -> Result<Built> {
+/// The default learner's account of its fit.
+struct Learned {
+    /// Its estimate of the relative L2 error of the solved `B − E`.
+    estimated_error: f64,
+    rounds: usize,
+    rays: u64,
+    stopped: LightStop,
+}
+
+/// Builds the representation `choice` names (fits, baselines) on `kernel`; the default
+/// learner learns on `mesh`, the solve's.
+fn build(
+    choice: &Choice,
+    kernel: &Kernel,
+    mesh: &Mesh,
+    args: &Args,
+    stop: &Stop,
+) -> Result<Built> {
     let started = Instant::now();
     let mut note = None;
+    let mut learned = None;
+    let basis = args.basis.unwrap_or(DEFAULT_BASIS);
     let rep: Box<dyn Representation> = match choice {
         Choice::Exact => Box::new(Kernel::new(kernel.scene().clone())),
         Choice::Model(path) => Box::new(ModelFile::load(path)?.model),
         Choice::Hr => {
-            let run = run_hr_at_budget(kernel, args.basis, args.seed, &HrParams::default())?;
+            let run = run_hr_at_budget(kernel, basis, args.seed, &HrParams::default())?;
             note = run.note.map(|n| n.to_string());
             Box::new(run.approx)
         }
@@ -262,14 +295,19 @@ fn build(choice: &Choice, kernel: &Kernel, args: &Args) -> Result<Built> {
                 },
                 ..UniformParams::default()
             };
-            let run = run_uniform(kernel, args.basis, args.seed, &params)?;
+            let run = run_uniform(kernel, basis, args.seed, &params)?;
             note = run.note.map(|n| n.to_string());
             Box::new(run.approx)
         }
         Choice::Default => {
+            let (fit, summary) = learn(kernel, mesh, args, stop)?;
+            learned = Some(summary);
+            Box::new(fit)
+        }
+        Choice::FirstShot => {
             // Exactly what `flatland fit --cells N --seed S` fits.
             let mut fit_args = super::fit::Args::for_scene(None);
-            fit_args.cells = args.basis;
+            fit_args.cells = basis;
             fit_args.seed = args.seed;
             let fit_params = fit_args.params()?;
             fit_params.validate().context("--basis")?;
@@ -296,7 +334,45 @@ fn build(choice: &Choice, kernel: &Kernel, args: &Args) -> Result<Built> {
         rep,
         build_s: started.elapsed().as_secs_f64(),
         note,
+        learned,
     })
+}
+
+/// The default learner on the solve's mesh, to `--tolerance` or `--basis` cells.
+fn learn(kernel: &Kernel, mesh: &Mesh, args: &Args, stop: &Stop) -> Result<(LightFit, Learned)> {
+    let params = LightParams {
+        tolerance: args.tolerance,
+        max_rays: args.basis.map_or(u64::MAX, |b| b as u64),
+        ..LightParams::default()
+    };
+    params
+        .check()
+        .map_err(|e| anyhow::anyhow!("--tolerance: {e}"))?;
+    let interrupted = |e: FitError| -> anyhow::Error {
+        match e {
+            FitError::Interrupted => interrupt::stopped().into(),
+            other => other.into(),
+        }
+    };
+    let kernel = Arc::new(Kernel::new(kernel.scene().clone()));
+    let mut fit = LightFit::new(kernel, mesh.clone(), params, stop).map_err(interrupted)?;
+    let bar = super::progress_bar(0, "cells");
+    let stopped = fit
+        .run(stop, |f| {
+            bar.set_position(f.cells().len() as u64);
+            if let Some(e) = f.estimated_error() {
+                bar.set_message(format!("estimated error {e:.4}"));
+            }
+        })
+        .map_err(interrupted)?;
+    bar.finish_and_clear();
+    let summary = Learned {
+        estimated_error: fit.estimated_error().unwrap_or(f64::INFINITY),
+        rounds: fit.history().len(),
+        rays: fit.rays(),
+        stopped,
+    };
+    Ok((fit, summary))
 }
 
 /// `edge,s,x,y,b`: one row per element midpoint, in order of s (shortest round-trip decimals).
@@ -336,6 +412,12 @@ fn summary_json(
     if let Some(note) = &built.note {
         summary["note"] = note.as_str().into();
     }
+    if let Some(l) = &built.learned {
+        summary["estimated_rel_l2_reflected"] = l.estimated_error.into();
+        summary["rounds"] = l.rounds.into();
+        summary["rays"] = l.rays.into();
+        summary["stopped"] = stop_name(l.stopped).into();
+    }
     summary
 }
 
@@ -369,6 +451,18 @@ fn print_summary(
         "rel. L2 of B − E",
         format!("{:.5}   (the reflected part)", c.errors.rel_l2_reflected),
     );
+    if let Some(l) = &built.learned {
+        row(
+            "  estimated by the learner",
+            format!(
+                "{:.5}   ({} rounds, {} rays, stopped: {})",
+                l.estimated_error,
+                l.rounds,
+                l.rays,
+                stop_name(l.stopped)
+            ),
+        );
+    }
     row(
         "iterations",
         format!(
@@ -386,6 +480,16 @@ fn print_summary(
         ),
     );
     row("building the kernel", format!("{:.3} s", built.build_s));
+}
+
+/// How `--json` and the table name why the default learner stopped.
+fn stop_name(stop: LightStop) -> &'static str {
+    match stop {
+        LightStop::Tolerance => "tolerance",
+        LightStop::Exact => "exact",
+        LightStop::Rays => "cells",
+        LightStop::Time => "time",
+    }
 }
 
 #[cfg(test)]

@@ -370,7 +370,8 @@ struct Piece {
     transfer: f64,
     face: FaceKey,
     st: [f64; 2],
-    /// Its extent in `s`.
+    /// Its extent in `s` (what the tests compare).
+    #[cfg(test)]
     length: f64,
 }
 
@@ -442,6 +443,7 @@ fn pieces(
                     transfer,
                     face: face.clone(),
                     st: [s, here.s_mid],
+                    #[cfg(test)]
                     length: width * (to - from),
                 });
             }

@@ -23,6 +23,8 @@
 //! its walls' blocks rise in the ranking: the loop follows the bounces, not just the lamps.
 
 mod blocks;
+mod cells;
+mod driver;
 
 use std::time::Instant;
 
@@ -30,6 +32,8 @@ use flatland_geom::Kernel;
 use flatland_solve::{Mesh, SolveParams, Stop, TransferOperator, solve_linear};
 
 pub(crate) use blocks::{Blocks, Faces};
+pub use cells::FaceCell;
+pub use driver::LightFit;
 
 use crate::FitError;
 
@@ -108,6 +112,7 @@ pub struct Round {
 }
 
 /// The loop on one mesh, generic over where face visibility is learned (the model).
+#[derive(Clone)]
 pub(crate) struct LightLoop<F: Faces> {
     blocks: Blocks,
     faces: F,
@@ -238,6 +243,11 @@ impl<F: Faces> LightLoop<F> {
     /// Every round so far.
     pub(crate) fn history(&self) -> &[Round] {
         &self.history
+    }
+
+    /// The rows' priors for the unresolved blocks.
+    pub(crate) fn priors(&self) -> &[f64] {
+        &self.priors
     }
 
     /// Where face visibility is learned.
@@ -443,81 +453,6 @@ mod tests {
                 break;
             }
             assert!(light.radiosity().iter().all(|&b| b >= -1e-12));
-        }
-    }
-}
-
-#[cfg(test)]
-mod probe {
-    use std::sync::Arc;
-    use std::time::Instant;
-
-    use flatland_geom::{Kernel, Scene};
-    use flatland_solve::{ExactReference, Mesh, SolveParams, never, solve_errors};
-
-    use super::test_support::RayFaces;
-    use super::*;
-
-    #[test]
-    #[ignore]
-    fn probe_scenes() {
-        for name in [
-            "fp4_1",
-            "gen_fp300",
-            "hall125_1",
-            "gen_hall300",
-            "gen_fp1000",
-        ] {
-            let text = std::fs::read_to_string(format!("/work/scratch/{name}.json")).unwrap();
-            let scene: Scene = serde_json::from_str(&text).unwrap();
-            let t0 = Instant::now();
-            let kernel = Arc::new(Kernel::new(scene));
-            let mesh = Mesh::new(&kernel, Mesh::default_elements(kernel.scene())).unwrap();
-            let params = LightParams::default();
-            let solve = SolveParams::default();
-            let mut light = LightLoop::new(
-                &kernel,
-                &mesh,
-                RayFaces::new(Arc::clone(&kernel)),
-                &params,
-                &never,
-            )
-            .unwrap();
-            let built = t0.elapsed().as_secs_f64();
-            let mut rounds = Vec::new();
-            let stop = loop {
-                let r = light
-                    .round(&kernel, &mesh, &params, &solve, &never)
-                    .unwrap();
-                rounds.push((
-                    t0.elapsed().as_secs_f64(),
-                    light.radiosity().to_vec(),
-                    *light.history().last().unwrap(),
-                ));
-                if let Some(r) = r {
-                    break r;
-                }
-            };
-            let reference = ExactReference::new(
-                &kernel,
-                ExactReference::default_elements(mesh.len()),
-                &solve,
-                &never,
-            )
-            .unwrap();
-            let exact_b = reference.radiosity_on(&mesh, &never).unwrap();
-            eprintln!(
-                "== {name}: {} elements, {} blocks, built {built:.3}s, stop {stop:?}",
-                mesh.len(),
-                light.blocks().len()
-            );
-            for (t, b, r) in rounds {
-                let e = solve_errors(&mesh, &b, &exact_b).rel_l2_reflected;
-                eprintln!(
-                    "  {t:7.3}s rays {:8} resolved {:7} est {:.4} measured {:.4}",
-                    r.rays, r.resolved, r.estimated_error, e
-                );
-            }
         }
     }
 }
