@@ -36,6 +36,51 @@ impl Wide {
             mask | (u32::from(sole == a || sole == b) << k)
         })
     }
+
+    /// The children's centres projected on `d` from `o` (unit frame): roughly the order a ray
+    /// from `o` along `d` reaches them, so a closest-hit query visits the nearer first.
+    #[inline]
+    pub(super) fn along(&self, o: DVec2, d: DVec2) -> Vec4 {
+        let (ox, oy) = (Vec4::splat(o.x as f32), Vec4::splat(o.y as f32));
+        (self.cx - ox) * Vec4::splat(d.x as f32) + (self.cy - oy) * Vec4::splat(d.y as f32)
+    }
+}
+
+/// The open half-plane beyond the first contact a closest-hit query has found so far (unit
+/// frame): a box wholly inside it, by more than the margin, holds nothing that could come
+/// first or tie, so the query skips it (conservative, like [`RayBox`]).
+pub(super) struct Beyond {
+    nx: Vec4,
+    ny: Vec4,
+    nx_abs: Vec4,
+    ny_abs: Vec4,
+    offset: Vec4,
+    margin: Vec4,
+}
+
+impl Beyond {
+    /// `{p : normal · (p − p0) > 0}` for a nonzero `normal` and `p0` in the scene's frame.
+    pub(super) fn new(p0: DVec2, normal: DVec2) -> Beyond {
+        let n = normal / normal.abs().max_element();
+        Beyond {
+            nx: Vec4::splat(n.x as f32),
+            ny: Vec4::splat(n.y as f32),
+            nx_abs: Vec4::splat(n.x.abs() as f32),
+            ny_abs: Vec4::splat(n.y.abs() as f32),
+            offset: Vec4::splat(n.dot(p0) as f32),
+            margin: Vec4::splat(BOX_MARGIN * (1.0 + p0.abs().element_sum() as f32)),
+        }
+    }
+
+    /// Bit `k`: whether child `k`'s box lies wholly beyond, by more than the margin. A NaN
+    /// comparison keeps the box.
+    #[inline]
+    pub(super) fn holds(&self, node: &Wide) -> u32 {
+        let nearest = self.nx * node.cx + self.ny * node.cy
+            - self.offset
+            - (self.nx_abs * node.hx + self.ny_abs * node.hy);
+        nearest.cmpgt(self.margin).bitmask() & 0b1111
+    }
 }
 
 /// An axis-aligned query box for [`Bvh::overlapping`](super::Bvh::overlapping), in the unit frame.

@@ -1,9 +1,12 @@
-//! A BVH over segments: pieces, a median-split binary tree collapsed to four-wide nodes, queries.
+//! A BVH over segments: pieces, a median-split tree collapsed to four-wide nodes, its queries.
+
+use std::cmp::Ordering;
 
 use glam::{DVec2, Vec4};
 
-use super::boxes::{Boxes, RayBox, Wide};
-use super::predicates::open_segment_hits;
+use super::boxes::{Beyond, Boxes, RayBox, Wide};
+use super::predicates::{open_segment_hits, orient};
+use super::ray::{Contact, Ray};
 
 /// An occluding segment (a parent edge).
 #[derive(Clone, Copy, Debug)]
@@ -151,6 +154,115 @@ impl Bvh {
                 i != skip_a && i != skip_b && open_segment_hits(x, y, s.a, s.b)
             },
         )
+    }
+
+    /// The first segment except `skip` the ray meets, and where ([`Ray::contact`]): the
+    /// contact first along the ray, of several at one point the lowest segment index, so the
+    /// answer is the linear scan's whatever the tree. Nearer children are visited first; once
+    /// a contact is known, boxes wholly beyond it are skipped.
+    pub(crate) fn first_hit(&self, ray: &Ray, skip: usize) -> Option<(usize, Contact)> {
+        if self.nodes.is_empty() {
+            return None;
+        }
+        let (o, f) = (self.to_frame(ray.o), self.to_frame(ray.f));
+        let boxes = RayBox::new(o, f);
+        let mut best: Option<(usize, Contact)> = None;
+        let mut beyond: Option<Beyond> = None;
+        // As in `any`: each level leaves at most 3 entries behind.
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let node = &self.nodes[stack[top] as usize];
+            let mut passed = boxes.may_meet(node) & node.used & !node.skipped(skip, skip);
+            if let Some(cut) = &beyond {
+                passed &= !cut.holds(node);
+            }
+            let keys = node.along(o, f - o).to_array();
+            let mut inner = [(0.0f32, 0u32); 4];
+            let mut n = 0;
+            for (k, &key) in keys.iter().enumerate() {
+                if passed & (1 << k) == 0 {
+                    continue;
+                }
+                let (child, count) = (node.child[k] as usize, node.count[k] as usize);
+                if count == 0 {
+                    inner[n] = (key, child as u32);
+                    n += 1;
+                    continue;
+                }
+                for item in child..child + count {
+                    if let Some(found) = self.improves(ray, item, skip, best.as_ref()) {
+                        beyond = Some(self.beyond(ray, &found.1));
+                        best = Some(found);
+                    }
+                }
+            }
+            // The farthest goes onto the stack first, so the nearest is visited next.
+            inner[..n].sort_unstable_by(|x, y| y.0.total_cmp(&x.0));
+            for &(_, child) in &inner[..n] {
+                stack[top] = child;
+                top += 1;
+            }
+        }
+        best
+    }
+
+    /// Item `item`'s segment and contact if it comes before `best` (or ties it with a lower
+    /// index).
+    #[inline]
+    fn improves(
+        &self,
+        ray: &Ray,
+        item: usize,
+        skip: usize,
+        best: Option<&(usize, Contact)>,
+    ) -> Option<(usize, Contact)> {
+        let i = self.items[item] as usize;
+        if i == skip || best.is_some_and(|&(b, _)| b == i) {
+            return None;
+        }
+        let s = self.ordered[item];
+        let contact = ray.contact(s.a, s.b)?;
+        let better = best.is_none_or(|(b, first)| match ray.order(&contact, first) {
+            Ordering::Less => true,
+            Ordering::Equal => i < *b,
+            Ordering::Greater => false,
+        });
+        better.then_some((i, contact))
+    }
+
+    /// The half-plane beyond a contact, in the unit frame: past the line of the segment it
+    /// crosses, or past the point across the ray.
+    fn beyond(&self, ray: &Ray, contact: &Contact) -> Beyond {
+        match *contact {
+            Contact::At(p) => Beyond::new(self.to_frame(p), ray.f - ray.o),
+            Contact::Crossing { a, b, .. } => {
+                let away = -orient(a, b, ray.o).signum();
+                Beyond::new(self.to_frame(a), (b - a).perp() * away)
+            }
+        }
+    }
+
+    /// The point twice as far from `o` along `d` as the farthest corner of the segments'
+    /// bounding square: the far end of a ray from `o` that no segment reaches. `None` for a
+    /// zero or non-finite `d`, or if the point is not finite.
+    pub(crate) fn far_point(&self, o: DVec2, d: DVec2) -> Option<DVec2> {
+        let scale = d.abs().max_element();
+        if !(scale > 0.0 && scale.is_finite()) {
+            return None;
+        }
+        let (lo, hi) = (
+            self.origin,
+            self.origin + DVec2::splat(1.0 / self.inv_scale),
+        );
+        // The L1 distance bounds the Euclidean one and cannot overflow where it is finite.
+        let reach = [lo, hi, DVec2::new(lo.x, hi.y), DVec2::new(hi.x, lo.y)]
+            .iter()
+            .fold(0.0, |m: f64, c| m.max((*c - o).abs().element_sum()));
+        let unit = d / scale;
+        let f = o + unit * (2.0 * reach / unit.length());
+        (f.is_finite() && f != o).then_some(f)
     }
 
     /// `p` in the unit frame of the boxes (double precision; the tests round it).
@@ -394,6 +506,39 @@ mod tests {
                     .enumerate()
                     .any(|(i, s)| i != skip_a && i != skip_b && open_segment_hits(x, y, s.a, s.b));
                 prop_assert_eq!(bvh.any_hit(x, y, skip_a, skip_b), linear, "{:?} {:?}", x, y);
+            }
+        }
+
+        /// The closest hit on the same grazing rays: the tree's answer is the linear scan's
+        /// (the contact first along the ray, ties to the lowest index), though its boxes cull
+        /// in single precision and its half-planes skip what lies beyond.
+        #[test]
+        fn bvh_first_hit_matches_the_linear_scan_on_grazing_rays(
+            seed in any::<u64>(),
+            n in 1usize..300,
+        ) {
+            let mut r = rng(seed);
+            let scale = [1e-150, 1.0, 3.0, 1e150][r.random_range(0..4)];
+            let snap = |p: DVec2| (p * 4.0).round() / 4.0 * scale;
+            let segments: Vec<Segment> = (0..n)
+                .map(|_| Segment { a: snap(point(&mut r)), b: snap(point(&mut r)) })
+                .collect();
+            let bvh = Bvh::new(&segments);
+            for _ in 0..300 {
+                let ray = Ray { o: snap(point(&mut r)), f: snap(point(&mut r) * 2.0) };
+                let skip = r.random_range(0..n + 1);
+                let mut linear: Option<(usize, Contact)> = None;
+                for (i, s) in segments.iter().enumerate() {
+                    if i == skip {
+                        continue;
+                    }
+                    if let Some(c) = ray.contact(s.a, s.b)
+                        && linear.is_none_or(|(_, b)| ray.order(&c, &b) == Ordering::Less)
+                    {
+                        linear = Some((i, c));
+                    }
+                }
+                prop_assert_eq!(bvh.first_hit(&ray, skip), linear, "{:?}", ray);
             }
         }
     }
