@@ -36,13 +36,52 @@ impl Wide {
             mask | (u32::from(sole == a || sole == b) << k)
         })
     }
+}
 
-    /// The children's centres projected on `d` from `o` (unit frame): roughly the order a ray
-    /// from `o` along `d` reaches them, so a closest-hit query visits the nearer first.
+/// Distances along a ray's direction (unit frame): a lower bound for each box, an upper bound
+/// for a point, each off by more than its rounding, so a box whose bound exceeds a contact's
+/// can hold nothing that comes first or ties. They also order a closest-hit query's visits,
+/// nearer boxes first.
+pub(super) struct Along {
+    ox: Vec4,
+    oy: Vec4,
+    ux: Vec4,
+    uy: Vec4,
+    ux_abs: Vec4,
+    uy_abs: Vec4,
+    o: DVec2,
+    unit: DVec2,
+    margin: f32,
+}
+
+impl Along {
+    /// From `o` towards `f` (distinct points of the unit frame).
+    pub(super) fn new(o: DVec2, f: DVec2) -> Along {
+        let unit = (f - o).normalize_or_zero();
+        Along {
+            ox: Vec4::splat(o.x as f32),
+            oy: Vec4::splat(o.y as f32),
+            ux: Vec4::splat(unit.x as f32),
+            uy: Vec4::splat(unit.y as f32),
+            ux_abs: Vec4::splat(unit.x.abs() as f32),
+            uy_abs: Vec4::splat(unit.y.abs() as f32),
+            o,
+            unit,
+            margin: BOX_MARGIN * (2.0 + o.abs().element_sum() as f32),
+        }
+    }
+
+    /// For each child of `node`, at most the distance along the ray of any point of its box.
     #[inline]
-    pub(super) fn along(&self, o: DVec2, d: DVec2) -> Vec4 {
-        let (ox, oy) = (Vec4::splat(o.x as f32), Vec4::splat(o.y as f32));
-        (self.cx - ox) * Vec4::splat(d.x as f32) + (self.cy - oy) * Vec4::splat(d.y as f32)
+    pub(super) fn entries(&self, node: &Wide) -> Vec4 {
+        (node.cx - self.ox) * self.ux + (node.cy - self.oy) * self.uy
+            - (node.hx * self.ux_abs + node.hy * self.uy_abs)
+            - Vec4::splat(self.margin)
+    }
+
+    /// At least the distance along the ray of `p`.
+    pub(super) fn reach(&self, p: DVec2) -> f32 {
+        (p - self.o).dot(self.unit) as f32 + self.margin
     }
 }
 

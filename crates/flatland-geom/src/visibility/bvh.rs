@@ -4,7 +4,7 @@ use std::cmp::Ordering;
 
 use glam::{DVec2, Vec4};
 
-use super::boxes::{Beyond, Boxes, RayBox, Wide};
+use super::boxes::{Along, Beyond, Boxes, RayBox, Wide};
 use super::predicates::{open_segment_hits, orient};
 use super::ray::{Contact, Ray};
 
@@ -165,45 +165,49 @@ impl Bvh {
             return None;
         }
         let (o, f) = (self.to_frame(ray.o), self.to_frame(ray.f));
-        let boxes = RayBox::new(o, f);
+        let (boxes, along) = (RayBox::new(o, f), Along::new(o, f));
         let mut best: Option<(usize, Contact)> = None;
-        let mut beyond: Option<Beyond> = None;
-        // As in `any`: each level leaves at most 3 entries behind.
-        let mut stack = [0u32; 64];
+        let mut beyond: Option<(Beyond, f32)> = None;
+        // As in `any`: each level leaves at most 3 entries behind. Each entry keeps how far
+        // along the ray its box starts, to skip it if a nearer contact has turned up since.
+        let mut stack = [(0u32, f32::NEG_INFINITY); 64];
         let mut top = 1;
         while top > 0 {
             top -= 1;
-            let node = &self.nodes[stack[top] as usize];
-            let mut passed = boxes.may_meet(node) & node.used & !node.skipped(skip, skip);
-            if let Some(cut) = &beyond {
-                passed &= !cut.holds(node);
+            let (index, entry) = stack[top];
+            let mut passed = 0b1111;
+            if let Some((cut, reach)) = &beyond {
+                if entry > *reach {
+                    continue;
+                }
+                passed = !cut.holds(&self.nodes[index as usize]);
             }
-            let keys = node.along(o, f - o).to_array();
-            let mut inner = [(0.0f32, 0u32); 4];
+            let node = &self.nodes[index as usize];
+            passed &= boxes.may_meet(node) & node.used & !node.skipped(skip, skip);
+            let entries = along.entries(node).to_array();
+            let mut inner = [(0u32, 0.0f32); 4];
             let mut n = 0;
-            for (k, &key) in keys.iter().enumerate() {
+            for (k, &entry) in entries.iter().enumerate() {
                 if passed & (1 << k) == 0 {
                     continue;
                 }
                 let (child, count) = (node.child[k] as usize, node.count[k] as usize);
                 if count == 0 {
-                    inner[n] = (key, child as u32);
+                    inner[n] = (child as u32, entry);
                     n += 1;
                     continue;
                 }
                 for item in child..child + count {
                     if let Some(found) = self.improves(ray, item, skip, best.as_ref()) {
-                        beyond = Some(self.beyond(ray, &found.1));
+                        beyond = Some(self.beyond(ray, &found.1, &along));
                         best = Some(found);
                     }
                 }
             }
             // The farthest goes onto the stack first, so the nearest is visited next.
-            inner[..n].sort_unstable_by(|x, y| y.0.total_cmp(&x.0));
-            for &(_, child) in &inner[..n] {
-                stack[top] = child;
-                top += 1;
-            }
+            inner[..n].sort_unstable_by(|x, y| y.1.total_cmp(&x.1));
+            stack[top..top + n].copy_from_slice(&inner[..n]);
+            top += n;
         }
         best
     }
@@ -232,14 +236,20 @@ impl Bvh {
         better.then_some((i, contact))
     }
 
-    /// The half-plane beyond a contact, in the unit frame: past the line of the segment it
-    /// crosses, or past the point across the ray.
-    fn beyond(&self, ray: &Ray, contact: &Contact) -> Beyond {
+    /// What lies beyond a contact, in the unit frame: the half-plane past the line of the
+    /// segment it crosses (or past the point, across the ray), and a bound on its distance
+    /// along the ray (the point's, or the farther end of the segment it lies on).
+    fn beyond(&self, ray: &Ray, contact: &Contact, along: &Along) -> (Beyond, f32) {
         match *contact {
-            Contact::At(p) => Beyond::new(self.to_frame(p), ray.f - ray.o),
+            Contact::At(p) => {
+                let p = self.to_frame(p);
+                (Beyond::new(p, ray.f - ray.o), along.reach(p))
+            }
             Contact::Crossing { a, b, .. } => {
                 let away = -orient(a, b, ray.o).signum();
-                Beyond::new(self.to_frame(a), (b - a).perp() * away)
+                let (fa, fb) = (self.to_frame(a), self.to_frame(b));
+                let reach = along.reach(fa).max(along.reach(fb));
+                (Beyond::new(fa, (b - a).perp() * away), reach)
             }
         }
     }
