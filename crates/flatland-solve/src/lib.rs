@@ -66,6 +66,7 @@
 
 #![deny(missing_docs)]
 
+mod bvh;
 mod error;
 mod exact;
 mod frame;
@@ -88,7 +89,9 @@ mod test_support;
 pub use error::SolveError;
 pub use exact::{check_scene, exact_block_means, exact_operator, receiver, sender};
 pub use frame::InputFrame;
-pub use mesh::{DEFAULT_ELEMENTS, Element, MAX_ELEMENTS, MIN_PER_EDGE, Mesh, MeshEdge};
+pub use mesh::{
+    DEFAULT_ELEMENTS, Element, MAX_ELEMENTS, MAX_MESH_ELEMENTS, MIN_PER_EDGE, Mesh, MeshEdge,
+};
 pub use operator::{DenseOperator, KernelRectangle, RectangleOperator, TransferOperator};
 pub use quadrature::gauss_legendre;
 pub use reference::{
