@@ -77,6 +77,8 @@ mod quadrature;
 mod reference;
 mod represent;
 mod solve;
+mod sparse;
+mod sweep;
 mod transfer;
 
 pub mod seeds;
@@ -105,4 +107,6 @@ pub use solve::{
     Comparison, ExactReference, Solution, SolveErrors, SolveParams, Stop, never, solve,
     solve_against, solve_errors, solve_operator,
 };
+pub use sparse::{MAX_NONZEROS, SparseOperator};
+pub use sweep::sweep_operator;
 pub use transfer::{Receiver, Sender, point_to_segment, point_to_segment_visible};
