@@ -48,6 +48,9 @@
 //! fine B, the Nyström interpolation). [`solve_errors`] then measures a solution's relative L2
 //! error (element lengths as weights), of B and of the reflected part `B − E`.
 //! [`solve_against`] does both for one representation: what a view or a benchmark row needs.
+//! How good the exact solve itself is: [`ExactReference::error_estimate`] compares it with a
+//! solve on twice the elements, and [`elements_for_error`] doubles the elements until that
+//! estimate is within a bound ([`DEFAULT_ERROR_BOUND`], 1 % of `B − E`).
 //!
 //! **Errors of ζ.** A [`Reference`] holds the exact ζ on a midpoint grid and at held-out random
 //! points; [`Reference::errors`] gives a representation's relative L2 and L1 on both
@@ -70,6 +73,7 @@
 #![deny(missing_docs)]
 
 mod bvh;
+mod discretization;
 mod error;
 mod exact;
 mod frame;
@@ -91,6 +95,7 @@ mod independent;
 #[cfg(test)]
 mod test_support;
 
+pub use discretization::{DEFAULT_ERROR_BOUND, ErrorEstimate, SAFETY_FACTOR, elements_for_error};
 pub use error::SolveError;
 pub use exact::{
     ExactMethod, SWEEP_FROM_EDGES, check_scene, exact_block_means, exact_operator, receiver, sender,
