@@ -86,7 +86,9 @@ fn tracer(c: &mut Criterion) {
         budget: TraceBudget::Photons(PHOTONS),
         seed: 1,
     };
-    let photons = trace(&kernel, &mesh, &params, &never).expect("a trace").photons;
+    let photons = trace(&kernel, &mesh, &params, &never)
+        .expect("a trace")
+        .photons;
     let mut group = c.benchmark_group("tracer");
     group.throughput(Throughput::Elements(photons));
     group.bench_function("floor_plan1k/all_threads", |b| {
