@@ -10,7 +10,8 @@ use anyhow::{Context, Result, bail};
 use flatland_baselines::{BlockValue, HrParams, UniformParams, run_hr_at_budget, run_uniform};
 use flatland_geom::{Kernel, Scene, write_atomic};
 use flatland_solve::{
-    Comparison, ExactReference, Mesh, Representation, SolveError, SolveParams, Stop, solve_against,
+    Comparison, DEFAULT_ERROR_BOUND, ErrorEstimate, ExactMethod, ExactReference, Mesh,
+    Representation, SolveError, SolveParams, Stop, elements_for_error, solve_against,
 };
 use kernel_fit::{Fit, FitError, LightFit, LightParams, LightStop, ModelFile};
 
@@ -38,11 +39,14 @@ pub struct Args {
     /// solved B − E is at most this, in (0, 1).
     #[arg(long, value_name = "X", default_value_t = LightParams::default().tolerance)]
     pub tolerance: f64,
-    /// Elements of the solve (default: chosen from the scene, 512 for the bundled scenes).
+    /// Elements of the solve (default: the fewest, doubling from the scene's minimum and at
+    /// least 512, whose estimated discretization error of B − E is below 1 %; 512 for the
+    /// bundled scenes).
     #[arg(long, value_name = "N")]
     pub elements: Option<usize>,
     /// Elements of the exact reference solve the errors are measured against
-    /// (default: 4 × elements, at least 2048, at most 8192).
+    /// (default: 4 × elements, at least 2048; at most 8192 on small scenes, whose exact
+    /// operator is dense).
     #[arg(long, value_name = "N")]
     pub reference_elements: Option<usize>,
     /// Seed of the fit or baseline built.
@@ -160,16 +164,14 @@ pub fn run(args: &Args) -> Result<()> {
     }
     let (scene, label) = scene_for(args, &choice)?;
     let kernel = Kernel::new(scene.clone());
-    let elements = args
-        .elements
-        .unwrap_or_else(|| Mesh::default_elements(&scene));
-    let mesh = Mesh::new(&kernel, elements).context("--elements")?;
-    let reference_elements = args
-        .reference_elements
-        .unwrap_or_else(|| ExactReference::default_elements(elements));
     let params = SolveParams::default();
-    // Check the reference size before the (maybe long) build of the representation.
-    Mesh::new(&kernel, reference_elements).context("--reference-elements")?;
+    // Check the sizes asked for before any (maybe long) solve or build.
+    if let Some(elements) = args.elements {
+        check_elements(&kernel, elements).context("--elements")?;
+    }
+    if let Some(reference_elements) = args.reference_elements {
+        check_elements(&kernel, reference_elements).context("--reference-elements")?;
+    }
 
     // Every long loop below polls Ctrl-C; nothing is written before the end.
     let stop: &Stop = &interrupt::requested;
@@ -179,6 +181,15 @@ pub fn run(args: &Args) -> Result<()> {
             other => other.into(),
         }
     };
+    let discretization = discretization(&kernel, args.elements, &params, stop)
+        .map_err(interrupted)
+        .context("estimating the discretization error of the exact solve")?;
+    let elements = discretization.elements;
+    let mesh = Mesh::new(&kernel, elements).context("--elements")?;
+    let reference_elements = args
+        .reference_elements
+        .unwrap_or_else(|| ExactReference::default_elements_for(&kernel, elements));
+    check_elements(&kernel, reference_elements).context("--reference-elements")?;
     let built = build(&choice, &kernel, &mesh, args, stop)?;
     interrupt::check()?;
     let reference = ExactReference::new(&kernel, reference_elements, &params, stop)
@@ -209,32 +220,49 @@ pub fn run(args: &Args) -> Result<()> {
             )?,
         }
     }
+    let summary = Summary {
+        scene: &label,
+        choice: &choice,
+        mesh: &mesh,
+        reference_elements,
+        basis: built.rep.basis_functions(),
+        comparison: &comparison,
+        build_s: built.build_s,
+        note: built.note.as_deref(),
+        learned: built.learned.as_ref(),
+        discretization: &discretization,
+    };
     if args.json {
-        println!(
-            "{}",
-            summary_json(
-                &label,
-                &choice,
-                &mesh,
-                reference_elements,
-                &built,
-                &comparison
-            )
-        );
+        println!("{}", summary.json());
     } else {
-        print_summary(
-            &label,
-            &choice,
-            &mesh,
-            reference_elements,
-            &built,
-            &comparison,
-        );
+        summary.print();
         if let Some(path) = &args.out {
             println!("wrote {}", path.display());
         }
     }
     Ok(())
+}
+
+/// Refuses an element count no mesh, or no exact operator of this scene, can have.
+fn check_elements(kernel: &Kernel, elements: usize) -> Result<(), SolveError> {
+    ExactMethod::of(kernel).check(elements)?;
+    Mesh::new(kernel, elements).map(|_| ())
+}
+
+/// The estimated discretization error of the exact solve on `elements` (from a solve on
+/// twice as many), or, without a count, the fewest elements whose estimate is below 1 %.
+fn discretization(
+    kernel: &Kernel,
+    elements: Option<usize>,
+    params: &SolveParams,
+    stop: &Stop,
+) -> Result<ErrorEstimate, SolveError> {
+    match elements {
+        Some(n) => {
+            ExactReference::new(kernel, n, params, stop)?.error_estimate(kernel, params, stop)
+        }
+        None => Ok(elements_for_error(kernel, DEFAULT_ERROR_BOUND, params, stop)?.1),
+    }
 }
 
 /// The scene to solve: `--scene` (subdivided), or a model's own scene when none is given.
@@ -267,13 +295,7 @@ struct Learned {
 
 /// Builds the representation `choice` names (fits, baselines) on `kernel`; the default
 /// learner learns on `mesh`, the solve's.
-fn build(
-    choice: &Choice,
-    kernel: &Kernel,
-    mesh: &Mesh,
-    args: &Args,
-    stop: &Stop,
-) -> Result<Built> {
+fn build(choice: &Choice, kernel: &Kernel, mesh: &Mesh, args: &Args, stop: &Stop) -> Result<Built> {
     let started = Instant::now();
     let mut note = None;
     let mut learned = None;
@@ -387,99 +409,121 @@ fn csv(mesh: &Mesh, b: &[f64]) -> String {
     out
 }
 
-/// The `--json` object; `note` is there only when the baseline built a count other than asked.
-fn summary_json(
-    scene: &str,
-    choice: &Choice,
-    mesh: &Mesh,
+/// What `flatland solve` reports.
+struct Summary<'a> {
+    scene: &'a str,
+    choice: &'a Choice,
+    mesh: &'a Mesh,
     reference_elements: usize,
-    built: &Built,
-    c: &Comparison,
-) -> serde_json::Value {
-    let mut summary = serde_json::json!({
-        "scene": scene,
-        "kernel": choice.label(),
-        "elements": mesh.len(),
-        "basis_functions": built.rep.basis_functions(),
-        "rel_l2_b": c.errors.rel_l2_b,
-        "rel_l2_reflected": c.errors.rel_l2_reflected,
-        "iterations": c.solution.iterations,
-        "residual": c.solution.residual,
-        "wall_s": c.solution.wall_s(),
-        "build_s": built.build_s,
-        "reference_elements": reference_elements,
-    });
-    if let Some(note) = &built.note {
-        summary["note"] = note.as_str().into();
-    }
-    if let Some(l) = &built.learned {
-        summary["estimated_rel_l2_reflected"] = l.estimated_error.into();
-        summary["rounds"] = l.rounds.into();
-        summary["rays"] = l.rays.into();
-        summary["stopped"] = stop_name(l.stopped).into();
-    }
-    summary
+    basis: Option<usize>,
+    comparison: &'a Comparison,
+    build_s: f64,
+    /// The baseline's note when it built another count than asked.
+    note: Option<&'a str>,
+    /// What the default learner says of itself.
+    learned: Option<&'a Learned>,
+    discretization: &'a ErrorEstimate,
 }
 
-/// The human-readable summary.
-fn print_summary(
-    scene: &str,
-    choice: &Choice,
-    mesh: &Mesh,
-    reference_elements: usize,
-    built: &Built,
-    c: &Comparison,
-) {
-    let row = |k: &str, v: String| println!("  {k:<26} {v}");
-    println!("solve of {scene} with the {} kernel", choice.label());
-    row(
-        "basis functions",
-        built
-            .rep
-            .basis_functions()
-            .map_or_else(|| "exact (none)".to_owned(), |b| b.to_string()),
-    );
-    if let Some(note) = &built.note {
-        row("note", note.clone());
+impl Summary<'_> {
+    /// The `--json` object; `note` is there only when the baseline built a count other than
+    /// asked.
+    fn json(&self) -> serde_json::Value {
+        let c = self.comparison;
+        let mut json = serde_json::json!({
+            "scene": self.scene,
+            "kernel": self.choice.label(),
+            "elements": self.mesh.len(),
+            "basis_functions": self.basis,
+            "rel_l2_b": c.errors.rel_l2_b,
+            "rel_l2_reflected": c.errors.rel_l2_reflected,
+            "iterations": c.solution.iterations,
+            "residual": c.solution.residual,
+            "wall_s": c.solution.wall_s(),
+            "build_s": self.build_s,
+            "reference_elements": self.reference_elements,
+            "discretization_error_estimate": self.discretization.estimate,
+        });
+        if let Some(note) = self.note {
+            json["note"] = note.into();
+        }
+        if let Some(l) = self.learned {
+            json["estimated_rel_l2_reflected"] = l.estimated_error.into();
+            json["rounds"] = l.rounds.into();
+            json["rays"] = l.rays.into();
+            json["stopped"] = stop_name(l.stopped).into();
+        }
+        json
     }
-    row(
-        "elements",
-        format!("{} (exact reference: {reference_elements})", mesh.len()),
-    );
-    row("rel. L2 of B", format!("{:.5}", c.errors.rel_l2_b));
-    row(
-        "rel. L2 of B − E",
-        format!("{:.5}   (the reflected part)", c.errors.rel_l2_reflected),
-    );
-    if let Some(l) = &built.learned {
+
+    /// The human-readable summary.
+    fn print(&self) {
+        let c = self.comparison;
+        let row = |k: &str, v: String| println!("  {k:<26} {v}");
+        println!(
+            "solve of {} with the {} kernel",
+            self.scene,
+            self.choice.label()
+        );
         row(
-            "  estimated by the learner",
+            "basis functions",
+            self.basis
+                .map_or_else(|| "exact (none)".to_owned(), |b| b.to_string()),
+        );
+        if let Some(note) = self.note {
+            row("note", note.to_owned());
+        }
+        row(
+            "elements",
             format!(
-                "{:.5}   ({} rounds, {} rays, stopped: {})",
-                l.estimated_error,
-                l.rounds,
-                l.rays,
-                stop_name(l.stopped)
+                "{} (exact reference: {})",
+                self.mesh.len(),
+                self.reference_elements
             ),
         );
+        row(
+            "discretization error",
+            format!(
+                "≈ {:.1e} (estimated from a solve on 2N = {} elements)",
+                self.discretization.estimate, self.discretization.finer_elements
+            ),
+        );
+        row("rel. L2 of B", format!("{:.5}", c.errors.rel_l2_b));
+        row(
+            "rel. L2 of B − E",
+            format!("{:.5}   (the reflected part)", c.errors.rel_l2_reflected),
+        );
+        if let Some(l) = self.learned {
+            row(
+                "  estimated by the learner",
+                format!(
+                    "{:.5}   (against the exact kernel on these elements; {} rounds, {} rays, \
+                     stopped: {})",
+                    l.estimated_error,
+                    l.rounds,
+                    l.rays,
+                    stop_name(l.stopped)
+                ),
+            );
+        }
+        row(
+            "iterations",
+            format!(
+                "{} (residual {:.1e})",
+                c.solution.iterations, c.solution.residual
+            ),
+        );
+        row(
+            "wall time",
+            format!(
+                "{:.3} s (operator {:.3} s, linear solve {:.3} s)",
+                c.solution.wall_s(),
+                c.solution.assembly_s,
+                c.solution.solve_s
+            ),
+        );
+        row("building the kernel", format!("{:.3} s", self.build_s));
     }
-    row(
-        "iterations",
-        format!(
-            "{} (residual {:.1e})",
-            c.solution.iterations, c.solution.residual
-        ),
-    );
-    row(
-        "wall time",
-        format!(
-            "{:.3} s (operator {:.3} s, linear solve {:.3} s)",
-            c.solution.wall_s(),
-            c.solution.assembly_s,
-            c.solution.solve_s
-        ),
-    );
-    row("building the kernel", format!("{:.3} s", built.build_s));
 }
 
 /// How `--json` and the table name why the default learner stopped.

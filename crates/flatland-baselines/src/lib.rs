@@ -50,6 +50,7 @@ mod hr;
 mod seeds;
 #[cfg(test)]
 mod solve_tests;
+mod tracer;
 mod uniform;
 
 pub use error::BaselineError;
@@ -58,6 +59,7 @@ pub use hr::{
     HierarchicalRadiosity, HrLink, HrParams, HrStats, LinkEstimate, Oracle, count_initial_links,
     f_eps_for_budget, hr_params_for_budget, run_hr, run_hr_at_budget,
 };
+pub use tracer::{LightTracer, Lighting, PowerBalance, TraceBudget, TraceParams, Traced, trace};
 pub use uniform::{BlockValue, UniformGrid, UniformParams, run_uniform};
 
 use flatland_solve::Representation;

@@ -4,6 +4,7 @@ mod batch;
 mod eval;
 mod pairs;
 mod params;
+mod rays;
 mod values;
 mod visible;
 
@@ -17,7 +18,7 @@ use crate::visibility::{Bvh, Segment, Shaft};
 use pairs::MAX_CACHED_SURFACES;
 
 pub use params::KernelParams;
-pub use values::{KernelSample, PairClass, PairVisibility, Unoccluded};
+pub use values::{Hit, KernelSample, PairClass, PairVisibility, Unoccluded};
 
 /// What the hot loop needs of one parent edge, packed together.
 #[derive(Clone, Copy, Debug)]

@@ -15,11 +15,21 @@
 //! - All decisions use Shewchuk's exact `orient2d` (the `robust` crate): no epsilons. The only
 //!   floating-point tests are conservative culling (bounding boxes with a generous margin) that
 //!   can only keep extra work, never change an answer.
+//!
+//! # Closest hit
+//! A ray from `o` is the open segment from `o` to a point beyond the scene, so it meets an
+//! edge by the same rule: touching an end point or running along an edge hits it (at the
+//! first point of the overlap), `o` itself never does. Which edge it meets first is decided
+//! exactly too: by orientations where one segment does not cross the other's line, and for
+//! two segments that cross each other by an exact degree-4 comparison (expansion arithmetic).
+//! Of several edges met at one point (a corner, a junction) the first listed wins.
 
 mod boxes;
 mod bvh;
 mod events;
+mod expansion;
 mod predicates;
+mod ray;
 mod shaft;
 
 pub(crate) use bvh::{Bvh, Segment};
@@ -27,6 +37,7 @@ pub use events::{PairEvents, SenderFace};
 pub(crate) use predicates::open_segment_hits;
 #[cfg(test)]
 pub(crate) use predicates::orient;
+pub(crate) use ray::{Contact, Ray};
 #[cfg(test)]
 pub(crate) use shaft::Candidates;
 pub(crate) use shaft::{Shaft, Side, classify};

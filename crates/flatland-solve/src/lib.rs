@@ -22,7 +22,10 @@
 //! - the exact kernel ([`flatland_geom::Kernel`]): the closed-form point-to-segment transfer
 //!   `(sin φ₂ − sin φ₁) / 2` where the shaft test proves a pair of edges clear, and the exact
 //!   visible part of each element elsewhere — no rays, no quadrature, so the solve converges as
-//!   elements are refined ([`exact_operator`]);
+//!   elements are refined. Small scenes take it from a table of pairs of edges, dense
+//!   ([`exact_operator`]); from [`SWEEP_FROM_EDGES`] edges on, a visibility sweep finds what
+//!   each collocation point sees without forming pairs and keeps only that, sparse
+//!   ([`sweep_operator`], [`SparseOperator`]): 10⁵ edges in seconds ([`ExactMethod`]);
 //! - the default learned model (`kernel_fit::LearnedKernel`, which keeps `G` exact and learns
 //!   `V`): the closed-form transfer of each piece of an element between the faces of the
 //!   visibility structure, times the model's `Ṽ` on that face — its own kernel, integrated
@@ -45,6 +48,9 @@
 //! fine B, the Nyström interpolation). [`solve_errors`] then measures a solution's relative L2
 //! error (element lengths as weights), of B and of the reflected part `B − E`.
 //! [`solve_against`] does both for one representation: what a view or a benchmark row needs.
+//! How good the exact solve itself is: [`ExactReference::error_estimate`] compares it with a
+//! solve on twice the elements, and [`elements_for_error`] doubles the elements until that
+//! estimate is within a bound ([`DEFAULT_ERROR_BOUND`], 1 % of `B − E`).
 //!
 //! **Errors of ζ.** A [`Reference`] holds the exact ζ on a midpoint grid and at held-out random
 //! points; [`Reference::errors`] gives a representation's relative L2 and L1 on both
@@ -66,6 +72,8 @@
 
 #![deny(missing_docs)]
 
+mod bvh;
+mod discretization;
 mod error;
 mod exact;
 mod frame;
@@ -76,6 +84,8 @@ mod quadrature;
 mod reference;
 mod represent;
 mod solve;
+mod sparse;
+mod sweep;
 mod transfer;
 
 pub mod seeds;
@@ -85,10 +95,15 @@ mod independent;
 #[cfg(test)]
 mod test_support;
 
+pub use discretization::{DEFAULT_ERROR_BOUND, ErrorEstimate, SAFETY_FACTOR, elements_for_error};
 pub use error::SolveError;
-pub use exact::{check_scene, exact_block_means, exact_operator, receiver, sender};
+pub use exact::{
+    ExactMethod, SWEEP_FROM_EDGES, check_scene, exact_block_means, exact_operator, receiver, sender,
+};
 pub use frame::InputFrame;
-pub use mesh::{DEFAULT_ELEMENTS, Element, MAX_ELEMENTS, MIN_PER_EDGE, Mesh, MeshEdge};
+pub use mesh::{
+    DEFAULT_ELEMENTS, Element, MAX_ELEMENTS, MAX_MESH_ELEMENTS, MIN_PER_EDGE, Mesh, MeshEdge,
+};
 pub use operator::{DenseOperator, KernelRectangle, RectangleOperator, TransferOperator};
 pub use quadrature::gauss_legendre;
 pub use reference::{
@@ -102,4 +117,6 @@ pub use solve::{
     Comparison, ExactReference, Solution, SolveErrors, SolveParams, Stop, never, solve,
     solve_against, solve_errors, solve_linear, solve_operator,
 };
+pub use sparse::{MAX_NONZEROS, SparseOperator};
+pub use sweep::sweep_operator;
 pub use transfer::{Receiver, Sender, point_to_segment, point_to_segment_visible};

@@ -1,9 +1,13 @@
 //! Elements: intervals of the surface edges on which the radiosity is constant.
 
+use std::cmp::{Ordering, Reverse};
+use std::collections::BinaryHeap;
 use std::ops::Range;
 
 use flatland_geom::{DVec2, Kernel, Scene};
+use rayon::prelude::*;
 
+use crate::bvh::{Aabb, Bvh};
 use crate::{InputFrame, SolveError};
 
 /// A surface edge as the solver sees it: a whole edge of the scene (all pieces of an edge that
@@ -71,8 +75,14 @@ pub struct Mesh {
     fingerprint: u64,
 }
 
-/// Most elements a mesh may have: the dense operators hold N² numbers (8192² · 8 B = 512 MiB).
+/// Most elements a dense operator may have: it holds N² numbers (8192² · 8 B = 512 MiB). A mesh
+/// may have more ([`MAX_MESH_ELEMENTS`]); the exact kernel's sparse operator
+/// ([`sweep_operator`](crate::sweep_operator)) is not bound by it.
 pub const MAX_ELEMENTS: usize = 8192;
+
+/// Most elements any mesh may have: about 2 GiB of elements, and column indices of a sparse
+/// operator fit in `u32`.
+pub const MAX_MESH_ELEMENTS: usize = 1 << 24;
 
 /// The default element count: about this many over the whole scene, and at least
 /// [`MIN_PER_EDGE`] per section of a surface edge. Measured against 8192 elements, 512 put the
@@ -84,8 +94,9 @@ pub const DEFAULT_ELEMENTS: usize = 512;
 pub const MIN_PER_EDGE: usize = 2;
 
 impl Mesh {
-    /// The default element count for `scene`: [`DEFAULT_ELEMENTS`], raised so every section of
-    /// a surface edge gets [`MIN_PER_EDGE`] elements, capped at [`MAX_ELEMENTS`].
+    /// The default element count for `scene` when it is compared with dense operators:
+    /// [`DEFAULT_ELEMENTS`], raised so every section of a surface edge gets [`MIN_PER_EDGE`]
+    /// elements, capped at [`MAX_ELEMENTS`] (but never below one element per section).
     #[must_use]
     pub fn default_elements(scene: &Scene) -> usize {
         let sections = Mesh::min_elements(scene);
@@ -98,29 +109,33 @@ impl Mesh {
     /// are as equal as the sections allow (each section gets at least one, apportioned by
     /// length). Sections are the parts of a surface edge between its ends and the junctions
     /// where other edges touch or cross it ([`MeshEdge::junctions`]). Errors name the valid
-    /// range: at least [`Mesh::min_elements`], at most [`MAX_ELEMENTS`].
+    /// range: at least [`Mesh::min_elements`], at most [`MAX_MESH_ELEMENTS`]. A dense operator
+    /// refuses more than [`MAX_ELEMENTS`] when it is built.
+    ///
+    /// Linear in the edges up to a logarithm: junctions are found through a spatial index.
     pub fn new(kernel: &Kernel, elements: usize) -> Result<Mesh, SolveError> {
-        let fewest = Mesh::min_elements(kernel.scene());
-        if elements < fewest || elements > MAX_ELEMENTS {
+        let scene = kernel.scene();
+        let runs = surface_runs(scene);
+        let cuts = all_junctions(scene, &runs);
+        let fewest = sections(&cuts);
+        if elements < fewest || elements > MAX_MESH_ELEMENTS {
             return Err(SolveError::InvalidParameter {
                 name: "elements",
                 value: elements.to_string(),
-                valid: if elements > MAX_ELEMENTS {
-                    "at most 8192 (the operator is dense: N² numbers)"
+                valid: if elements > MAX_MESH_ELEMENTS {
+                    "at most 16777216 (2²⁴: a mesh's elements are indexed by u32)"
                 } else {
                     "at least one per section of a surface edge (elements never straddle two \
                      edges, nor a point where another edge touches or crosses one)"
                 },
             });
         }
-        Mesh::build(kernel, elements)
+        Ok(Mesh::build(kernel, runs, &cuts, elements))
     }
 
-    fn build(kernel: &Kernel, elements: usize) -> Result<Mesh, SolveError> {
+    fn build(kernel: &Kernel, runs: Vec<Range<usize>>, cuts: &[Vec<f64>], elements: usize) -> Mesh {
         let scene = kernel.scene();
-        let runs = surface_runs(scene);
         let total_length = scene.total_length();
-        let cuts: Vec<Vec<f64>> = runs.iter().map(|r| junctions(scene, r)).collect();
         let lengths: Vec<f64> = runs
             .iter()
             .map(|r| {
@@ -204,29 +219,30 @@ impl Mesh {
             }
             edges[k].elements.end = out.len();
         }
-        Ok(Mesh {
+        Mesh {
             edges,
             elements: out,
             local,
             frame,
             total_length,
             fingerprint: scene.fingerprint(),
-        })
+        }
     }
 
     /// One element per section of a surface edge: the coarsest mesh (no limit on the count).
     pub fn coarsest(kernel: &Kernel) -> Result<Mesh, SolveError> {
-        Mesh::build(kernel, Mesh::min_elements(kernel.scene()))
+        let scene = kernel.scene();
+        let runs = surface_runs(scene);
+        let cuts = all_junctions(scene, &runs);
+        let fewest = sections(&cuts);
+        Ok(Mesh::build(kernel, runs, &cuts, fewest))
     }
 
     /// The fewest elements a mesh of `scene` can have: one per section, the parts of a surface
     /// edge between its ends and the points where other edges touch or cross it.
     #[must_use]
     pub fn min_elements(scene: &Scene) -> usize {
-        surface_runs(scene)
-            .iter()
-            .map(|r| junctions(scene, r).len() - 1)
-            .sum()
+        sections(&all_junctions(scene, &surface_runs(scene)))
     }
 
     /// The elements, in parameter order.
@@ -314,18 +330,62 @@ fn surface_runs(scene: &Scene) -> Vec<Range<usize>> {
     runs
 }
 
+/// Fewest elements: one per section, the parts of a run between consecutive cuts.
+fn sections(cuts: &[Vec<f64>]) -> usize {
+    cuts.iter().map(|c| c.len() - 1).sum()
+}
+
+/// [`junctions`] of every run, through one spatial index over all edges so the whole is
+/// `O(n log n)` rather than `O(n²)` in the edges.
+fn all_junctions(scene: &Scene, runs: &[Range<usize>]) -> Vec<Vec<f64>> {
+    let boxes: Vec<Aabb> = scene
+        .edges()
+        .iter()
+        .map(|e| Aabb::of_segment(e.a, e.b).expanded(slack(e.a, e.b)))
+        .collect();
+    let index = Bvh::new(&boxes);
+    runs.par_iter()
+        .map_init(Vec::new, |candidates, run| {
+            junctions(scene, run, &index, candidates)
+        })
+        .collect()
+}
+
+/// How far beyond a segment's box a point [`junctions`] accepts may lie: the parameter
+/// tolerance along it, and rounding of its coordinates (with room to spare; a candidate too
+/// many costs one test).
+fn slack(a: DVec2, b: DVec2) -> f64 {
+    4.0 * JUNCTION_TOLERANCE * (b - a).length()
+        + 16.0 * f64::EPSILON * a.abs().max(b.abs()).max_element()
+}
+
+/// Parameters within this of an end are the end (the edge meets another at a corner).
+const JUNCTION_TOLERANCE: f64 = 1e-9;
+
 /// `0`, the junctions of surface run `run` (see [`MeshEdge::junctions`]) and `1`, ascending.
-fn junctions(scene: &Scene, run: &Range<usize>) -> Vec<f64> {
+/// Only edges whose (slightly grown) boxes overlap the run's can meet it; `index` holds the
+/// boxes of all edges, `candidates` is scratch.
+fn junctions(
+    scene: &Scene,
+    run: &Range<usize>,
+    index: &Bvh,
+    candidates: &mut Vec<u32>,
+) -> Vec<f64> {
     let all = scene.edges();
     let (a, b) = (all[run.start].a, all[run.end - 1].b);
     let d = b - a;
-    // Parameters within this of an end are the end (the edge meets another at a corner).
-    let tol = 1e-9;
+    let tol = JUNCTION_TOLERANCE;
     let mut cuts = vec![0.0, 1.0];
-    for (i, e) in all.iter().enumerate() {
+    candidates.clear();
+    index.overlapping(&Aabb::of_segment(a, b).expanded(slack(a, b)), candidates);
+    // In file order, as a scan over all edges would meet them.
+    candidates.sort_unstable();
+    for &i in candidates.iter() {
+        let i = i as usize;
         if run.contains(&i) {
             continue;
         }
+        let e = &all[i];
         let q = e.b - e.a;
         let den = d.perp_dot(q);
         if den == 0.0 {
@@ -342,9 +402,30 @@ fn junctions(scene: &Scene, run: &Range<usize>) -> Vec<f64> {
     cuts
 }
 
+/// An edge's element length, ordered by value (`total_cmp`), ties by edge index, so a heap
+/// picks exactly what a scan with `max_by` (the last of equals) or `min_by` (the first)
+/// would.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct ElementLength(f64, usize);
+
+impl Eq for ElementLength {}
+
+impl PartialOrd for ElementLength {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for ElementLength {
+    fn cmp(&self, other: &Self) -> Ordering {
+        self.0.total_cmp(&other.0).then(self.1.cmp(&other.1))
+    }
+}
+
 /// `total` elements over edges of `lengths`: at least one each, otherwise as close to equal
 /// element lengths as whole numbers allow (each step gives one more element to the edge whose
-/// elements are longest, or takes one from the edge whose elements are shortest).
+/// elements are longest, or takes one from the edge whose elements are shortest). A heap finds
+/// that edge, so large scenes cost `O(n log n)`.
 fn apportion(lengths: &[f64], total: usize) -> Vec<usize> {
     let sum: f64 = lengths.iter().sum();
     let mut counts: Vec<usize> = lengths
@@ -352,21 +433,30 @@ fn apportion(lengths: &[f64], total: usize) -> Vec<usize> {
         .map(|&l| ((l / sum * total as f64).floor() as usize).max(1))
         .collect();
     let mut assigned: usize = counts.iter().sum();
-    let element = |k: usize, c: &[usize]| lengths[k] / c[k] as f64;
-    while assigned < total {
-        let k = (0..lengths.len())
-            .max_by(|&p, &q| element(p, &counts).total_cmp(&element(q, &counts)))
-            .expect("at least one edge");
-        counts[k] += 1;
-        assigned += 1;
+    let element = |k: usize, c: &[usize]| ElementLength(lengths[k] / c[k] as f64, k);
+    if assigned < total {
+        let mut longest: BinaryHeap<ElementLength> =
+            (0..lengths.len()).map(|k| element(k, &counts)).collect();
+        while assigned < total {
+            let ElementLength(_, k) = longest.pop().expect("at least one edge");
+            counts[k] += 1;
+            assigned += 1;
+            longest.push(element(k, &counts));
+        }
     }
-    while assigned > total {
-        let k = (0..lengths.len())
+    if assigned > total {
+        let mut shortest: BinaryHeap<Reverse<ElementLength>> = (0..lengths.len())
             .filter(|&k| counts[k] > 1)
-            .min_by(|&p, &q| element(p, &counts).total_cmp(&element(q, &counts)))
-            .expect("total ≥ number of edges");
-        counts[k] -= 1;
-        assigned -= 1;
+            .map(|k| Reverse(element(k, &counts)))
+            .collect();
+        while assigned > total {
+            let Reverse(ElementLength(_, k)) = shortest.pop().expect("total ≥ number of edges");
+            counts[k] -= 1;
+            assigned -= 1;
+            if counts[k] > 1 {
+                shortest.push(Reverse(element(k, &counts)));
+            }
+        }
     }
     counts
 }
@@ -374,7 +464,9 @@ fn apportion(lengths: &[f64], total: usize) -> Vec<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::test_support::bundled;
+    use crate::test_support::{bundled, floor_plan, hall, random_room};
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
 
     #[test]
     fn elements_tile_the_parameter_range_in_order_and_never_straddle_edges() {
@@ -466,6 +558,122 @@ mod tests {
         // A tiny edge still gets one element.
         let c = apportion(&[1.0, 1e-6, 1.0], 10);
         assert_eq!(c[1], 1);
+    }
+
+    /// The scan over all edges that [`junctions`] replaced: the definition it must match.
+    fn junctions_by_scan(scene: &Scene, run: &Range<usize>) -> Vec<f64> {
+        let all = scene.edges();
+        let (a, b) = (all[run.start].a, all[run.end - 1].b);
+        let d = b - a;
+        let tol = JUNCTION_TOLERANCE;
+        let mut cuts = vec![0.0, 1.0];
+        for (i, e) in all.iter().enumerate() {
+            if run.contains(&i) {
+                continue;
+            }
+            let q = e.b - e.a;
+            let den = d.perp_dot(q);
+            if den == 0.0 {
+                continue;
+            }
+            let w = e.a - a;
+            let (u, v) = (w.perp_dot(q) / den, w.perp_dot(d) / den);
+            if u > tol && u < 1.0 - tol && (-tol..=1.0 + tol).contains(&v) {
+                cuts.push(u);
+            }
+        }
+        cuts.sort_by(f64::total_cmp);
+        cuts.dedup_by(|x, y| (*x - *y).abs() <= tol);
+        cuts
+    }
+
+    #[test]
+    fn junctions_through_the_index_are_those_of_a_scan() {
+        let scenes = [
+            bundled("maze"),
+            bundled("corners"),
+            bundled("fig3").subdivide(3).unwrap(),
+            floor_plan(600),
+            hall(600),
+            random_room(40, 3),
+        ];
+        let mut found = Vec::new();
+        for scene in scenes {
+            let runs = surface_runs(&scene);
+            let indexed = all_junctions(&scene, &runs);
+            for (run, cuts) in runs.iter().zip(&indexed) {
+                assert_eq!(cuts, &junctions_by_scan(&scene, run), "run {run:?}");
+            }
+            found.push(indexed.iter().map(|c| c.len() - 2).sum::<usize>());
+        }
+        // maze, corners and the random room have T-junctions and crossings; fig3 has none,
+        // and the generated scenes leave out every covered part of a face, so where walls
+        // abut they meet at corners.
+        assert!(found[0] > 0 && found[1] > 0 && found[5] > 0, "{found:?}");
+        assert_eq!(found[2..5], [0, 0, 0]);
+    }
+
+    /// The scan [`apportion`] replaced: one step at a time over all edges.
+    fn apportion_by_scan(lengths: &[f64], total: usize) -> Vec<usize> {
+        let sum: f64 = lengths.iter().sum();
+        let mut counts: Vec<usize> = lengths
+            .iter()
+            .map(|&l| ((l / sum * total as f64).floor() as usize).max(1))
+            .collect();
+        let mut assigned: usize = counts.iter().sum();
+        let element = |k: usize, c: &[usize]| lengths[k] / c[k] as f64;
+        while assigned < total {
+            let k = (0..lengths.len())
+                .max_by(|&p, &q| element(p, &counts).total_cmp(&element(q, &counts)))
+                .unwrap();
+            counts[k] += 1;
+            assigned += 1;
+        }
+        while assigned > total {
+            let k = (0..lengths.len())
+                .filter(|&k| counts[k] > 1)
+                .min_by(|&p, &q| element(p, &counts).total_cmp(&element(q, &counts)))
+                .unwrap();
+            counts[k] -= 1;
+            assigned -= 1;
+        }
+        counts
+    }
+
+    #[test]
+    fn apportionment_by_heap_is_the_scan() {
+        let mut rng = ChaCha8Rng::seed_from_u64(17);
+        for case in 0..300 {
+            let n = 1 + case % 40;
+            // Equal lengths in some cases: ties must go the same way.
+            let lengths: Vec<f64> = (0..n)
+                .map(|_| {
+                    if case % 3 == 0 {
+                        [1.0, 2.0, 0.5][rng.random_range(0..3)]
+                    } else {
+                        rng.random_range(0.001..5.0)
+                    }
+                })
+                .collect();
+            let total = n + rng.random_range(0..200);
+            assert_eq!(
+                apportion(&lengths, total),
+                apportion_by_scan(&lengths, total)
+            );
+        }
+    }
+
+    #[test]
+    fn large_scenes_mesh_past_the_dense_limit() {
+        let kernel = Kernel::new(floor_plan(5000));
+        let fewest = Mesh::min_elements(kernel.scene());
+        assert!(fewest > MAX_ELEMENTS / 2, "{fewest}");
+        let mesh = Mesh::new(&kernel, 3 * fewest).unwrap();
+        assert_eq!(mesh.len(), 3 * fewest);
+        let err = Mesh::new(&kernel, MAX_MESH_ELEMENTS + 1)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("at most 16777216"), "{err}");
     }
 
     #[test]

@@ -3,7 +3,7 @@
 
 use rayon::prelude::*;
 
-use crate::{Mesh, SolveError, Stop};
+use crate::{MAX_ELEMENTS, Mesh, SolveError, Stop};
 
 /// The discrete operator K of `B = E + K B` on a [`Mesh`]: what a solver iterates with.
 pub trait TransferOperator: Send + Sync {
@@ -33,12 +33,14 @@ impl DenseOperator {
     /// Fills row `i` (receiver element `i`, all N senders) with `row(i, &mut row)`, rows in
     /// parallel. `stop` is polled once per row; when it says so the assembly ends with
     /// [`SolveError::Interrupted`]. Entries that are not finite are an error (they would poison
-    /// the solve), naming the row and column.
+    /// the solve), naming the row and column. More than [`MAX_ELEMENTS`] rows are refused
+    /// before anything is allocated.
     pub fn assemble(
         n: usize,
         row: impl Fn(usize, &mut [f64]) + Sync,
         stop: &Stop,
     ) -> Result<DenseOperator, SolveError> {
+        check_dense(n)?;
         let mut k = vec![0.0; n * n];
         if n > 0 {
             k.par_chunks_mut(n)
@@ -69,6 +71,24 @@ impl DenseOperator {
     pub fn row(&self, i: usize) -> &[f64] {
         &self.k[i * self.n..(i + 1) * self.n]
     }
+
+    /// Bytes the operator holds in memory (its N² numbers).
+    #[must_use]
+    pub fn memory_bytes(&self) -> usize {
+        std::mem::size_of::<DenseOperator>() + 8 * self.k.capacity()
+    }
+}
+
+/// Refuses a dense operator of more than [`MAX_ELEMENTS`] elements; the error names the limit.
+pub(crate) fn check_dense(n: usize) -> Result<(), SolveError> {
+    if n > MAX_ELEMENTS {
+        return Err(SolveError::InvalidParameter {
+            name: "elements",
+            value: n.to_string(),
+            valid: "at most 8192 where the operator is dense (N² numbers)",
+        });
+    }
+    Ok(())
 }
 
 impl TransferOperator for DenseOperator {

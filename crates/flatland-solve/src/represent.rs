@@ -5,7 +5,10 @@ use flatland_geom::Kernel;
 
 use crate::exact::exact_operator;
 use crate::quadrature::gauss_legendre;
-use crate::{DenseOperator, Mesh, SolveError, SolveParams, Stop, TransferOperator};
+use crate::{
+    DenseOperator, ExactMethod, Mesh, SolveError, SolveParams, Stop, TransferOperator,
+    sweep_operator,
+};
 
 /// A representation of the kernel: the exact kernel, the learned model, hierarchical
 /// radiosity, the uniform grid, or anything else that approximates the learning target
@@ -19,7 +22,7 @@ use crate::{DenseOperator, Mesh, SolveError, SolveParams, Stop, TransferOperator
 /// ([`quadrature_operator`]). A representation that knows more overrides `operator`:
 ///
 /// - the exact kernel uses the closed-form point-to-segment transfer and exact visible
-///   intervals ([`exact_operator`]);
+///   intervals ([`exact_operator`], or [`sweep_operator`] on large scenes);
 /// - HR and the uniform grid are constant on rectangles of `(s, t)` and apply their links
 ///   directly, gathering and pushing–pulling ([`RectangleOperator`](crate::RectangleOperator));
 /// - the default learned model keeps the geometry exact and learns only the visibility `Ṽ`:
@@ -149,13 +152,20 @@ impl Representation for Kernel {
         Some(self.scene().fingerprint())
     }
 
-    /// The exact operator: closed form and exact visible intervals, no rays.
+    /// The exact operator: closed form and exact visible intervals, no rays; dense from the
+    /// pair table on small scenes, sparse by the visibility sweep on large ones
+    /// ([`ExactMethod`]).
     fn operator(
         &self,
         mesh: &Mesh,
         _: &SolveParams,
         stop: &Stop,
     ) -> Result<Box<dyn TransferOperator>, SolveError> {
-        Ok(Box::new(exact_operator(self, mesh, stop)?))
+        let method = ExactMethod::of(self);
+        method.check(mesh.len())?;
+        Ok(match method {
+            ExactMethod::Dense => Box::new(exact_operator(self, mesh, stop)?),
+            ExactMethod::Sweep => Box::new(sweep_operator(self, mesh, stop)?),
+        })
     }
 }

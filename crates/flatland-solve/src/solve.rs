@@ -4,12 +4,16 @@
 
 use std::time::Instant;
 
-use flatland_geom::Kernel;
+use flatland_geom::{DVec2, Kernel};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::exact::{self, PairTable};
-use crate::{MAX_ELEMENTS, Mesh, Representation, SolveError, TransferOperator, gmres};
+use crate::sweep::{self, SweepBuffers, SweepScene};
+use crate::{
+    ExactMethod, MAX_ELEMENTS, MAX_MESH_ELEMENTS, Mesh, Representation, SolveError,
+    TransferOperator, check_scene, gmres,
+};
 
 /// The stop flag of every long loop here: polled between rows and iterations; when it returns
 /// `true` the work ends with [`SolveError::Interrupted`].
@@ -230,11 +234,22 @@ fn weighted_relative_l2(approx: &[f64], exact: &[f64], weights: &[f64]) -> f64 {
 }
 
 /// The exact kernel solved on a fine mesh: the reference every solved B is compared with.
+/// Large scenes are solved by the visibility sweep ([`ExactMethod`]), so no pair of edges is
+/// ever classified there: ground truth at 10⁵ edges.
 #[derive(Clone, Debug)]
 pub struct ExactReference {
     mesh: Mesh,
-    table: PairTable,
+    visibility: Visibility,
     solution: Solution,
+}
+
+/// What an [`ExactReference`] keeps to evaluate the exact transfer at other points.
+#[derive(Clone, Debug)]
+enum Visibility {
+    /// The pair table of the dense operator (small scenes).
+    Pairs(PairTable),
+    /// The sweep's hierarchy of every edge (large scenes).
+    Sweep(SweepScene),
 }
 
 impl ExactReference {
@@ -245,26 +260,69 @@ impl ExactReference {
         params: &SolveParams,
         stop: &Stop,
     ) -> Result<ExactReference, SolveError> {
+        ExactReference::with_method(kernel, elements, ExactMethod::of(kernel), params, stop)
+    }
+
+    /// [`ExactReference::new`] assembled by `method`, whatever the scene's size.
+    pub(crate) fn with_method(
+        kernel: &Kernel,
+        elements: usize,
+        method: ExactMethod,
+        params: &SolveParams,
+        stop: &Stop,
+    ) -> Result<ExactReference, SolveError> {
         params.validate()?;
+        method.check(elements)?;
         let mesh = Mesh::new(kernel, elements)?;
         let started = Instant::now();
-        let table = PairTable::new(kernel, &mesh)?;
-        let op = exact::exact_operator_with(&table, &mesh, stop)?;
+        let (visibility, op): (Visibility, Box<dyn TransferOperator>) = match method {
+            ExactMethod::Dense => {
+                let table = PairTable::new(kernel, &mesh)?;
+                let op = exact::exact_operator_with(&table, &mesh, stop)?;
+                (Visibility::Pairs(table), Box::new(op))
+            }
+            ExactMethod::Sweep => {
+                check_scene(kernel, &mesh)?;
+                let scene = SweepScene::new(kernel.scene(), &mesh);
+                let op = sweep::sweep_operator_with(&scene, &mesh, true, stop)?;
+                (Visibility::Sweep(scene), Box::new(op))
+            }
+        };
         let assembly_s = started.elapsed().as_secs_f64();
-        let mut solution = solve_operator(&op, &mesh, params, stop)?;
+        let mut solution = solve_operator(op.as_ref(), &mesh, params, stop)?;
         solution.assembly_s = assembly_s;
         Ok(ExactReference {
             mesh,
-            table,
+            visibility,
             solution,
         })
     }
 
     /// The default fine resolution for comparing solutions on `elements` elements: four times
-    /// finer, at least 2048, at most [`MAX_ELEMENTS`].
+    /// finer, at least 2048, at most [`MAX_ELEMENTS`] (the dense limit; see
+    /// [`ExactReference::default_elements_for`] for a scene the sweep solves).
     #[must_use]
     pub fn default_elements(elements: usize) -> usize {
         (4 * elements).clamp(2048, MAX_ELEMENTS)
+    }
+
+    /// [`ExactReference::default_elements`] for `kernel`'s scene: not capped at the dense limit
+    /// where the sweep assembles the operator ([`ExactMethod`]), only at [`MAX_MESH_ELEMENTS`].
+    #[must_use]
+    pub fn default_elements_for(kernel: &Kernel, elements: usize) -> usize {
+        match ExactMethod::of(kernel) {
+            ExactMethod::Dense => ExactReference::default_elements(elements),
+            ExactMethod::Sweep => (4 * elements).clamp(2048, MAX_MESH_ELEMENTS),
+        }
+    }
+
+    /// How the exact operator was assembled: dense from pairs of edges, or by the sweep.
+    #[must_use]
+    pub fn method(&self) -> ExactMethod {
+        match self.visibility {
+            Visibility::Pairs(_) => ExactMethod::Dense,
+            Visibility::Sweep(_) => ExactMethod::Sweep,
+        }
     }
 
     /// The fine mesh.
@@ -289,33 +347,54 @@ impl ExactReference {
                 mesh: format!("{:016x}", mesh.fingerprint()),
             });
         }
-        let b = &self.solution.radiosity;
+        match &self.visibility {
+            Visibility::Pairs(table) => self.interpolate(
+                mesh,
+                || vec![0.0; self.mesh.len()],
+                |row, k, y| {
+                    exact::transfer_row(&self.mesh, table, k, y, row, &exact::visible);
+                    let b = &self.solution.radiosity;
+                    row.iter().zip(b).map(|(t, bj)| t * bj).sum()
+                },
+                stop,
+            ),
+            Visibility::Sweep(scene) => self.interpolate(
+                mesh,
+                SweepBuffers::default,
+                |buffers, k, y| {
+                    let b = &self.solution.radiosity;
+                    let row = sweep::transfers(scene, &self.mesh, k, y, true, buffers);
+                    row.iter().map(|&(j, t)| t * b[j as usize]).sum()
+                },
+                stop,
+            ),
+        }
+    }
+
+    /// `E + ρ · gather(scratch, k, y)` at every collocation point `y` (on edge `k`) of `mesh`,
+    /// where `gather` is `Σ_j B_j ∫_{fine element j} G V` at `y`; rows in parallel, each
+    /// thread with its own scratch from `init`.
+    fn interpolate<S: Send>(
+        &self,
+        mesh: &Mesh,
+        init: impl Fn() -> S + Sync + Send,
+        gather: impl Fn(&mut S, usize, DVec2) -> f64 + Sync + Send,
+        stop: &Stop,
+    ) -> Result<Vec<f64>, SolveError> {
         (0..mesh.len())
             .into_par_iter()
             .with_min_len(8)
-            .map_init(
-                || vec![0.0; self.mesh.len()],
-                |row, i| {
-                    if stop() {
-                        return Err(SolveError::Interrupted);
-                    }
-                    let edge = mesh.edge_of(i);
-                    let k = mesh.elements()[i].mesh_edge;
-                    if edge.reflectance == 0.0 {
-                        return Ok(edge.emission);
-                    }
-                    exact::transfer_row(
-                        &self.mesh,
-                        &self.table,
-                        k,
-                        mesh.local(i)[2],
-                        row,
-                        &exact::visible,
-                    );
-                    let gathered: f64 = row.iter().zip(b).map(|(t, bj)| t * bj).sum();
-                    Ok(edge.emission + edge.reflectance * gathered)
-                },
-            )
+            .map_init(init, |scratch, i| {
+                if stop() {
+                    return Err(SolveError::Interrupted);
+                }
+                let edge = mesh.edge_of(i);
+                if edge.reflectance == 0.0 {
+                    return Ok(edge.emission);
+                }
+                let gathered = gather(scratch, mesh.elements()[i].mesh_edge, mesh.local(i)[2]);
+                Ok(edge.emission + edge.reflectance * gathered)
+            })
             .collect()
     }
 }
@@ -562,5 +641,85 @@ mod tests {
         // Nothing reflected anywhere: absolute RMS instead of a division by zero.
         let err = solve_errors(&mesh, &e, &e);
         assert_eq!(err.rel_l2_reflected, 0.0);
+    }
+
+    #[test]
+    fn small_scenes_keep_the_dense_path_bit_for_bit() {
+        // Every bundled scene is below the crossover: the exact kernel's operator is the pair
+        // table's, number for number, so every figure made with them stays what it was.
+        for name in ["fig3", "box", "maze", "corners"] {
+            let kernel = Kernel::new(bundled(name));
+            assert_eq!(ExactMethod::of(&kernel), ExactMethod::Dense, "{name}");
+            let mesh = Mesh::new(&kernel, 200).unwrap();
+            let dense = exact_operator(&kernel, &mesh, &never).unwrap();
+            let op = kernel
+                .operator(&mesh, &SolveParams::default(), &never)
+                .unwrap();
+            let mut rng = ChaCha8Rng::seed_from_u64(3);
+            let b: Vec<f64> = (0..mesh.len())
+                .map(|_| rng.random_range(0.0..1.0))
+                .collect();
+            let (mut expected, mut got) = (vec![0.0; mesh.len()], vec![0.0; mesh.len()]);
+            dense.apply(&b, &mut expected);
+            op.apply(&b, &mut got);
+            assert_eq!(expected, got, "{name}");
+            let reference =
+                ExactReference::new(&kernel, 400, &SolveParams::default(), &never).unwrap();
+            assert_eq!(reference.method(), ExactMethod::Dense);
+        }
+    }
+
+    #[test]
+    fn the_sweep_and_the_dense_path_give_the_same_reference() {
+        // Above the crossover the sweep is used, and never a pair table; both methods give
+        // the same solution and the same interpolated B, to rounding.
+        let params = SolveParams::default();
+        for scene in [
+            crate::test_support::floor_plan(200),
+            crate::test_support::hall(200),
+        ] {
+            let kernel = Kernel::new(scene);
+            assert_eq!(ExactMethod::of(&kernel), ExactMethod::Sweep);
+            let n = 2 * Mesh::min_elements(kernel.scene());
+            let sweep = ExactReference::new(&kernel, n, &params, &never).unwrap();
+            assert_eq!(sweep.method(), ExactMethod::Sweep);
+            let dense =
+                ExactReference::with_method(&kernel, n, ExactMethod::Dense, &params, &never)
+                    .unwrap();
+            let close = |a: &[f64], b: &[f64], what: &str| {
+                for (i, (x, y)) in a.iter().zip(b).enumerate() {
+                    assert!(
+                        (x - y).abs() <= 1e-9 * x.abs().max(1e-3),
+                        "{what} {i}: {x} vs {y}"
+                    );
+                }
+            };
+            close(
+                &sweep.solution().radiosity,
+                &dense.solution().radiosity,
+                "B",
+            );
+            let coarse = Mesh::new(&kernel, Mesh::min_elements(kernel.scene()) + 7).unwrap();
+            close(
+                &sweep.radiosity_on(&coarse, &never).unwrap(),
+                &dense.radiosity_on(&coarse, &never).unwrap(),
+                "interpolated B",
+            );
+        }
+    }
+
+    #[test]
+    fn reference_sizes_follow_the_method() {
+        let small = Kernel::new(bundled("maze"));
+        let large = Kernel::new(crate::test_support::floor_plan(200));
+        assert_eq!(
+            ExactReference::default_elements_for(&small, 4000),
+            MAX_ELEMENTS
+        );
+        assert_eq!(ExactReference::default_elements_for(&small, 100), 2048);
+        assert_eq!(ExactReference::default_elements_for(&large, 4000), 16000);
+        let err = ExactReference::new(&small, MAX_ELEMENTS + 1, &SolveParams::default(), &never)
+            .unwrap_err();
+        assert!(err.to_string().contains("at most 8192"), "{err}");
     }
 }

@@ -1,6 +1,9 @@
-//! Helpers shared by the solver's tests: bundled scenes and small rooms built in code.
+//! Helpers shared by the solver's tests: bundled scenes, small rooms built in code, generated
+//! scenes and random ones.
 
 use flatland_geom::{DVec2, Edge, Scene};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 
 /// The bundled scene `NAME`.
 pub fn bundled(name: &str) -> Scene {
@@ -33,4 +36,50 @@ pub fn l_room(rho: f64) -> Scene {
     // The light at the far end of the short leg, out of sight of most of the long one.
     edges[1].emission = 1.0;
     Scene::new(edges).expect("valid L room")
+}
+
+/// A generated floor plan of about `edges` edges (seed 1).
+pub fn floor_plan(edges: usize) -> Scene {
+    flatland_geom::generate::floor_plan(edges, 1).expect("a generated floor plan")
+}
+
+/// A generated hall of about `edges` edges (seed 1).
+pub fn hall(edges: usize) -> Scene {
+    flatland_geom::generate::hall(edges, 1).expect("a generated hall")
+}
+
+/// A closed 4 × 3 room holding `inside` random segments from `seed`: surfaces one- and
+/// two-sided, and blockers, crossing and touching each other and the walls at random; some
+/// end exactly on a wall or on another segment's end (T-junctions and shared corners).
+pub fn random_room(inside: usize, seed: u64) -> Scene {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let corners = [
+        DVec2::new(0.0, 0.0),
+        DVec2::new(4.0, 0.0),
+        DVec2::new(4.0, 3.0),
+        DVec2::new(0.0, 3.0),
+    ];
+    let mut edges = Edge::polygon(&corners, 0.6);
+    edges[2].emission = 1.0;
+    let mut ends: Vec<DVec2> = corners.to_vec();
+    while edges.len() < 4 + inside {
+        let a = match rng.random_range(0..4) {
+            // On the floor, or at the end of an earlier segment.
+            0 => DVec2::new(rng.random_range(0.2..3.8), 0.0),
+            1 => ends[rng.random_range(0..ends.len())],
+            _ => DVec2::new(rng.random_range(0.1..3.9), rng.random_range(0.1..2.9)),
+        };
+        let b = DVec2::new(rng.random_range(0.1..3.9), rng.random_range(0.1..2.9));
+        if a.distance(b) < 0.05 {
+            continue;
+        }
+        let edge = match rng.random_range(0..3) {
+            0 => Edge::blocker(a, b),
+            1 => Edge::surface(a, b, 0.5).with_two_sided(true),
+            _ => Edge::surface(a, b, 0.7).with_emission(rng.random_range(0.0..1.0)),
+        };
+        edges.push(edge);
+        ends.push(b);
+    }
+    Scene::new(edges).expect("a valid random room")
 }

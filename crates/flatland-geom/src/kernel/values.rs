@@ -1,4 +1,4 @@
-//! The values the kernel's queries return: a sample, a pair's class and visibility, `k` unoccluded.
+//! The kernel's query results: a sample, a ray's hit, a pair's class and visibility, `k` unoccluded.
 
 use glam::DVec2;
 
@@ -19,6 +19,21 @@ pub struct KernelSample {
     pub k: f64,
     /// `ζ(s, t) = E'(e_x) · k(s, t)`.
     pub zeta: f64,
+}
+
+/// Where a ray first meets an edge ([`Kernel::first_hit`](crate::Kernel::first_hit)).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// The edge met, an index into [`Scene::edges`](crate::Scene::edges) (of a subdivided
+    /// edge, the piece).
+    pub edge: usize,
+    /// The distance from the ray's origin to `point`.
+    pub distance: f64,
+    /// The point met: on the edge up to rounding, and exactly an end point where the ray
+    /// touches one (or the first point of an edge it runs along).
+    pub point: DVec2,
+    /// Its fraction along the edge from `a` to `b`, in `[0, 1]`: `point ≈ edge.point_at(u)`.
+    pub u: f64,
 }
 
 /// How the visibility of a pair of surface edges is decided (see

@@ -38,6 +38,90 @@ impl Wide {
     }
 }
 
+/// Distances along a ray's direction (unit frame): a lower bound for each box, an upper bound
+/// for a point, each off by more than its rounding, so a box whose bound exceeds a contact's
+/// can hold nothing that comes first or ties. They also order a closest-hit query's visits,
+/// nearer boxes first.
+pub(super) struct Along {
+    ox: Vec4,
+    oy: Vec4,
+    ux: Vec4,
+    uy: Vec4,
+    ux_abs: Vec4,
+    uy_abs: Vec4,
+    o: DVec2,
+    unit: DVec2,
+    margin: f32,
+}
+
+impl Along {
+    /// From `o` towards `f` (distinct points of the unit frame).
+    pub(super) fn new(o: DVec2, f: DVec2) -> Along {
+        let unit = (f - o).normalize_or_zero();
+        Along {
+            ox: Vec4::splat(o.x as f32),
+            oy: Vec4::splat(o.y as f32),
+            ux: Vec4::splat(unit.x as f32),
+            uy: Vec4::splat(unit.y as f32),
+            ux_abs: Vec4::splat(unit.x.abs() as f32),
+            uy_abs: Vec4::splat(unit.y.abs() as f32),
+            o,
+            unit,
+            margin: BOX_MARGIN * (2.0 + o.abs().element_sum() as f32),
+        }
+    }
+
+    /// For each child of `node`, at most the distance along the ray of any point of its box.
+    #[inline]
+    pub(super) fn entries(&self, node: &Wide) -> Vec4 {
+        (node.cx - self.ox) * self.ux + (node.cy - self.oy) * self.uy
+            - (node.hx * self.ux_abs + node.hy * self.uy_abs)
+            - Vec4::splat(self.margin)
+    }
+
+    /// At least the distance along the ray of `p`.
+    pub(super) fn reach(&self, p: DVec2) -> f32 {
+        (p - self.o).dot(self.unit) as f32 + self.margin
+    }
+}
+
+/// The open half-plane beyond the first contact a closest-hit query has found so far (unit
+/// frame): a box wholly inside it, by more than the margin, holds nothing that could come
+/// first or tie, so the query skips it (conservative, like [`RayBox`]).
+pub(super) struct Beyond {
+    nx: Vec4,
+    ny: Vec4,
+    nx_abs: Vec4,
+    ny_abs: Vec4,
+    offset: Vec4,
+    margin: Vec4,
+}
+
+impl Beyond {
+    /// `{p : normal · (p − p0) > 0}` for a nonzero `normal` and `p0` in the scene's frame.
+    pub(super) fn new(p0: DVec2, normal: DVec2) -> Beyond {
+        let n = normal / normal.abs().max_element();
+        Beyond {
+            nx: Vec4::splat(n.x as f32),
+            ny: Vec4::splat(n.y as f32),
+            nx_abs: Vec4::splat(n.x.abs() as f32),
+            ny_abs: Vec4::splat(n.y.abs() as f32),
+            offset: Vec4::splat(n.dot(p0) as f32),
+            margin: Vec4::splat(BOX_MARGIN * (1.0 + p0.abs().element_sum() as f32)),
+        }
+    }
+
+    /// Bit `k`: whether child `k`'s box lies wholly beyond, by more than the margin. A NaN
+    /// comparison keeps the box.
+    #[inline]
+    pub(super) fn holds(&self, node: &Wide) -> u32 {
+        let nearest = self.nx * node.cx + self.ny * node.cy
+            - self.offset
+            - (self.nx_abs * node.hx + self.ny_abs * node.hy);
+        nearest.cmpgt(self.margin).bitmask() & 0b1111
+    }
+}
+
 /// An axis-aligned query box for [`Bvh::overlapping`](super::Bvh::overlapping), in the unit frame.
 pub(super) struct Boxes {
     cx: Vec4,

@@ -1,9 +1,12 @@
-//! A BVH over segments: pieces, a median-split binary tree collapsed to four-wide nodes, queries.
+//! A BVH over segments: pieces, a median-split tree collapsed to four-wide nodes, its queries.
+
+use std::cmp::Ordering;
 
 use glam::{DVec2, Vec4};
 
-use super::boxes::{Boxes, RayBox, Wide};
-use super::predicates::open_segment_hits;
+use super::boxes::{Along, Beyond, Boxes, RayBox, Wide};
+use super::predicates::{open_segment_hits, orient};
+use super::ray::{Contact, Ray};
 
 /// An occluding segment (a parent edge).
 #[derive(Clone, Copy, Debug)]
@@ -151,6 +154,125 @@ impl Bvh {
                 i != skip_a && i != skip_b && open_segment_hits(x, y, s.a, s.b)
             },
         )
+    }
+
+    /// The first segment except `skip` the ray meets, and where ([`Ray::contact`]): the
+    /// contact first along the ray, of several at one point the lowest segment index, so the
+    /// answer is the linear scan's whatever the tree. Nearer children are visited first; once
+    /// a contact is known, boxes wholly beyond it are skipped.
+    pub(crate) fn first_hit(&self, ray: &Ray, skip: usize) -> Option<(usize, Contact)> {
+        if self.nodes.is_empty() {
+            return None;
+        }
+        let (o, f) = (self.to_frame(ray.o), self.to_frame(ray.f));
+        let (boxes, along) = (RayBox::new(o, f), Along::new(o, f));
+        let mut best: Option<(usize, Contact)> = None;
+        let mut beyond: Option<(Beyond, f32)> = None;
+        // As in `any`: each level leaves at most 3 entries behind. Each entry keeps how far
+        // along the ray its box starts, to skip it if a nearer contact has turned up since.
+        let mut stack = [(0u32, f32::NEG_INFINITY); 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let (index, entry) = stack[top];
+            let mut passed = 0b1111;
+            if let Some((cut, reach)) = &beyond {
+                if entry > *reach {
+                    continue;
+                }
+                passed = !cut.holds(&self.nodes[index as usize]);
+            }
+            let node = &self.nodes[index as usize];
+            passed &= boxes.may_meet(node) & node.used & !node.skipped(skip, skip);
+            let entries = along.entries(node).to_array();
+            let mut inner = [(0u32, 0.0f32); 4];
+            let mut n = 0;
+            for (k, &entry) in entries.iter().enumerate() {
+                if passed & (1 << k) == 0 {
+                    continue;
+                }
+                let (child, count) = (node.child[k] as usize, node.count[k] as usize);
+                if count == 0 {
+                    inner[n] = (child as u32, entry);
+                    n += 1;
+                    continue;
+                }
+                for item in child..child + count {
+                    if let Some(found) = self.improves(ray, item, skip, best.as_ref()) {
+                        beyond = Some(self.beyond(ray, &found.1, &along));
+                        best = Some(found);
+                    }
+                }
+            }
+            // The farthest goes onto the stack first, so the nearest is visited next.
+            inner[..n].sort_unstable_by(|x, y| y.1.total_cmp(&x.1));
+            stack[top..top + n].copy_from_slice(&inner[..n]);
+            top += n;
+        }
+        best
+    }
+
+    /// Item `item`'s segment and contact if it comes before `best` (or ties it with a lower
+    /// index).
+    #[inline]
+    fn improves(
+        &self,
+        ray: &Ray,
+        item: usize,
+        skip: usize,
+        best: Option<&(usize, Contact)>,
+    ) -> Option<(usize, Contact)> {
+        let i = self.items[item] as usize;
+        if i == skip || best.is_some_and(|&(b, _)| b == i) {
+            return None;
+        }
+        let s = self.ordered[item];
+        let contact = ray.contact(s.a, s.b)?;
+        let better = best.is_none_or(|(b, first)| match ray.order(&contact, first) {
+            Ordering::Less => true,
+            Ordering::Equal => i < *b,
+            Ordering::Greater => false,
+        });
+        better.then_some((i, contact))
+    }
+
+    /// What lies beyond a contact, in the unit frame: the half-plane past the line of the
+    /// segment it crosses (or past the point, across the ray), and a bound on its distance
+    /// along the ray (the point's, or the farther end of the segment it lies on).
+    fn beyond(&self, ray: &Ray, contact: &Contact, along: &Along) -> (Beyond, f32) {
+        match *contact {
+            Contact::At(p) => {
+                let p = self.to_frame(p);
+                (Beyond::new(p, ray.f - ray.o), along.reach(p))
+            }
+            Contact::Crossing { a, b, .. } => {
+                let away = -orient(a, b, ray.o).signum();
+                let (fa, fb) = (self.to_frame(a), self.to_frame(b));
+                let reach = along.reach(fa).max(along.reach(fb));
+                (Beyond::new(fa, (b - a).perp() * away), reach)
+            }
+        }
+    }
+
+    /// The point twice as far from `o` along `d` as the farthest corner of the segments'
+    /// bounding square: the far end of a ray from `o` that no segment reaches. `None` for a
+    /// zero or non-finite `d`, or if the point is not finite.
+    pub(crate) fn far_point(&self, o: DVec2, d: DVec2) -> Option<DVec2> {
+        let scale = d.abs().max_element();
+        if !(scale > 0.0 && scale.is_finite()) {
+            return None;
+        }
+        let (lo, hi) = (
+            self.origin,
+            self.origin + DVec2::splat(1.0 / self.inv_scale),
+        );
+        // The L1 distance bounds the Euclidean one and cannot overflow where it is finite.
+        let reach = [lo, hi, DVec2::new(lo.x, hi.y), DVec2::new(hi.x, lo.y)]
+            .iter()
+            .fold(0.0, |m: f64, c| m.max((*c - o).abs().element_sum()));
+        let unit = d / scale;
+        let f = o + unit * (2.0 * reach / unit.length());
+        (f.is_finite() && f != o).then_some(f)
     }
 
     /// `p` in the unit frame of the boxes (double precision; the tests round it).
@@ -394,6 +516,39 @@ mod tests {
                     .enumerate()
                     .any(|(i, s)| i != skip_a && i != skip_b && open_segment_hits(x, y, s.a, s.b));
                 prop_assert_eq!(bvh.any_hit(x, y, skip_a, skip_b), linear, "{:?} {:?}", x, y);
+            }
+        }
+
+        /// The closest hit on the same grazing rays: the tree's answer is the linear scan's
+        /// (the contact first along the ray, ties to the lowest index), though its boxes cull
+        /// in single precision and its half-planes skip what lies beyond.
+        #[test]
+        fn bvh_first_hit_matches_the_linear_scan_on_grazing_rays(
+            seed in any::<u64>(),
+            n in 1usize..300,
+        ) {
+            let mut r = rng(seed);
+            let scale = [1e-150, 1.0, 3.0, 1e150][r.random_range(0..4)];
+            let snap = |p: DVec2| (p * 4.0).round() / 4.0 * scale;
+            let segments: Vec<Segment> = (0..n)
+                .map(|_| Segment { a: snap(point(&mut r)), b: snap(point(&mut r)) })
+                .collect();
+            let bvh = Bvh::new(&segments);
+            for _ in 0..300 {
+                let ray = Ray { o: snap(point(&mut r)), f: snap(point(&mut r) * 2.0) };
+                let skip = r.random_range(0..n + 1);
+                let mut linear: Option<(usize, Contact)> = None;
+                for (i, s) in segments.iter().enumerate() {
+                    if i == skip {
+                        continue;
+                    }
+                    if let Some(c) = ray.contact(s.a, s.b)
+                        && linear.is_none_or(|(_, b)| ray.order(&c, &b) == Ordering::Less)
+                    {
+                        linear = Some((i, c));
+                    }
+                }
+                prop_assert_eq!(bvh.first_hit(&ray, skip), linear, "{:?}", ray);
             }
         }
     }

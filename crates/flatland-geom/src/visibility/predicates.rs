@@ -37,7 +37,7 @@ pub(crate) fn open_segment_hits(x: DVec2, y: DVec2, p: DVec2, q: DVec2) -> bool 
 }
 
 /// Exactly collinear `x, y, p, q`: does the open `(x, y)` overlap the closed `[p, q]`?
-fn collinear_overlap(x: DVec2, y: DVec2, p: DVec2, q: DVec2) -> bool {
+pub(super) fn collinear_overlap(x: DVec2, y: DVec2, p: DVec2, q: DVec2) -> bool {
     if x == y {
         return false;
     }

@@ -84,13 +84,18 @@ impl Faces for FaceCells {
             .collect();
         for ((key, [s, t]), visible) in rays.iter().zip(visible) {
             if !self.known.contains_key(key) {
-                let id = u32::try_from(self.cells.len()).map_err(|_| FitError::InvalidParameter {
-                    name: "max_rays",
-                    value: self.cells.len().to_string(),
-                    valid: "at most 2³² − 1 faces learned",
-                })?;
+                let id =
+                    u32::try_from(self.cells.len()).map_err(|_| FitError::InvalidParameter {
+                        name: "max_rays",
+                        value: self.cells.len().to_string(),
+                        valid: "at most 2³² − 1 faces learned",
+                    })?;
                 self.known.insert(key.clone(), id);
-                self.cells.push(FaceCell { s: *s, t: *t, visible });
+                self.cells.push(FaceCell {
+                    s: *s,
+                    t: *t,
+                    visible,
+                });
             }
         }
         Ok(rays.len() as u64)

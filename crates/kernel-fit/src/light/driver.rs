@@ -3,14 +3,14 @@
 
 use std::sync::Arc;
 
-use flatland_geom::{Kernel, PairClass};
-use flatland_solve::{
-    Mesh, Representation, SolveError, SolveParams, Stop, TransferOperator, check_fingerprint,
-};
 use super::cells::{FaceCell, FaceCells};
 use super::{Blocks, Faces, LightLoop, LightParams, LightStop, Round};
 use crate::FitError;
 use crate::visibility::FaceKey;
+use flatland_geom::{Kernel, PairClass};
+use flatland_solve::{
+    Mesh, Representation, SolveError, SolveParams, Stop, TransferOperator, check_fingerprint,
+};
 
 /// A light-driven fit of one scene on one mesh (see the module docs of `light` and
 /// docs/ALGORITHM.md §4): [`LightFit::round`] or [`LightFit::run`], then read the solved
@@ -176,9 +176,7 @@ impl TransferOperator for LearnedOperator {
         self.mesh.len()
     }
     fn apply(&self, b: &[f64], out: &mut [f64]) {
-        self.blocks
-            .operator(&self.mesh, &self.priors)
-            .apply(b, out);
+        self.blocks.operator(&self.mesh, &self.priors).apply(b, out);
     }
 }
 
@@ -259,12 +257,20 @@ mod tests {
         for (a, b) in solved.radiosity.iter().zip(fit.radiosity()) {
             assert!((a - b).abs() <= 1e-6 * (1.0 + b.abs()), "{a} vs {b}");
         }
-        let exact = solve(fit.kernel().as_ref(), fit.mesh(), &SolveParams::default(), &never)
-            .unwrap()
-            .radiosity;
+        let exact = solve(
+            fit.kernel().as_ref(),
+            fit.mesh(),
+            &SolveParams::default(),
+            &never,
+        )
+        .unwrap()
+        .radiosity;
         let measured = solve_errors(fit.mesh(), fit.radiosity(), &exact).rel_l2_reflected;
         let estimated = fit.estimated_error().unwrap();
-        assert!(measured <= 3.0 * estimated.max(0.01), "{measured} vs {estimated}");
+        assert!(
+            measured <= 3.0 * estimated.max(0.01),
+            "{measured} vs {estimated}"
+        );
         assert_eq!(fit.cells().len() as u64, fit.rays());
     }
 
@@ -295,7 +301,11 @@ mod tests {
         let cells = a.cells().len();
         a.set_params(LightParams::default()).unwrap();
         a.run(&never, |_| {}).unwrap();
-        assert!(a.cells().len() > cells, "{} cells after {cells}", a.cells().len());
+        assert!(
+            a.cells().len() > cells,
+            "{} cells after {cells}",
+            a.cells().len()
+        );
         let b = fit(100, 7, LightParams::default());
         assert_eq!(a.radiosity().len(), b.radiosity().len());
         assert!(a.estimated_error().unwrap() <= 0.01 || a.stopped() != Some(LightStop::Tolerance));

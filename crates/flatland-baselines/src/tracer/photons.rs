@@ -1,0 +1,121 @@
+//! One batch of photons: stratified starts, cosine directions, bounces until absorbed or gone.
+
+use flatland_geom::{DVec2, Kernel};
+use flatland_solve::Mesh;
+use rand::RngExt;
+use rand_chacha::ChaCha8Rng;
+
+use super::emitters::{Emitters, Start};
+use super::tally::BatchTally;
+
+/// Bounces after which a photon is counted absorbed: it would carry `ρ^1000` of its power.
+const MAX_BOUNCES: usize = 1000;
+
+/// A batch: `size` photons stratified over the emitters, drawn from `rng` (its own stream).
+pub(super) struct Batch<'t> {
+    pub kernel: &'t Kernel,
+    pub mesh: &'t Mesh,
+    /// The mesh edge of each scene edge (`None` for a blocker).
+    pub surface_of: &'t [Option<u32>],
+    pub emitters: &'t Emitters,
+    pub rng: ChaCha8Rng,
+    pub size: u64,
+}
+
+impl Batch<'_> {
+    /// Traces every photon of the batch; power in units of one photon's.
+    pub(super) fn trace(mut self) -> BatchTally {
+        let mut tally = BatchTally::new(self.mesh.len());
+        let below_one = 1.0 - f64::EPSILON / 2.0;
+        for k in 0..self.size {
+            let u = (k as f64 + self.rng.random::<f64>()) / self.size as f64;
+            let start = self.emitters.start(u.min(below_one));
+            let normal = self.side(start.normal, start.two_sided);
+            self.photon(start, normal, &mut tally);
+        }
+        tally
+    }
+
+    /// One photon from `start`, leaving about `normal`, until it is absorbed or leaves.
+    fn photon(&mut self, start: Start, mut normal: DVec2, tally: &mut BatchTally) {
+        let (mut x, mut skip, mut power) = (start.point, start.edge, 1.0);
+        for _ in 0..MAX_BOUNCES {
+            let d = cosine_direction(normal, self.rng.random::<f64>());
+            tally.rays += 1;
+            let Some(hit) = self.kernel.first_hit(x, d, Some(skip)) else {
+                tally.escaped += power;
+                return;
+            };
+            let Some(m) = self.surface_of[hit.edge] else {
+                tally.absorbed += power; // a blocker
+                return;
+            };
+            let edge = &self.mesh.edges()[m as usize];
+            let facing = d.dot(edge.normal);
+            if !(facing < 0.0 || (edge.two_sided && facing > 0.0)) {
+                tally.absorbed += power; // the back of a one-sided surface (or edge-on)
+                return;
+            }
+            let s = self
+                .kernel
+                .scene()
+                .param_of(hit.edge, hit.point)
+                .expect("a surface edge has a parameter");
+            tally.deposits[self.mesh.element_at(s)] += power;
+            let sides = if edge.two_sided { 2.0 } else { 1.0 };
+            let survival = sides * edge.reflectance;
+            if survival < 1.0 {
+                if self.rng.random::<f64>() >= survival {
+                    tally.absorbed += power;
+                    return;
+                }
+            } else {
+                power *= survival;
+            }
+            (x, skip) = (hit.point, hit.edge);
+            normal = self.side(edge.normal, edge.two_sided);
+        }
+        tally.absorbed += power;
+    }
+
+    /// `normal`, or for an edge that sends from both sides either side at random.
+    fn side(&mut self, normal: DVec2, two_sided: bool) -> DVec2 {
+        if two_sided && self.rng.random_bool(0.5) {
+            -normal
+        } else {
+            normal
+        }
+    }
+}
+
+/// A direction of density `cos θ / 2` about `normal` from a uniform `xi ∈ [0, 1)`:
+/// `sin θ = 2 xi − 1`, towards `perp(normal)` for positive `sin θ`.
+pub(super) fn cosine_direction(normal: DVec2, xi: f64) -> DVec2 {
+    let sin = 2.0 * xi - 1.0;
+    let cos = (1.0 - sin * sin).max(0.0).sqrt();
+    normal * cos + normal.perp() * sin
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn directions_are_cosine_distributed_about_the_normal() {
+        // Under density cos θ / 2 on (−π/2, π/2): E[cos θ] = π/4, E[sin² θ] = 1/3, and no
+        // direction points behind.
+        let normal = DVec2::new(0.6, 0.8);
+        let n = 100_000;
+        let (mut cos_sum, mut sin2_sum) = (0.0, 0.0);
+        for k in 0..n {
+            let d = cosine_direction(normal, (k as f64 + 0.5) / n as f64);
+            assert!((d.length() - 1.0).abs() < 1e-12 && d.dot(normal) >= 0.0);
+            cos_sum += d.dot(normal);
+            sin2_sum += d.perp_dot(normal).powi(2);
+        }
+        assert!((cos_sum / n as f64 - std::f64::consts::FRAC_PI_4).abs() < 1e-6);
+        assert!((sin2_sum / n as f64 - 1.0 / 3.0).abs() < 1e-6);
+        let tangent = cosine_direction(normal, 1.0);
+        assert!((tangent - normal.perp()).length() < 1e-12);
+    }
+}

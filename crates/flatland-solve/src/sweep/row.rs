@@ -1,0 +1,117 @@
+//! One row of the sweep: the envelope of each side of a receiving point, turned into the
+//! transfer to every element it sees.
+
+use glam::DVec2;
+
+use super::envelope::Piece;
+use super::view::View;
+use super::{SweepBuffers, SweepScene};
+use crate::Mesh;
+
+/// `∫_{element j} G(x, y) V(x, y) dl_x` for every element `j` of `mesh` that `y` (a frame
+/// point on mesh edge `k`) sees, as `(j, transfer)` sorted by `j`, without ρ. A two-sided
+/// receiver looks to both sides. The slice lives in `buffers` until the next row.
+pub(crate) fn transfers<'b>(
+    scene: &SweepScene,
+    mesh: &Mesh,
+    k: usize,
+    y: DVec2,
+    cull: bool,
+    buffers: &'b mut SweepBuffers,
+) -> &'b [(u32, f64)] {
+    let receiver = &mesh.edges()[k];
+    let skip = scene.segment_of[k];
+    let mut out = std::mem::take(&mut buffers.transfers);
+    out.clear();
+    let sides: &[f64] = if receiver.two_sided {
+        &[1.0, -1.0]
+    } else {
+        &[1.0]
+    };
+    for &side in sides {
+        let view = View::new(y, receiver.normal * side);
+        scene.envelope(&view, skip, cull, buffers);
+        for piece in buffers.envelope.pieces() {
+            if let Some(m) = scene.mesh_edge[piece.segment as usize] {
+                seen_part(&view, mesh, m as usize, piece, &mut out);
+            }
+        }
+    }
+    // Pieces of one element seen in several places (between occluders, from both sides) sum.
+    out.sort_by_key(|&(j, _)| j);
+    out.dedup_by(|later, kept| {
+        let same = later.0 == kept.0;
+        if same {
+            kept.1 += later.1;
+        }
+        same
+    });
+    buffers.transfers = out;
+    &buffers.transfers
+}
+
+/// Appends the transfer of `piece` of surface `m` to each element of `m` it overlaps, when
+/// `m`'s front faces the receiving point (a surface seen from behind sends nothing, but still
+/// hides what lies beyond it).
+fn seen_part(view: &View, mesh: &Mesh, m: usize, piece: &Piece, out: &mut Vec<(u32, f64)>) {
+    let edge = &mesh.edges()[m];
+    let elements = edge.elements.clone();
+    let (first, last) = (
+        mesh.local(elements.start)[0],
+        mesh.local(elements.end - 1)[1],
+    );
+    let facing = edge.normal.dot(view.y - first);
+    if !(if edge.two_sided {
+        facing != 0.0
+    } else {
+        facing > 0.0
+    }) {
+        return;
+    }
+    // σ is monotone along the edge: increasing from `first` when `last` is counter-clockwise
+    // of it. Boundary `b` (0 = `first`, count = `last`) of the edges' elements, in σ order.
+    let count = elements.len();
+    let increasing = (first - view.y).perp_dot(last - view.y) > 0.0;
+    let point = |b: usize| {
+        let b = if increasing { b } else { count - b };
+        if b == count {
+            last
+        } else {
+            mesh.local(elements.start + b)[0]
+        }
+    };
+    let element = |b: usize| elements.start + if increasing { b } else { count - 1 - b };
+    // Boundaries behind the horizon sit beyond the end where the edge leaves the view, where
+    // σ is ±1: the low end if that is the first point in σ order, the high end otherwise.
+    let behind_low = view.height(point(0)) <= 0.0;
+    let sine = |b: usize| {
+        let p = point(b);
+        match (view.height(p) > 0.0, behind_low) {
+            (true, _) => view.sine(p),
+            (false, true) => -1.0,
+            (false, false) => 1.0,
+        }
+    };
+    // The first element whose upper boundary lies above the piece's start.
+    let (mut lo, mut hi) = (0, count);
+    while lo < hi {
+        let mid = (lo + hi) / 2;
+        if sine(mid + 1) <= piece.lo {
+            lo = mid + 1;
+        } else {
+            hi = mid;
+        }
+    }
+    let mut below = sine(lo);
+    for b in lo..count {
+        if below >= piece.hi {
+            break;
+        }
+        let above = sine(b + 1);
+        let part = above.min(piece.hi) - below.max(piece.lo);
+        if part > 0.0 {
+            out.push((element(b) as u32, 0.5 * part));
+        }
+        below = above;
+    }
+}
