@@ -1276,3 +1276,52 @@ fn scene_generates_a_floor_plan_and_a_hall_of_the_size_asked_for_the_same_each_t
     ]);
     assert_one_line_error(&out, &["edges", "[24, 1000000]", "5"]);
 }
+
+/// The default kernel learns a generated floor plan to its tolerance, says how far it thinks
+/// it is beside the measured error, and the measured error is within reach of its estimate
+/// plus the mesh's own discretization error.
+#[test]
+fn solve_with_the_default_learner_meets_its_tolerance_on_a_floor_plan_and_says_so() {
+    let dir = temp_dir("solve-light");
+    let plan = dir.join("plan.json");
+    let made = flatland(&[
+        "scene",
+        "floorplan",
+        "--size",
+        "120",
+        "--seed",
+        "9",
+        "--out",
+        as_str(&plan),
+    ]);
+    assert!(made.status.success(), "{}", stderr(&made));
+    let json = solve_json(&[
+        "--scene",
+        as_str(&plan),
+        "--kernel",
+        "sgcs",
+        "--tolerance",
+        "0.02",
+    ]);
+    assert_eq!(json["kernel"], "default");
+    assert_eq!(json["stopped"], "tolerance", "{json}");
+    let estimated = json["estimated_rel_l2_reflected"].as_f64().unwrap();
+    let measured = json["rel_l2_reflected"].as_f64().unwrap();
+    let discretization = json["discretization_error_estimate"].as_f64().unwrap();
+    assert!(estimated <= 0.02, "{json}");
+    assert!(measured <= 2.0 * (estimated + discretization), "{json}");
+    assert_eq!(
+        json["rays"], json["basis_functions"],
+        "one ray per cell: {json}"
+    );
+    let out = flatland(&[
+        "solve",
+        "--scene",
+        as_str(&plan),
+        "--kernel",
+        "sgcs",
+        "--tolerance",
+        "1.5",
+    ]);
+    assert_one_line_error(&out, &["tolerance", "1.5", "(0, 1)"]);
+}

@@ -13,7 +13,7 @@ use flatland_solve::{
 };
 
 /// A light-driven fit of one scene on one mesh (see the module docs of `light` and
-/// docs/ALGORITHM.md §4): [`LightFit::round`] or [`LightFit::run`], then read the solved
+/// docs/ALGORITHM.md §4a): [`LightFit::round`] or [`LightFit::run`], then read the solved
 /// radiosity, the estimated error and the cells, or solve with it as a [`Representation`].
 ///
 /// ```

@@ -1,5 +1,5 @@
 //! Learning driven by the light that flows: the default learner alternates solving and learning
-//! until the lit scene meets a tolerance (docs/ALGORITHM.md §4).
+//! until the lit scene meets a tolerance (docs/ALGORITHM.md §4a).
 //!
 //! The paper weights what is learned by the first shot `E'` only; its future work is to couple
 //! the learner to the energy transfer. Here the coupling is the loop itself. On a mesh of the
