@@ -95,8 +95,8 @@ impl Choice {
                 Choice::Model(PathBuf::from(text))
             }
             _ => bail!(
-                "--kernel `{text}` is not known: expected exact, default, first-shot, hr, uniform, \
-                 uniform-exact or a model file (.json) written by `flatland fit --out`"
+                "--kernel `{text}` is not known: expected exact, default, hr, uniform, uniform-exact, \
+                 first-shot or a model file (.json) written by `flatland fit --out`"
             ),
         })
     }

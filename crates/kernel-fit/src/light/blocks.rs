@@ -70,7 +70,7 @@ impl Blocks {
         flatland_solve::check_scene(kernel, mesh)?;
         let edges = mesh.edges();
         let n = mesh.len();
-        let per_row: Vec<(Vec<(u32, f64)>, Vec<f64>)> = (0..n)
+        let per_row: Vec<UnoccludedRow> = (0..n)
             .into_par_iter()
             .with_min_len(ROWS_PER_TASK)
             .map(|i| {
@@ -452,9 +452,12 @@ fn pieces(
     out
 }
 
+/// A row's sending edges with any unoccluded transfer (edge, sum), and their entries.
+type UnoccludedRow = (Vec<(u32, f64)>, Vec<f64>);
+
 /// The closed-form unoccluded transfers of row `i` (`ρ_i` included): the sending edges with
 /// any, each with its sum, and their entries in edge order.
-fn unoccluded_row(mesh: &Mesh, i: usize) -> (Vec<(u32, f64)>, Vec<f64>) {
+fn unoccluded_row(mesh: &Mesh, i: usize) -> UnoccludedRow {
     let rho = mesh.edge_of(i).reflectance;
     let own = mesh.elements()[i].mesh_edge;
     let mut blocks = Vec::new();

@@ -78,7 +78,7 @@ impl LightParams {
         if self.max_rays == 0 {
             return bad("max_rays", "0".into(), "at least 1");
         }
-        if !(self.max_seconds > 0.0) {
+        if self.max_seconds.is_nan() || self.max_seconds <= 0.0 {
             return bad("max_seconds", self.max_seconds.to_string(), "more than 0");
         }
         Ok(())
