@@ -205,14 +205,17 @@ impl Blocks {
             .collect()
     }
 
-    /// The `count` unresolved blocks through which the prior sends the most light, as power
-    /// (`p_i Σ_j U_ij b_j` times the receiver element's length), largest first.
+    /// The unresolved blocks through which the prior sends the most light, as power
+    /// (`p_i Σ_j U_ij b_j` times the receiver element's length), largest first: at most
+    /// `count`, and no more than it takes to cover `share` of the power of every unresolved
+    /// block (a share of 1 takes all `count`).
     pub(crate) fn most_light(
         &self,
         mesh: &Mesh,
         priors: &[f64],
         b: &[f64],
         count: usize,
+        share: f64,
     ) -> Vec<usize> {
         let (edges, elements) = (mesh.edges(), mesh.elements());
         let mut flow: Vec<(f64, usize)> = self
@@ -231,11 +234,20 @@ impl Blocks {
         if count == 0 {
             return Vec::new();
         }
+        let total: f64 = flow.iter().map(|f| f.0.abs()).sum();
         let by_power = |x: &(f64, usize), y: &(f64, usize)| y.0.total_cmp(&x.0).then(x.1.cmp(&y.1));
         flow.select_nth_unstable_by(count - 1, by_power);
         flow.truncate(count);
         flow.sort_unstable_by(by_power);
-        flow.into_iter().map(|(_, q)| q).collect()
+        let mut covered = 0.0;
+        let enough = flow
+            .iter()
+            .position(|f| {
+                covered += f.0.abs();
+                covered >= share * total
+            })
+            .map_or(count, |k| k + 1);
+        flow.into_iter().take(enough).map(|(_, q)| q).collect()
     }
 
     /// `Σ_j values_j b_j` of one block.

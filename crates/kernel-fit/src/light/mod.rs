@@ -15,9 +15,10 @@
 //!    `(I − K)⁻¹` by one more solve) and stops when it is within the tolerance;
 //! 3. ranks the unresolved blocks by the light the prior sends through them — the sender's
 //!    solved `B` × the receiver's `ρ` × `G`, as power — and resolves the largest, twice as
-//!    many as the round before: the geometry decides a pair outright where it can, and on a
-//!    pair whose visibility varies each face the block sees costs one ray the first time any
-//!    block meets it (a new cell), nothing after.
+//!    many as the round before (near the tolerance, only as many as carry the share
+//!    `1 − tol / (2 · estimate)` of that light): the geometry decides a pair outright where
+//!    it can, and on a pair whose visibility varies each face the block sees costs one ray
+//!    the first time any block meets it (a new cell), nothing after.
 //!
 //! Light that flows through doors into a dark room raises that room's B in the next solve, so
 //! its walls' blocks rise in the ranking: the loop follows the bounces, not just the lamps.
@@ -172,9 +173,12 @@ impl<F: Faces> LightLoop<F> {
         if let Some(reason) = self.should_stop(estimated_error, params) {
             return Ok(Some(reason));
         }
-        let which = self
-            .blocks
-            .most_light(mesh, &self.priors, &self.radiosity, self.next_round);
+        // Near the tolerance, resolve only the light it takes to get there (with a margin:
+        // the estimate falls more slowly than the light resolved, as priors move).
+        let share = (1.0 - 0.5 * params.tolerance / estimated_error).clamp(0.0, 1.0);
+        let which =
+            self.blocks
+                .most_light(mesh, &self.priors, &self.radiosity, self.next_round, share);
         self.rays += self
             .blocks
             .resolve(kernel, mesh, &which, &mut self.faces, stop)?;
