@@ -532,8 +532,8 @@ fn tool_written_files() -> &'static [(&'static str, serde_json::Value)] {
                 target_cells: 10,
                 initial_samples: 40,
                 heldout: 64,
-                target,
-                ..FitParams::default()
+                refit: false,
+                ..FitParams::default().learning(target)
             };
             let mut fit = Fit::new(Arc::clone(&kernel), Arc::clone(&reference), params).unwrap();
             let summary = fit.run(1000, |_| ControlFlow::Continue(())).unwrap();

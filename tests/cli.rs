@@ -490,7 +490,10 @@ fn solve_rejects_bad_arguments_with_one_line_and_writes_nothing() {
         &run(&["--elements", "100000"]),
         &["elements", "at most 8192"],
     );
-    assert_one_line_error(&run(&["--kernel", "sgsc"]), &["`sgsc`", "exact, sgcs, hr"]);
+    assert_one_line_error(
+        &run(&["--kernel", "sgsc"]),
+        &["`sgsc`", "exact, default, hr"],
+    );
     assert_one_line_error(
         &run(&["--kernel", "no/such/model.json"]),
         &["no/such/model.json"],
@@ -1024,7 +1027,7 @@ fn regression_ctrl_c_stops_every_long_command() {
         &[
             "bench",
             "--methods",
-            "sgcs-paper,uniform",
+            "paper,uniform",
             "--budgets",
             "20,1500",
             "--seeds",
@@ -1079,4 +1082,197 @@ fn regression_ctrl_c_stops_every_long_command() {
     );
     assert_interrupted(&eval, "nothing was saved");
     assert!(!dir.join("e.csv").exists());
+}
+
+// ===== the learner: one model, one summary; resume; refused combinations =====
+
+/// `flatland fit --json` (and its `--out`) in `dir`, parsed.
+fn fit_json(dir: &Path, args: &[&str]) -> serde_json::Value {
+    let mut all = vec!["fit"];
+    all.extend(args);
+    all.push("--json");
+    let out = flatland_in(dir, &all);
+    assert!(out.status.success(), "{}", stderr(&out));
+    serde_json::from_str(&stdout(&out)).expect("one JSON object")
+}
+
+/// The fields of a `fit --json` object that say what was learned (not the times, not the
+/// label of the scene).
+fn learned_fields(json: &serde_json::Value) -> serde_json::Map<String, serde_json::Value> {
+    let object = json.as_object().expect("a JSON object");
+    object
+        .iter()
+        .filter(|(k, _)| k.as_str() != "scene" && !k.ends_with("_s"))
+        .map(|(k, v)| (k.clone(), v.clone()))
+        .collect()
+}
+
+/// `eval --json` measures a model file exactly as `fit --json` measured the fit that wrote
+/// it: same reference, same model (after the paper's refit), the same numbers to the bit.
+#[test]
+fn eval_json_equals_fit_json_on_the_same_model() {
+    let dir = temp_dir("eval-equals-fit");
+    let fig3 = scene("fig3");
+    for preset in ["default", "paper"] {
+        let model = format!("{preset}.json");
+        let fit = fit_json(
+            &dir,
+            &[
+                "--scene",
+                as_str(&fig3),
+                "--preset",
+                preset,
+                "--cells",
+                "40",
+                "--res",
+                "64",
+                "--out",
+                &model,
+            ],
+        );
+        let out = flatland_in(
+            &dir,
+            &[
+                "eval", "--model", &model, "--res", "64", "--out", "e.csv", "--json",
+            ],
+        );
+        assert!(out.status.success(), "{}", stderr(&out));
+        let eval: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+        let fields = [
+            "cells",
+            "rel_l2_grid",
+            "rel_l2_heldout",
+            "rel_l2_heldout_p05",
+            "rel_l2_heldout_p95",
+            "rel_l1_grid",
+            "rel_l1_heldout",
+        ];
+        for field in fields {
+            assert!(!fit[field].is_null(), "{preset}: {field} in {fit}");
+            assert_eq!(eval[field], fit[field], "{preset}: {field}");
+        }
+    }
+}
+
+/// A fit interrupted (Ctrl-C, its checkpoint saved at that step) and resumed ends exactly
+/// where the same fit run without a break ends: every learned figure equal to the bit.
+#[test]
+fn a_resumed_fit_equals_the_uninterrupted_one() {
+    let dir = temp_dir("resume-equals");
+    let fig3 = scene("fig3");
+    let args = [
+        "--scene",
+        as_str(&fig3),
+        "--preset",
+        "paper",
+        "--cells",
+        "800",
+    ];
+    let whole = fit_json(&dir, &args);
+    let mut checkpointed = vec!["fit"];
+    checkpointed.extend(args);
+    checkpointed.extend(["--checkpoint", "run.ckpt"]);
+    let stopped = interrupt_when(&dir, &checkpointed, "training to");
+    assert_interrupted(&stopped, "checkpoint saved to run.ckpt");
+    let saved: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("run.ckpt")).unwrap()).unwrap();
+    let at = saved["state"]["model"]["network"]["steps"]
+        .as_u64()
+        .unwrap();
+    let total = whole["steps"].as_u64().unwrap();
+    assert!(at < total, "interrupted at step {at} of {total}");
+    let resumed = fit_json(&dir, &["--resume", "run.ckpt"]);
+    assert_eq!(learned_fields(&resumed), learned_fields(&whole));
+}
+
+/// Combinations a learner would silently ignore are refused before any work, naming both
+/// parameters; the default learner's old name still solves.
+#[test]
+fn meaningless_parameters_are_refused_and_sgcs_still_names_the_default_learner() {
+    let fig3 = scene("fig3");
+    for (preset, set, needles) in [
+        (
+            "paper",
+            "importance=0.5",
+            ["`importance`", "`target` = zeta"],
+        ),
+        (
+            "default",
+            "target_error=0.1",
+            ["`target_error`", "`eval_every`"],
+        ),
+    ] {
+        let mut args = vec!["fit", "--scene", as_str(&fig3), "--preset", preset];
+        args.extend(["--set", set]);
+        if preset == "default" {
+            args.extend(["--set", "eval_every=0"]);
+        }
+        assert_one_line_error(&flatland(&args), &needles);
+    }
+    let args = |kernel| {
+        vec![
+            "--scene",
+            as_str(&fig3),
+            "--kernel",
+            kernel,
+            "--basis",
+            "30",
+            "--elements",
+            "64",
+            "--reference-elements",
+            "256",
+        ]
+    };
+    let (old, new) = (solve_json(&args("sgcs")), solve_json(&args("default")));
+    assert_eq!(new["kernel"], "default");
+    for field in [
+        "basis_functions",
+        "rel_l2_b",
+        "rel_l2_reflected",
+        "iterations",
+    ] {
+        assert_eq!(old[field], new[field], "{field}");
+    }
+}
+
+#[test]
+fn scene_generates_a_floor_plan_and_a_hall_of_the_size_asked_for_the_same_each_time() {
+    let dir = temp_dir("scene");
+    for kind in ["floorplan", "hall"] {
+        let (a, b) = (
+            dir.join(format!("{kind}-a.json")),
+            dir.join(format!("{kind}-b.ron")),
+        );
+        for out in [&a, &b] {
+            let run = flatland(&[
+                "scene",
+                kind,
+                "--size",
+                "400",
+                "--seed",
+                "5",
+                "--out",
+                as_str(out),
+            ]);
+            assert!(run.status.success(), "{}", stderr(&run));
+            assert!(stdout(&run).contains("edges"), "{}", stdout(&run));
+        }
+        let (sa, sb) = (Scene::load(&a).unwrap(), Scene::load(&b).unwrap());
+        assert_eq!(sa, sb, "{kind}: the same seed in .json and .ron");
+        let n = sa.edges().len();
+        assert!((320..=480).contains(&n), "{kind}: {n} edges");
+        assert!(
+            sa.edges().iter().any(|e| e.emission > 0.0),
+            "{kind}: nothing emits"
+        );
+    }
+    let out = flatland(&[
+        "scene",
+        "hall",
+        "--size",
+        "5",
+        "--out",
+        as_str(&dir.join("x.json")),
+    ]);
+    assert_one_line_error(&out, &["edges", "[24, 1000000]", "5"]);
 }

@@ -1,4 +1,5 @@
-//! `flatland bench`: run time against error for SGCS, hierarchical radiosity and a uniform grid.
+//! `flatland bench`: run time against error for the learners, hierarchical radiosity and a
+//! uniform grid.
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -15,12 +16,13 @@ use flatland_lab::{interrupt, output};
 pub struct Args {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// Methods, comma-separated: sgcs (the default learner), sgcs-paper (the paper's network
-    /// with the refit), sgcs-paper-norefit, hr, uniform.
+    /// Methods, comma-separated: default (the default learner), paper (the paper's network
+    /// with the refit), paper-norefit, hr, uniform (`sgcs`, `sgcs-paper` and
+    /// `sgcs-paper-norefit` still name the first three).
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "sgcs,sgcs-paper,sgcs-paper-norefit,hr,uniform"
+        default_value = "default,paper,paper-norefit,hr,uniform"
     )]
     pub methods: Vec<String>,
     /// Budgets (numbers of basis functions, each in [3, 10 000 000]), comma-separated.

@@ -16,7 +16,7 @@ use flatland_lab::{interrupt, output};
 pub struct Args {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// Which learner: `default` (the project's) or `paper` (the paper's network).
+    /// Which learner: `default` (the default learner) or `paper` (the paper's network).
     #[arg(long, value_enum, default_value_t = super::fit::PresetArg::Default)]
     pub preset: super::fit::PresetArg,
     /// Cells of the fit shown.

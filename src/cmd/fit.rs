@@ -23,7 +23,7 @@ pub enum ResamplingArg {
 /// `--preset` values.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, Default)]
 pub enum PresetArg {
-    /// The project's learner: visibility only, where geometry cannot decide it, with cells that
+    /// The default learner: visibility only, where geometry cannot decide it, with cells that
     /// never straddle a shadow boundary.
     #[default]
     Default,
@@ -46,7 +46,7 @@ impl PresetArg {
 pub struct Args {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// Which learner: `default` (the project's) or `paper` (the paper's network).
+    /// Which learner: `default` (the default learner) or `paper` (the paper's network).
     #[arg(long, value_enum, default_value_t = PresetArg::Default)]
     pub preset: PresetArg,
     /// Stop at this many cells, in [3, 10 000 000].
@@ -216,7 +216,7 @@ pub fn run(args: &Args) -> Result<()> {
     if reason == StopReason::Interrupted {
         return Err(interrupt::stopped().into());
     }
-    if fit.params().refit {
+    if fit.head().refit().is_some() {
         eprintln!("least-squares refit and final errors (Ctrl-C stops)");
     } else {
         eprintln!("final errors");

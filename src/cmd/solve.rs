@@ -22,12 +22,14 @@ use flatland_lab::interrupt;
 pub struct Args {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// The kernel: `exact`, `sgcs` (fit the default learner with --basis cells), `hr`,
+    /// The kernel: `exact`, `default` (fit the default learner with --basis cells; `sgcs` is
+    /// the same), `hr`,
     /// `uniform` (20 rays per block), `uniform-exact` (exact block means of k), or a model file
     /// (.json) written by `flatland fit --out`.
     #[arg(long, value_name = "KERNEL", default_value = "exact")]
     pub kernel: String,
-    /// Basis functions of the representation built: cells (sgcs), links (hr), blocks (uniform).
+    /// Basis functions of the representation built: cells (default), links (hr), blocks
+    /// (uniform).
     #[arg(long, value_name = "N", default_value_t = 400)]
     pub basis: usize,
     /// Elements of the solve (default: chosen from the scene, 512 for the bundled scenes).
@@ -53,7 +55,8 @@ pub struct Args {
 #[derive(Clone, Debug, PartialEq)]
 enum Choice {
     Exact,
-    Sgcs,
+    /// The default learner.
+    Default,
     Hr,
     Uniform,
     UniformExact,
@@ -64,7 +67,8 @@ impl Choice {
     fn parse(text: &str) -> Result<Choice> {
         Ok(match text {
             "exact" => Choice::Exact,
-            "sgcs" => Choice::Sgcs,
+            // `sgcs` was the default learner's name before it was called so.
+            "default" | "sgcs" => Choice::Default,
             "hr" => Choice::Hr,
             "uniform" => Choice::Uniform,
             "uniform-exact" => Choice::UniformExact,
@@ -75,7 +79,7 @@ impl Choice {
                 Choice::Model(PathBuf::from(text))
             }
             _ => bail!(
-                "--kernel `{text}` is not known: expected exact, sgcs, hr, uniform, uniform-exact \
+                "--kernel `{text}` is not known: expected exact, default, hr, uniform, uniform-exact \
                  or a model file (.json) written by `flatland fit --out`"
             ),
         })
@@ -84,7 +88,7 @@ impl Choice {
     fn label(&self) -> String {
         match self {
             Choice::Exact => "exact".into(),
-            Choice::Sgcs => "sgcs".into(),
+            Choice::Default => "default".into(),
             Choice::Hr => "hr".into(),
             Choice::Uniform => "uniform".into(),
             Choice::UniformExact => "uniform-exact".into(),
@@ -117,10 +121,12 @@ fn output_of(path: &Path) -> Result<Output> {
     Ok(output)
 }
 
-/// A built representation and what building it cost.
+/// A built representation, what building it cost, and the baseline's note when it built a
+/// count other than `--basis` (HR below its initial linking, a grid that is not square).
 struct Built {
     rep: Box<dyn Representation>,
     build_s: f64,
+    note: Option<String>,
 }
 
 /// Runs `flatland solve`.
@@ -188,7 +194,6 @@ pub fn run(args: &Args) -> Result<()> {
             )?,
         }
     }
-    let basis = built.rep.basis_functions();
     if args.json {
         println!(
             "{}",
@@ -197,9 +202,8 @@ pub fn run(args: &Args) -> Result<()> {
                 &choice,
                 &mesh,
                 reference_elements,
-                basis,
-                &comparison,
-                built.build_s
+                &built,
+                &comparison
             )
         );
     } else {
@@ -208,9 +212,8 @@ pub fn run(args: &Args) -> Result<()> {
             &choice,
             &mesh,
             reference_elements,
-            basis,
+            &built,
             &comparison,
-            built.build_s,
         );
         if let Some(path) = &args.out {
             println!("wrote {}", path.display());
@@ -241,23 +244,29 @@ fn scene_for(args: &Args, choice: &Choice) -> Result<(Scene, String)> {
 /// Builds the representation `choice` names (fits, baselines) on `kernel`.
 fn build(choice: &Choice, kernel: &Kernel, args: &Args) -> Result<Built> {
     let started = Instant::now();
+    let mut note = None;
     let rep: Box<dyn Representation> = match choice {
         Choice::Exact => Box::new(Kernel::new(kernel.scene().clone())),
         Choice::Model(path) => Box::new(ModelFile::load(path)?.model),
         Choice::Hr => {
-            Box::new(run_hr_at_budget(kernel, args.basis, args.seed, &HrParams::default())?.approx)
+            let run = run_hr_at_budget(kernel, args.basis, args.seed, &HrParams::default())?;
+            note = run.note.map(|n| n.to_string());
+            Box::new(run.approx)
         }
-        Choice::Uniform => {
-            Box::new(run_uniform(kernel, args.basis, args.seed, &UniformParams::default())?.approx)
-        }
-        Choice::UniformExact => {
+        Choice::Uniform | Choice::UniformExact => {
             let params = UniformParams {
-                block_value: BlockValue::ExactKernelMean,
+                block_value: if *choice == Choice::Uniform {
+                    BlockValue::Rays
+                } else {
+                    BlockValue::ExactKernelMean
+                },
                 ..UniformParams::default()
             };
-            Box::new(run_uniform(kernel, args.basis, args.seed, &params)?.approx)
+            let run = run_uniform(kernel, args.basis, args.seed, &params)?;
+            note = run.note.map(|n| n.to_string());
+            Box::new(run.approx)
         }
-        Choice::Sgcs => {
+        Choice::Default => {
             // Exactly what `flatland fit --cells N --seed S` fits.
             let mut fit_args = super::fit::Args::for_scene(None);
             fit_args.cells = args.basis;
@@ -279,15 +288,14 @@ fn build(choice: &Choice, kernel: &Kernel, args: &Args) -> Result<Built> {
             });
             bar.finish_and_clear();
             interrupt::check()?;
-            if fit_params.refit {
-                fit.refit()?;
-            }
+            fit.finish()?;
             Box::new(fit.model().clone())
         }
     };
     Ok(Built {
         rep,
         build_s: started.elapsed().as_secs_f64(),
+        note,
     })
 }
 
@@ -303,29 +311,32 @@ fn csv(mesh: &Mesh, b: &[f64]) -> String {
     out
 }
 
-/// The `--json` object.
+/// The `--json` object; `note` is there only when the baseline built a count other than asked.
 fn summary_json(
     scene: &str,
     choice: &Choice,
     mesh: &Mesh,
     reference_elements: usize,
-    basis: Option<usize>,
+    built: &Built,
     c: &Comparison,
-    build_s: f64,
 ) -> serde_json::Value {
-    serde_json::json!({
+    let mut summary = serde_json::json!({
         "scene": scene,
         "kernel": choice.label(),
         "elements": mesh.len(),
-        "basis_functions": basis,
+        "basis_functions": built.rep.basis_functions(),
         "rel_l2_b": c.errors.rel_l2_b,
         "rel_l2_reflected": c.errors.rel_l2_reflected,
         "iterations": c.solution.iterations,
         "residual": c.solution.residual,
         "wall_s": c.solution.wall_s(),
-        "build_s": build_s,
+        "build_s": built.build_s,
         "reference_elements": reference_elements,
-    })
+    });
+    if let Some(note) = &built.note {
+        summary["note"] = note.as_str().into();
+    }
+    summary
 }
 
 /// The human-readable summary.
@@ -334,16 +345,21 @@ fn print_summary(
     choice: &Choice,
     mesh: &Mesh,
     reference_elements: usize,
-    basis: Option<usize>,
+    built: &Built,
     c: &Comparison,
-    build_s: f64,
 ) {
     let row = |k: &str, v: String| println!("  {k:<26} {v}");
     println!("solve of {scene} with the {} kernel", choice.label());
     row(
         "basis functions",
-        basis.map_or_else(|| "exact (none)".to_owned(), |b| b.to_string()),
+        built
+            .rep
+            .basis_functions()
+            .map_or_else(|| "exact (none)".to_owned(), |b| b.to_string()),
     );
+    if let Some(note) = &built.note {
+        row("note", note.clone());
+    }
     row(
         "elements",
         format!("{} (exact reference: {reference_elements})", mesh.len()),
@@ -369,7 +385,7 @@ fn print_summary(
             c.solution.solve_s
         ),
     );
-    row("building the kernel", format!("{build_s:.3} s"));
+    row("building the kernel", format!("{:.3} s", built.build_s));
 }
 
 #[cfg(test)]
@@ -387,9 +403,12 @@ mod tests {
             Choice::parse("runs/m.JSON").unwrap(),
             Choice::Model(PathBuf::from("runs/m.JSON"))
         );
+        // The default learner, also by the name it had before it was called so.
+        assert_eq!(Choice::parse("default").unwrap(), Choice::Default);
+        assert_eq!(Choice::parse("sgcs").unwrap(), Choice::Default);
         let err = Choice::parse("sgsc").unwrap_err().to_string();
         assert!(
-            err.contains("`sgsc`") && err.contains("exact, sgcs, hr"),
+            err.contains("`sgsc`") && err.contains("exact, default, hr"),
             "{err}"
         );
     }

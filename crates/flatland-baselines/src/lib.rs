@@ -13,7 +13,9 @@
 //!   oracle and the link estimate.
 //!
 //! The `run_*` functions are what `flatland bench` loops over: each returns a [`BaselineRun`] with
-//! the approximation, rays cast, wall time, basis-function count and memory.
+//! the approximation, rays cast, wall time, basis-function count and memory, and a
+//! [`BudgetNote`] when the count built is not within [`budget_tolerance`] of the budget asked
+//! for (below HR's initial linking, where HR's count jumps, or a grid that is not square).
 //!
 //! **Rays.** Every kernel evaluation a baseline makes counts as one ray, whether or not the
 //! geometry layer needed to trace it (it may skip back-facing or unoccludable pairs): that is the
@@ -59,6 +61,7 @@ pub use hr::{
 pub use uniform::{BlockValue, UniformGrid, UniformParams, run_uniform};
 
 use flatland_solve::Representation;
+use std::fmt;
 use std::time::Duration;
 
 /// One baseline run: what `flatland bench` records per method, budget and seed.
@@ -74,10 +77,13 @@ pub struct BaselineRun<A> {
     pub basis_functions: usize,
     /// Bytes of the representation.
     pub memory_bytes: usize,
+    /// Why `basis_functions` is not the budget asked for, when it is outside
+    /// [`budget_tolerance`] of it (`None` for runs without a budget).
+    pub note: Option<BudgetNote>,
 }
 
 impl<A: Representation> BaselineRun<A> {
-    fn new(approx: A, rays: u64, wall: Duration) -> Self {
+    fn new(approx: A, rays: u64, wall: Duration, note: Option<BudgetNote>) -> Self {
         let basis_functions = approx
             .basis_functions()
             .expect("a baseline counts its basis functions");
@@ -88,8 +94,108 @@ impl<A: Representation> BaselineRun<A> {
             wall,
             basis_functions,
             memory_bytes,
+            note,
         }
     }
+}
+
+/// How far a baseline's basis-function count may be from its budget and still count as met:
+/// 5 % of it, at least 1.
+#[must_use]
+pub fn budget_tolerance(budget: usize) -> usize {
+    (budget / 20).max(1)
+}
+
+/// Why a run built a count outside [`budget_tolerance`] of the budget asked for. Its text is
+/// what `flatland solve` prints.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[non_exhaustive]
+pub enum BudgetNote {
+    /// The budget is below HR's initial linking (one link per interacting surface-edge pair),
+    /// the least HR can build; that was built.
+    InitialLinking {
+        /// Links asked for.
+        asked: usize,
+        /// Links built: the initial linking.
+        built: usize,
+    },
+    /// The budget is above HR's finest linking (every interacting element pair down to the
+    /// minimum length), the most HR can build; that was built.
+    Finest {
+        /// Links asked for.
+        asked: usize,
+        /// Links built: the finest linking.
+        built: usize,
+    },
+    /// HR's count jumps past the budget (many equal corners refine at one F_ε): no F_ε and
+    /// minimum length comes within tolerance, and the nearest count was built.
+    Nearest {
+        /// Links asked for.
+        asked: usize,
+        /// Links built.
+        built: usize,
+    },
+    /// The uniform grid is g × g: the nearest square to the budget was built.
+    Square {
+        /// Blocks asked for.
+        asked: usize,
+        /// Blocks built, g².
+        built: usize,
+    },
+}
+
+impl fmt::Display for BudgetNote {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            BudgetNote::InitialLinking { asked, built } => write!(
+                f,
+                "HR's initial linking needs {} links; built that instead of {}",
+                grouped(built),
+                grouped(asked)
+            ),
+            BudgetNote::Finest { asked, built } => write!(
+                f,
+                "HR's finest linking (every element down to `min_length`) has {} links; built \
+                 that instead of {} (a smaller `min_length` allows more)",
+                grouped(built),
+                grouped(asked)
+            ),
+            BudgetNote::Nearest { asked, built } => {
+                let tolerance = budget_tolerance(asked);
+                write!(
+                    f,
+                    "HR's link count jumps past {} (no F_ε or minimum length gives {}–{} \
+                     links); built the nearest, {}",
+                    grouped(asked),
+                    grouped(asked.saturating_sub(tolerance)),
+                    grouped(asked + tolerance),
+                    grouped(built)
+                )
+            }
+            BudgetNote::Square { asked, built } => {
+                let g = built.isqrt();
+                write!(
+                    f,
+                    "the uniform grid is g × g blocks: built {} ({g} × {g}) instead of {}",
+                    grouped(built),
+                    grouped(asked)
+                )
+            }
+        }
+    }
+}
+
+/// `n` with its thousands grouped by spaces ("25 600"), as the messages print counts.
+pub(crate) fn grouped(n: usize) -> String {
+    let digits = n.to_string();
+    let mut out = String::with_capacity(digits.len() + digits.len() / 3);
+    for (k, c) in digits.chars().enumerate() {
+        if k > 0 && (digits.len() - k).is_multiple_of(3) {
+            out.push(' ');
+        }
+        out.push(c);
+    }
+    out
 }
 
 /// Shared by the tests of both baselines: small scenes built in code, seeded.
@@ -142,5 +248,26 @@ pub(crate) mod test_support {
     /// A kernel over `edges` (which must be valid).
     pub fn kernel(edges: Vec<Edge>) -> Kernel {
         Kernel::new(Scene::new(edges).expect("valid test scene"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counts_are_grouped_by_thousands() {
+        assert_eq!(grouped(0), "0");
+        assert_eq!(grouped(400), "400");
+        assert_eq!(grouped(1_000), "1 000");
+        assert_eq!(grouped(25_600), "25 600");
+        assert_eq!(grouped(2_000_000), "2 000 000");
+    }
+
+    #[test]
+    fn the_tolerance_is_five_percent_and_at_least_one() {
+        assert_eq!(budget_tolerance(1), 1);
+        assert_eq!(budget_tolerance(50), 2);
+        assert_eq!(budget_tolerance(400), 20);
     }
 }

@@ -6,7 +6,7 @@
 //! boundaries and shadow edges alike, which is what makes it the floor every adaptive method must
 //! beat.
 
-use crate::{BaselineError, BaselineRun, seeds};
+use crate::{BaselineError, BaselineRun, BudgetNote, budget_tolerance, seeds};
 use flatland_geom::Kernel;
 use flatland_solve::{
     KernelRectangle, Mesh, RectangleOperator, Representation, SolveError, SolveParams, Stop,
@@ -213,8 +213,10 @@ impl Representation for UniformGrid {
         Some(self.values.len())
     }
 
+    /// The block values, and the sender weights of a grid of k.
     fn memory_bytes(&self) -> usize {
         self.values.len() * std::mem::size_of::<f64>()
+            + self.sender_weights.len() * std::mem::size_of::<(f64, f64)>()
     }
 
     fn operator(
@@ -255,7 +257,8 @@ impl Representation for UniformGrid {
 }
 
 /// The uniform baseline at a budget of basis functions: `g = round(√budget)` (at least 1), so the
-/// count is the nearest square, reported in the run.
+/// count is the nearest square, reported in the run; [`BaselineRun::note`] says so when that is
+/// outside [`budget_tolerance`] of the budget (small budgets between squares, such as 7 → 9).
 pub fn run_uniform(
     kernel: &Kernel,
     budget: usize,
@@ -274,7 +277,12 @@ pub fn run_uniform(
     let grid = UniformGrid::build(kernel, g, params, seed)?;
     let wall = start.elapsed();
     let rays = grid.rays;
-    Ok(BaselineRun::new(grid, rays, wall))
+    let built = g * g;
+    let note = (built.abs_diff(budget) > budget_tolerance(budget)).then_some(BudgetNote::Square {
+        asked: budget,
+        built,
+    });
+    Ok(BaselineRun::new(grid, rays, wall, note))
 }
 
 #[cfg(test)]
@@ -372,9 +380,18 @@ mod tests {
             .count();
         assert!(expected > 0 && expected < 400 * 3);
         assert_eq!(run.rays, expected as u64);
-        // 50 is not a square: the nearest one (49) is used and reported.
+        // 50 is not a square: the nearest one (49) is used and reported, within tolerance.
         let run = run_uniform(&kernel, 50, 1, &UniformParams::default()).unwrap();
         assert_eq!(run.basis_functions, 49);
+        assert_eq!(run.note, None);
+        // 7 is 2 from the nearest square, past the tolerance of 1: the note says so.
+        let run = run_uniform(&kernel, 7, 1, &UniformParams::default()).unwrap();
+        assert_eq!(run.basis_functions, 9);
+        let note = run.note.expect("a note for 9 blocks instead of 7");
+        assert_eq!(
+            note.to_string(),
+            "the uniform grid is g × g blocks: built 9 (3 × 3) instead of 7"
+        );
         assert!(
             run.approx
                 .values()

@@ -21,25 +21,39 @@ use crate::LabError;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Method {
-    /// The project's learner ([`Preset::Default`](kernel_fit::Preset::Default)).
-    Sgcs,
+    /// The default learner ([`Preset::Default`](kernel_fit::Preset::Default)).
+    #[serde(alias = "sgcs")]
+    Default,
     /// The paper's network with the least-squares output refit
     /// ([`Preset::Paper`](kernel_fit::Preset::Paper); one fit gives this row and the next).
-    SgcsPaper,
+    #[serde(alias = "sgcs-paper")]
+    Paper,
     /// The paper's network with its delta-rule output weights only.
-    SgcsPaperNoRefit,
+    #[serde(
+        rename = "paper-norefit",
+        alias = "sgcs-paper-norefit",
+        alias = "sgcs-paper-no-refit"
+    )]
+    PaperNoRefit,
     /// Hierarchical radiosity (Hanrahan, Salzman, Aupperle 1991).
     Hr,
     /// Piecewise constant on a g × g grid.
     Uniform,
 }
 
+/// The names of the methods before the default learner was named so, still accepted.
+const ALIASES: [(&str, Method); 3] = [
+    ("sgcs", Method::Default),
+    ("sgcs-paper", Method::Paper),
+    ("sgcs-paper-norefit", Method::PaperNoRefit),
+];
+
 impl Method {
     /// Every method, in the order tables list them.
     pub const ALL: [Method; 5] = [
-        Method::Sgcs,
-        Method::SgcsPaper,
-        Method::SgcsPaperNoRefit,
+        Method::Default,
+        Method::Paper,
+        Method::PaperNoRefit,
         Method::Hr,
         Method::Uniform,
     ];
@@ -47,23 +61,25 @@ impl Method {
     /// The name used in files and on the command line.
     pub fn name(self) -> &'static str {
         match self {
-            Method::Sgcs => "sgcs",
-            Method::SgcsPaper => "sgcs-paper",
-            Method::SgcsPaperNoRefit => "sgcs-paper-norefit",
+            Method::Default => "default",
+            Method::Paper => "paper",
+            Method::PaperNoRefit => "paper-norefit",
             Method::Hr => "hr",
             Method::Uniform => "uniform",
         }
     }
 
-    /// Parses a name as [`Method::name`] writes it.
+    /// Parses a name as [`Method::name`] writes it (or as it was written before: `sgcs`,
+    /// `sgcs-paper`, `sgcs-paper-norefit`).
     pub fn parse(name: &str) -> Result<Method, LabError> {
         Method::ALL
             .into_iter()
             .find(|m| m.name() == name)
+            .or_else(|| ALIASES.iter().find(|a| a.0 == name).map(|a| a.1))
             .ok_or_else(|| LabError::InvalidParameter {
                 name: "methods",
                 value: name.to_owned(),
-                valid: "a comma-separated list of sgcs, sgcs-paper, sgcs-paper-norefit, hr, uniform",
+                valid: "a comma-separated list of default, paper, paper-norefit, hr, uniform",
             })
     }
 }
@@ -141,7 +157,7 @@ impl BenchPlan {
             return bad(
                 "methods",
                 "(none)".into(),
-                "at least one of sgcs, sgcs-paper, sgcs-paper-norefit, hr, uniform",
+                "at least one of default, paper, paper-norefit, hr, uniform",
             );
         }
         if let Some(b) = self.budgets.iter().find(|&&b| b < 3) {
@@ -164,7 +180,7 @@ impl BenchPlan {
 /// Runs the plan on one kernel; `progress(done, total)` after each row. The paper's network
 /// with and without its refit come from one fit (the error before and after the refit), so
 /// asking for both costs one fit; its wall time is the training time (plus the refit for
-/// `sgcs-paper`).
+/// `paper`).
 pub fn run_bench(
     kernel: &Arc<Kernel>,
     reference: &Arc<Reference>,
@@ -183,7 +199,7 @@ pub fn run_bench(
             let wants_paper = plan
                 .methods
                 .iter()
-                .any(|m| matches!(m, Method::SgcsPaper | Method::SgcsPaperNoRefit));
+                .any(|m| matches!(m, Method::Paper | Method::PaperNoRefit));
             let paper = if wants_paper {
                 Some(paper_rows(
                     kernel,
@@ -199,9 +215,9 @@ pub fn run_bench(
             for &method in &plan.methods {
                 let s = solver.as_ref();
                 let row = match method {
-                    Method::Sgcs => learner_row(kernel, reference, &plan.fit, budget, seed, s)?,
-                    Method::SgcsPaper => paper.as_ref().map(|r| r.0.clone()).expect("fitted above"),
-                    Method::SgcsPaperNoRefit => {
+                    Method::Default => learner_row(kernel, reference, &plan.fit, budget, seed, s)?,
+                    Method::Paper => paper.as_ref().map(|r| r.0.clone()).expect("fitted above"),
+                    Method::PaperNoRefit => {
                         paper.as_ref().map(|r| r.1.clone()).expect("fitted above")
                     }
                     Method::Hr => baseline_row(
@@ -262,13 +278,14 @@ impl Solver {
     }
 }
 
+/// The row of `approx`, whose errors against the reference are `errors`.
 #[allow(clippy::too_many_arguments)]
 fn row(
     method: Method,
     budget: usize,
     seed: u64,
     approx: &impl Representation,
-    reference: &Reference,
+    errors: Errors,
     rays: u64,
     wall_s: f64,
     solver: Option<&Solver>,
@@ -285,7 +302,7 @@ fn row(
         budget,
         seed,
         basis_functions: approx.basis_functions().unwrap_or_default(),
-        errors: reference.errors(approx),
+        errors,
         rays,
         wall_s,
         memory_bytes: approx.memory_bytes(),
@@ -304,19 +321,20 @@ fn baseline_row<A: Representation>(
     solver: Option<&Solver>,
 ) -> Result<BenchRow, LabError> {
     let wall_s = run.wall.as_secs_f64();
+    let errors = reference.errors(&run.approx);
     row(
         method,
         budget,
         seed,
         &run.approx,
-        reference,
+        errors,
         run.rays,
         wall_s,
         solver,
     )
 }
 
-/// The learner at `budget` cells (it may stop with fewer when it has converged).
+/// The default learner at `budget` cells (it may stop with fewer when it has converged).
 fn learner_row(
     kernel: &Arc<Kernel>,
     reference: &Arc<Reference>,
@@ -325,33 +343,22 @@ fn learner_row(
     seed: u64,
     solver: Option<&Solver>,
 ) -> Result<BenchRow, LabError> {
-    let params = FitParams {
-        target_cells: budget,
-        seed,
-        eval_every: 0,
-        ..*fit
-    };
-    let mut learner = Fit::new(Arc::clone(kernel), Arc::clone(reference), params)?;
-    let started = Instant::now();
-    learner.train(u64::MAX, |_| ControlFlow::Continue(()));
-    if params.refit {
-        learner.refit()?;
-    }
-    let wall_s = started.elapsed().as_secs_f64();
+    let mut learner = fitted(kernel, reference, fit, budget, seed)?;
+    let summary = learner.finish()?;
     row(
-        Method::Sgcs,
+        Method::Default,
         budget,
         seed,
         learner.model(),
-        reference,
-        learner.rays(),
-        wall_s,
+        summary.errors,
+        summary.rays,
+        summary.wall_s,
         solver,
     )
 }
 
-/// One fit of the paper's network at `budget` cells: the row after the refit and the row
-/// before it.
+/// One fit of the paper's network at `budget` cells, ended with its refit: the row after the
+/// refit and the row before it.
 fn paper_rows(
     kernel: &Arc<Kernel>,
     reference: &Arc<Reference>,
@@ -360,41 +367,57 @@ fn paper_rows(
     seed: u64,
     solver: Option<&Solver>,
 ) -> Result<(BenchRow, BenchRow), LabError> {
-    let params = FitParams {
-        target_cells: budget,
-        seed,
-        refit: false,
-        eval_every: 0,
+    let paper = FitParams {
+        refit: true,
         ..*paper
     };
-    let mut fit = Fit::new(Arc::clone(kernel), Arc::clone(reference), params)?;
-    let started = Instant::now();
-    fit.train(u64::MAX, |_| ControlFlow::Continue(()));
-    let train_s = started.elapsed().as_secs_f64();
+    let mut fit = fitted(kernel, reference, &paper, budget, seed)?;
+    let learned = fit.model().clone();
+    let summary = fit.finish()?;
+    let before = summary
+        .errors_before_refit
+        .expect("the paper's network ends with its refit");
+    let train_s = summary.wall_s - summary.refit_s;
     let before = row(
-        Method::SgcsPaperNoRefit,
+        Method::PaperNoRefit,
         budget,
         seed,
-        fit.model(),
-        reference,
-        fit.rays(),
+        &learned,
+        before,
+        summary.rays,
         train_s,
         solver,
     )?;
-    let started = Instant::now();
-    fit.refit()?;
-    let refit_s = started.elapsed().as_secs_f64();
     let after = row(
-        Method::SgcsPaper,
+        Method::Paper,
         budget,
         seed,
         fit.model(),
-        reference,
-        fit.rays(),
-        train_s + refit_s,
+        summary.errors,
+        summary.rays,
+        summary.wall_s,
         solver,
     )?;
     Ok((after, before))
+}
+
+/// A fit of `params` at `budget` cells and `seed`, trained to its stop (not yet finished).
+fn fitted(
+    kernel: &Arc<Kernel>,
+    reference: &Arc<Reference>,
+    params: &FitParams,
+    budget: usize,
+    seed: u64,
+) -> Result<Fit, LabError> {
+    let params = FitParams {
+        target_cells: budget,
+        seed,
+        eval_every: 0,
+        ..*params
+    };
+    let mut fit = Fit::new(Arc::clone(kernel), Arc::clone(reference), params)?;
+    fit.train(u64::MAX, |_| ControlFlow::Continue(()));
+    Ok(fit)
 }
 
 #[cfg(test)]
@@ -446,12 +469,12 @@ mod tests {
         for budget in [30, 60] {
             // The refit never makes the paper's network worse on the samples it validates on.
             assert!(
-                pick(Method::SgcsPaper, budget).errors.heldout
-                    <= pick(Method::SgcsPaperNoRefit, budget).errors.heldout * 1.05
+                pick(Method::Paper, budget).errors.heldout
+                    <= pick(Method::PaperNoRefit, budget).errors.heldout * 1.05
             );
             // The learner beats hierarchical radiosity by far at the same budget (R4), and so
             // does the scene it lights.
-            let (learned, hr) = (pick(Method::Sgcs, budget), pick(Method::Hr, budget));
+            let (learned, hr) = (pick(Method::Default, budget), pick(Method::Hr, budget));
             assert!(
                 learned.errors.grid < 0.5 * hr.errors.grid,
                 "{learned:?} vs {hr:?}"
@@ -494,10 +517,14 @@ mod tests {
             Method::parse("nope")
                 .unwrap_err()
                 .to_string()
-                .contains("sgcs")
+                .contains("paper-norefit")
         );
         for m in Method::ALL {
             assert_eq!(Method::parse(m.name()).unwrap(), m);
+        }
+        // The names before the default learner was named so still parse.
+        for (old, m) in ALIASES {
+            assert_eq!(Method::parse(old).unwrap(), m);
         }
     }
 }

@@ -25,7 +25,7 @@
 //!
 //! // The methods every table lists, by the names files and the command line use.
 //! let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
-//! assert_eq!(names, ["sgcs", "sgcs-paper", "sgcs-paper-norefit", "hr", "uniform"]);
+//! assert_eq!(names, ["default", "paper", "paper-norefit", "hr", "uniform"]);
 //! assert_eq!(Method::parse("hr")?, Method::Hr);
 //! # Ok::<(), flatland_lab::LabError>(())
 //! ```

@@ -29,7 +29,7 @@ use flatland_geom::Scene;
 use kernel_fit::FitParams;
 
 use crate::scenes;
-use crate::settings::{SETTINGS_KEY, SceneChoice, Settings, live_params};
+use crate::settings::{SETTINGS_KEY, SceneChoice, Settings};
 use crate::timeline::{Moment, Timeline};
 use crate::views::{Hover, SceneDrag};
 use crate::worker::{Approx, Command, KernelGrid, LitState, Status, WorkerHandle, World};
@@ -73,7 +73,7 @@ pub struct ViewerApp {
     settings: Settings,
     /// Parameters of the fit the last Reset started.
     fit_params: FitParams,
-    /// Parameters last sent to the running fit ([`live_params`]).
+    /// Parameters the learner last got: the fit's, with the live part last sent.
     sent_params: FitParams,
     worker: WorkerHandle,
     /// Commands sent up to and including the last Reset: older statuses are the old fit's.
@@ -306,25 +306,32 @@ impl ViewerApp {
         }
     }
 
-    /// Sends changed parameters (when valid) to the running fit: those it can take
-    /// ([`live_params`]); the rest wait for Reset.
-    fn sync_params(&mut self) {
-        let live = live_params(&self.settings.params, &self.fit_params);
-        if live != self.sent_params {
-            match self.settings.params.validate() {
-                Ok(()) => {
-                    self.sent_params = live;
-                    self.worker.send(Command::Params(live));
-                    if self
-                        .message
-                        .as_ref()
-                        .is_some_and(|(m, _)| m.starts_with("parameter"))
-                    {
-                        self.message = None;
-                    }
-                }
-                Err(e) => self.message = Some((e.to_string(), true)),
-            }
+    /// Sends changed parameters (when valid) to the learner: a change of the live part
+    /// ([`kernel_fit::LiveParams`]) to the running fit, any other as a new fit, once the
+    /// control is let go (a drag does not start a fit per frame).
+    fn sync_params(&mut self, ctx: &egui::Context) {
+        let wanted = self.settings.params;
+        if wanted == self.sent_params {
+            return;
+        }
+        if let Err(e) = wanted.validate() {
+            self.message = Some((e.to_string(), true));
+            return;
+        }
+        if self
+            .message
+            .as_ref()
+            .is_some_and(|(m, _)| m.starts_with("parameter"))
+        {
+            self.message = None;
+        }
+        if self.fit_params.with_live(wanted.live()) == wanted {
+            self.sent_params = wanted;
+            self.worker.send(Command::Params(wanted.live()));
+        } else if ctx.egui_is_using_pointer() {
+            ctx.request_repaint();
+        } else {
+            self.reset();
         }
     }
 
@@ -355,7 +362,7 @@ impl ViewerApp {
                 ScrollArea::vertical().show(ui, |ui| self.controls(ui));
             });
         CentralPanel::default().show(ui, |ui| self.main_area(ui));
-        self.sync_params();
+        self.sync_params(ui.ctx());
         if self.running() || self.busy.is_some() || self.cursor.replaying.is_some() {
             ui.ctx().request_repaint_after(Duration::from_millis(16));
         }

@@ -29,11 +29,12 @@
 //!   scene and curves as they were then; Replay plays the run back at a chosen speed, Live
 //!   returns to the running learner ([`timeline`]).
 //! - **Controls**: play, pause, step, reset, the pace of growth; the learner preset (the
-//!   project's default or the paper's network) and every parameter of both (docs/ALGORITHM.md
-//!   §8) with its valid range; what only a new fit can change (target, gating, importance, …)
-//!   waits for Reset. Settings persist, with the preset chosen; settings saved by an older
-//!   viewer load with the current learner. Export saves the window as a PNG and the run as the
-//!   model file `flatland eval` reads.
+//!   default learner or the paper's network) and every parameter of both (docs/ALGORITHM.md
+//!   §8) with its valid range; a live parameter ([`kernel_fit::LiveParams`]) reaches the
+//!   running fit, any other (target, gating, importance, the network's rules, …) starts a new
+//!   fit with it. Settings persist, with the preset chosen; settings saved by an older viewer
+//!   load with the current learner. Export saves the window as a PNG and the run as the model
+//!   file `flatland eval` reads.
 //!
 //! The first launch opens a generated floor plan ([`scenes`]) and grows its network at a pace
 //! of cells per second rather than as fast as the machine goes: on `fig3` the default learner
@@ -72,7 +73,7 @@ use std::path::PathBuf;
 
 pub use app::{Options, ViewerApp, stop_text};
 pub use colormap::{colour, grid_image, samples_image, set_color};
-pub use settings::{SceneChoice, Settings, live_params, waiting_for_reset, with_preset};
+pub use settings::{SceneChoice, Settings, with_preset};
 pub use timeline::{Moment, Prefix, Timeline};
 pub use worker::{CellMark, Growth, LearnedGrid, Lit, LitState, Status, World};
 

@@ -1,5 +1,5 @@
-//! What the viewer remembers between runs, the two learner presets, and which parameters a
-//! running fit can take.
+//! What the viewer remembers between runs and the two learner presets. Which parameters a
+//! running fit can take is the learner's rule ([`kernel_fit::LiveParams`]), not the viewer's.
 //!
 //! Settings are stored by eframe (RON). They carry the preset the user chose and that preset's
 //! parameters as the build that saved them defined it, so a later build whose preset differs
@@ -152,44 +152,6 @@ pub fn with_preset(preset: Preset, run: &FitParams) -> FitParams {
         eval_every: run.eval_every,
         ..preset.params()
     }
-}
-
-/// The parameters a running fit can take: `wanted`, with everything only a new fit can
-/// change kept at the running fit's values (see [`waiting_for_reset`]).
-#[must_use]
-pub fn live_params(wanted: &FitParams, running: &FitParams) -> FitParams {
-    FitParams {
-        // `Fit::set_params` refuses another target or gating: the network learns another thing.
-        target: running.target,
-        gating: running.gating,
-        // Used when a fit starts: the sampler's mixture, every sample's weight, S₀, the seed
-        // streams and the held-out reference are made once.
-        importance: running.importance,
-        weighted: running.weighted,
-        initial_samples: running.initial_samples,
-        seed: running.seed,
-        heldout: running.heldout,
-        ..*wanted
-    }
-}
-
-/// Names of the parameters in `wanted` that differ from the running fit's and wait for a new
-/// fit (Reset); empty exactly when [`live_params`] gives `wanted` back.
-#[must_use]
-pub fn waiting_for_reset(wanted: &FitParams, running: &FitParams) -> Vec<&'static str> {
-    let checks = [
-        ("target", wanted.target != running.target),
-        ("gating", wanted.gating != running.gating),
-        ("importance", wanted.importance != running.importance),
-        ("weighted", wanted.weighted != running.weighted),
-        ("|S₀|", wanted.initial_samples != running.initial_samples),
-        ("seed", wanted.seed != running.seed),
-        ("held-out points", wanted.heldout != running.heldout),
-    ];
-    checks
-        .into_iter()
-        .filter_map(|(name, differs)| differs.then_some(name))
-        .collect()
 }
 
 #[cfg(test)]
@@ -346,70 +308,5 @@ mod tests {
                 ..FitParams::default()
             }
         );
-    }
-
-    #[test]
-    fn live_parameters_keep_exactly_what_waits_for_reset() {
-        let running = FitParams::default();
-        let paper = FitParams::paper();
-        // Each parameter that differs between the presets, alone.
-        let variants = [
-            FitParams {
-                target: paper.target,
-                ..running
-            },
-            FitParams {
-                gating: paper.gating,
-                ..running
-            },
-            FitParams {
-                importance: 0.2,
-                ..running
-            },
-            FitParams {
-                weighted: false,
-                ..running
-            },
-            FitParams {
-                initial_samples: 99,
-                ..running
-            },
-            FitParams {
-                seed: 17,
-                ..running
-            },
-            FitParams {
-                heldout: 64,
-                ..running
-            },
-            FitParams {
-                phi: 0.5,
-                ..running
-            },
-            FitParams {
-                network: paper.network,
-                ..running
-            },
-            FitParams {
-                target_cells: 9,
-                ..running
-            },
-            paper,
-        ];
-        for wanted in variants {
-            let live = live_params(&wanted, &running);
-            let waiting = waiting_for_reset(&wanted, &running);
-            assert_eq!(waiting.is_empty(), live == wanted, "{waiting:?}");
-            assert!(waiting_for_reset(&live, &running).is_empty());
-            assert_eq!((live.target, live.gating), (running.target, running.gating));
-        }
-        let all = waiting_for_reset(&paper, &running);
-        assert!(
-            all.contains(&"target") && all.contains(&"gating"),
-            "{all:?}"
-        );
-        let live = live_params(&paper, &running);
-        assert_eq!(live.network, paper.network, "network options apply live");
-        assert_eq!(live.phi, paper.phi);
     }
 }

@@ -21,7 +21,7 @@ use std::time::Duration;
 
 use flatland_geom::Scene;
 use flatland_solve::Representation;
-use kernel_fit::{FitParams, LearnedKernel};
+use kernel_fit::{FitParams, LearnedKernel, LiveParams};
 use rayon::prelude::*;
 
 pub use published::{
@@ -47,8 +47,8 @@ pub enum Command {
         /// The fit's parameters.
         params: FitParams,
     },
-    /// New parameters for the running fit.
-    Params(FitParams),
+    /// New live parameters for the running fit (what else changes needs a new fit: `Reset`).
+    Params(LiveParams),
     /// The scene changed (an end point was dragged): keep learning from the current state.
     Edit {
         /// The changed scene (not subdivided).

@@ -300,56 +300,49 @@ fn switching_presets_starts_a_new_fit_with_that_learner() {
     assert!(h.state().settings().is_preset());
 }
 
+/// A live parameter (a rate of the network) reaches the running fit; a fixed one (a rule of
+/// the network, what it learns) starts a new fit with it, and what only the visibility learner
+/// has goes when the target changes.
 #[test]
-fn network_options_reach_the_running_fit_and_the_target_waits_for_reset() {
+fn live_options_reach_the_running_fit_and_the_others_start_a_new_one() {
     let mut h = harness(quick_settings());
     wait_for(&mut h, "the reference", ready);
     settled(&mut h);
     let world = h.state().world_id();
 
-    // A network option applies to the running fit at once.
+    h.get_by_role_and_label(Role::SpinButton, "η")
+        .set_value_accesskit(0.05);
+    wait_for(&mut h, "η in the running fit", |a| {
+        a.caught_up() && a.fit_params().is_some_and(|p| p.network.eta == 0.05)
+    });
+    assert_eq!(h.state().world_id(), world, "no new fit for a live option");
+    h.get_by_label("(changed)");
+
     h.get_by_label("midpoint").click();
-    wait_for(&mut h, "midpoint insertion in the running fit", |a| {
-        a.caught_up()
+    wait_for(&mut h, "a new fit with midpoint insertion", |a| {
+        a.world_id() > world
+            && a.caught_up()
             && a.fit_params()
                 .is_some_and(|p| p.network.insertion == Insertion::Midpoint)
     });
-    assert_eq!(
-        h.state().world_id(),
-        world,
-        "no new fit for a network option"
-    );
-    h.get_by_label("(changed)");
-
-    // What the network learns needs a new fit: it waits, and says so.
-    h.get_by_label("ζ").click();
-    h.get_by_role_and_label(Role::SpinButton, "importance")
-        .set_value_accesskit(0.3);
-    h.run_steps(2);
-    h.get_by_label_contains("target, importance: apply on Reset");
-    settled(&mut h);
+    let world = h.state().world_id();
     let fit = h.state().fit_params().unwrap();
-    assert_eq!(
-        (fit.target, fit.importance),
-        (Target::Visibility, 0.7),
-        "the running fit keeps its target"
-    );
-    assert_eq!(h.state().world_id(), world);
-    assert!(
-        h.state().message().is_none(),
-        "no error for a waiting change"
-    );
+    assert_eq!((fit.network.eta, fit.target), (0.05, Target::Visibility));
 
-    h.get_by_label("Start a new fit").click();
+    h.get_by_label("ζ").click();
     wait_for(&mut h, "a new fit learning ζ", |a| {
         a.world_id() > world
             && a.caught_up()
             && a.fit_params().is_some_and(|p| p.target == Target::Zeta)
     });
     let fit = h.state().fit_params().unwrap();
-    assert_eq!(fit.importance, 0.3);
+    assert_eq!(
+        (fit.gating, fit.importance, fit.weighted, fit.refit),
+        (Gating::Off, 0.0, false, true),
+        "the paper's learner of ζ, without what only the visibility learner has"
+    );
     assert_eq!(fit.network.insertion, Insertion::Midpoint, "kept");
-    assert!(h.query_by_label_contains("apply on Reset").is_none());
+    assert!(h.state().message().is_none(), "{:?}", h.state().message());
 }
 
 #[test]

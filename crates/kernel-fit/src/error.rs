@@ -24,6 +24,22 @@ pub enum FitError {
         /// The valid range, in interval notation.
         range: String,
     },
+    /// A parameter whose value means nothing with another's (a learner would ignore it).
+    #[error(
+        "parameter `{name}` is {value}, which means nothing with `{other}` = {other_value}: {valid}"
+    )]
+    Meaningless {
+        /// The parameter refused.
+        name: &'static str,
+        /// Its value, as text.
+        value: String,
+        /// The parameter whose value makes it meaningless.
+        other: &'static str,
+        /// That parameter's value, as text.
+        other_value: String,
+        /// What would be valid, in words.
+        valid: &'static str,
+    },
     /// The geometry layer refused something.
     #[error(transparent)]
     Geom(#[from] flatland_geom::GeomError),

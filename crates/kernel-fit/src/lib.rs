@@ -5,7 +5,10 @@
 //! visibility query per value) into a compact learned one, spending rays where the network is
 //! poor or absent; its parameters, training, model and files. It is measured by `flatland_solve`
 //! (below it) and compared with the baselines by `flatland_lab` (above it). Two learners share
-//! one driver ([`Fit`]), chosen by [`Preset`]:
+//! one driver ([`Fit`]), chosen by [`Preset`]; [`FitParams::check`] refuses combinations that
+//! mean nothing and gives the learner's variant ([`Head`]) and the parameters by lifetime
+//! ([`FixedParams`] at the start, [`LiveParams`] while it runs, [`Measurement`]); every fit
+//! ends with [`Fit::finish`]:
 //!
 //! - **The paper's network** ([`FitParams::paper`]). A sample is `(γ(s, t), ζ(s, t))` with
 //!   `γ = (x₁, y₁, x₂, y₂)`, the sender point `x = point(s)` and receiver point `y = point(t)`,
@@ -15,7 +18,7 @@
 //!   `θ(ξ) = ρ_ACC(ξ) ∨ ¬ρ_A(ξ)` (the printed `∧` is an erratum): a candidate costs a ray only if
 //!   it falls in a critical zone or outside the network. Training draws a set uniformly, then a
 //!   sample from it; the [`sgcs::Network`] inserts a cell every λ steps.
-//! - **The default** ([`FitParams::default`], [`Target::Visibility`]). `ζ = E' ρ G · V`, and
+//! - **The default learner** ([`FitParams::default`], [`Head::Visibility`]). `ζ = E' ρ G · V`, and
 //!   everything but `V` is known in closed form, as is `V` itself on every pair of surface
 //!   edges the geometry proves unoccluded or fully blocked. So the network learns only `V`,
 //!   only where it varies, and `ζ̃ = ζ_unoccluded · Ṽ`. On such a pair `V` is constant on the
@@ -73,10 +76,12 @@ mod visibility;
 
 pub use error::FitError;
 pub use fit::{
-    CellSnapshot, Fit, FitSummary, HistoryPoint, INPUT_DIM, LearnedKernel, RefitChoice, Snapshot,
-    StopReason,
+    CellSnapshot, Fit, FitSummary, HistoryPoint, INPUT_DIM, LearnedKernel, Snapshot, StopReason,
 };
 pub use limits::REFERENCE_SEED;
 pub use model::{MODEL_FORMAT, MODEL_VERSION, ModelFile, fingerprint_hex};
-pub use params::{FitParams, Gating, Preset, Resampling, Target, parameter_table};
+pub use params::{
+    FitParams, FixedParams, Gating, Head, LiveParams, Measurement, NetworkRates, NetworkRules,
+    Preset, Refit, Resampling, Target, ValidParams, VisibilityParams, parameter_table,
+};
 pub use sgcs::schema::{self, Schema, Spec};

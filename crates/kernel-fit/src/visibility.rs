@@ -1,5 +1,6 @@
 //! The visibility learner's geometry: which face of a pair's visibility structure a ray or a
-//! cell lies in, and where its samples are drawn.
+//! cell lies in, and the gates that let only a face's cells respond (its samples are drawn by
+//! `sampler`).
 //!
 //! With [`Target::Visibility`](crate::Target::Visibility) the network learns only `V` on the
 //! pairs of surface edges where it varies ([`PairClass::Varies`]); everywhere else the geometry
@@ -12,10 +13,13 @@ use foldhash::HashMap;
 
 use flatland_geom::{DVec2, Kernel, PairClass, PairEvents, Unoccluded};
 use flatland_solve::InputFrame;
-use rand::{Rng, RngExt};
 use sgcs::{CellId, Gate};
 
 use crate::Gating;
+
+mod sampler;
+
+pub(crate) use sampler::{MAX_LISTED_PARENTS, Sampler};
 
 /// One face of a pair's visibility structure: the ordered pair of surface edges (sender rank,
 /// receiver rank), the sub-pair, and the side of each of the sub-pair's event points (bits).
@@ -310,250 +314,75 @@ fn distance_to_segment(p: DVec2, a: DVec2, b: DVec2) -> f64 {
     p.distance(a + d * u)
 }
 
-/// Draws `(s, t)` where visibility varies: a share `importance` from a proposal that follows
-/// the clipped square of the unoccluded target `g = min(ζ_unoccluded / c, 1)²`, the rest
-/// uniformly, each with the importance weight `w ∝ g / q` that makes weighted sums estimate
-/// `∫∫ g (·) ds dt` over those pairs (so errors count where the target is bright).
-///
-/// The pairs of surface edges where visibility varies are listed with the area of their
-/// rectangle of `(s, t)`; a uniform draw picks one in proportion to its area, then a point in
-/// it (no draw is wasted on pairs geometry decides). The importance proposal cuts each pair's
-/// rectangle into [`TILES`]² tiles, estimates `g` on each from a few points (geometry only, no
-/// ray) and draws tiles in proportion to area × estimate. A scene with more than
-/// [`MAX_LISTED_PARENTS`] surface edges draws from the whole square instead, keeps what lands on
-/// such a pair, and draws in proportion to `g` by rejection.
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub(crate) struct Sampler {
-    importance: f64,
-    /// The clip level `c` of the unoccluded ζ (a high quantile of it).
-    clip: f64,
-    /// The mean of `g` over uniform draws.
-    mean_g: f64,
-    /// The pairs where visibility varies: (sender rank, receiver rank, cumulative area).
-    pairs: Vec<(u32, u32, f64)>,
-    /// Parameter ranges of the surface edges, by rank.
-    ranges: Vec<(f64, f64)>,
-    /// Per tile (pair-major, [`TILES`]² per pair): the estimate of `g`, and the cumulative
-    /// area × estimate the importance proposal draws by.
-    tile_g: Vec<f64>,
-    tile_cumulative: Vec<f64>,
-    /// The area-weighted mean of `tile_g`.
-    mean_tile_g: f64,
-}
+#[cfg(test)]
+mod tests {
+    use rand::RngExt;
 
-/// A drawn place: `(s, t)` and its importance weight.
-pub(crate) struct Draw {
-    pub st: [f64; 2],
-    pub weight: f64,
-}
+    use super::*;
 
-/// Uniform draws tried before concluding that no pair has varying visibility.
-const MAX_TRIES: usize = 1 << 20;
-/// Uniform draws that set the clip level.
-const PILOT: usize = 4096;
-/// The clip level is this quantile of the unoccluded ζ: the 1/r corners of a light must not
-/// take every sample.
-const CLIP_QUANTILE: f64 = 0.99;
-/// Up to this many surface edges the pairs are listed (n² entries).
-pub(crate) const MAX_LISTED_PARENTS: usize = 512;
-/// Tiles per side of a pair's rectangle in the importance proposal.
-const TILES: usize = 8;
-/// Points per tile estimating `g` (a jittered 2 × 2 grid).
-const TILE_POINTS: usize = 2;
+    /// A face of one of `pairs` pairs, with one of four side patterns.
+    fn random_key(rng: &mut impl rand::Rng, pairs: u32) -> FaceKey {
+        FaceKey {
+            pair: (rng.random_range(0..pairs), rng.random_range(0..pairs)),
+            sub: rng.random_range(0..2u8),
+            sides: vec![rng.random_range(0..4u64)].into(),
+        }
+    }
 
-impl Sampler {
-    /// Lists the pairs, sets the clip level from a pilot of uniform draws and builds the
-    /// importance proposal; `None` when visibility varies nowhere.
-    pub(crate) fn new(kernel: &Kernel, importance: f64, rng: &mut impl Rng) -> Option<Sampler> {
-        let n = kernel.surface_parents();
-        let mut sampler = Sampler {
-            importance,
-            clip: 1.0,
-            mean_g: 1.0,
-            pairs: Vec::new(),
-            ranges: Vec::new(),
-            tile_g: Vec::new(),
-            tile_cumulative: Vec::new(),
-            mean_tile_g: 1.0,
-        };
-        if n <= MAX_LISTED_PARENTS {
-            let scene = kernel.scene();
-            sampler.ranges = (0..n)
-                .map(|r| scene.parent_param_range(r).unwrap_or((0.0, 0.0)))
+    /// Cells placed, moved between faces, moved off every face and inserted at random, with
+    /// faces of rays interned in between: after every change the face and pair lists hold
+    /// exactly the cells filed there, ascending, and every gate names exactly those cells.
+    #[test]
+    fn face_filing_survives_random_moves_and_insertions() {
+        let mut rng = crate::seeds::stream(11, 0);
+        let mut faces = Faces::default();
+        let mut filed: Vec<Option<FaceKey>> = Vec::new();
+        for step in 0..3000 {
+            let key = (rng.random::<f64>() < 0.85).then(|| random_key(&mut rng, 4));
+            match rng.random_range(0..10) {
+                // A new cell (ids are dense, as the network's are).
+                0..=2 => {
+                    faces.place(filed.len(), key.clone());
+                    filed.push(key);
+                }
+                // A ray's face, numbered before any cell is in it.
+                3 => {
+                    if let Some(key) = key {
+                        faces.intern(key);
+                    }
+                }
+                // A cell moves (possibly within its face, or off every face).
+                _ if !filed.is_empty() => {
+                    let c = rng.random_range(0..filed.len());
+                    faces.place(c, key.clone());
+                    filed[c] = key;
+                }
+                _ => {}
+            }
+            faces
+                .check(filed.len(), |c| filed[c].clone())
+                .unwrap_or_else(|e| panic!("after change {step}: {e}"));
+            let probe = random_key(&mut rng, 4);
+            let in_face: Vec<CellId> = (0..filed.len())
+                .filter(|&c| filed[c].as_ref() == Some(&probe))
                 .collect();
-            let mut total = 0.0;
-            for a in 0..n {
-                for b in 0..n {
-                    if kernel.pair_class(a, b) == PairClass::Varies {
-                        let (ra, rb) = (sampler.ranges[a], sampler.ranges[b]);
-                        total += (ra.1 - ra.0) * (rb.1 - rb.0);
-                        sampler.pairs.push((a as u32, b as u32, total));
-                    }
-                }
-            }
-            if sampler.pairs.is_empty() {
-                return None;
-            }
-        }
-        let mut values: Vec<f64> = Vec::with_capacity(PILOT);
-        for _ in 0..PILOT {
-            values.push(sampler.uniform(kernel, rng)?.1.zeta);
-        }
-        values.sort_by(f64::total_cmp);
-        let clip = values[((values.len() - 1) as f64 * CLIP_QUANTILE) as usize];
-        sampler.clip = if clip > 0.0 { clip } else { 1.0 };
-        let mean_g = values.iter().map(|&z| g(z, sampler.clip)).sum::<f64>() / values.len() as f64;
-        sampler.mean_g = mean_g.max(f64::MIN_POSITIVE);
-        sampler.build_tiles(kernel, rng);
-        Some(sampler)
-    }
-
-    /// Estimates `g` on every tile of every listed pair.
-    fn build_tiles(&mut self, kernel: &Kernel, rng: &mut impl Rng) {
-        let (mut cumulative, mut weighted) = (0.0, 0.0);
-        let mut previous = 0.0;
-        for k in 0..self.pairs.len() {
-            let (a, b, end) = self.pairs[k];
-            let pair_area = end - previous;
-            previous = end;
-            let (ra, rb) = (self.ranges[a as usize], self.ranges[b as usize]);
-            let (ws, wt) = ((ra.1 - ra.0) / TILES as f64, (rb.1 - rb.0) / TILES as f64);
-            for i in 0..TILES {
-                for j in 0..TILES {
-                    let mut sum = 0.0;
-                    for p in 0..TILE_POINTS * TILE_POINTS {
-                        let u =
-                            ((p / TILE_POINTS) as f64 + rng.random::<f64>()) / TILE_POINTS as f64;
-                        let v =
-                            ((p % TILE_POINTS) as f64 + rng.random::<f64>()) / TILE_POINTS as f64;
-                        let z = kernel
-                            .unoccluded(ra.0 + ws * (i as f64 + u), rb.0 + wt * (j as f64 + v))
-                            .zeta;
-                        sum += g(z, self.clip);
-                    }
-                    let estimate = sum / (TILE_POINTS * TILE_POINTS) as f64;
-                    let area = pair_area / (TILES * TILES) as f64;
-                    cumulative += area * estimate;
-                    weighted += area * estimate;
-                    self.tile_g.push(estimate);
-                    self.tile_cumulative.push(cumulative);
-                }
+            let in_pair: Vec<CellId> = (0..filed.len())
+                .filter(|&c| filed[c].as_ref().is_some_and(|k| k.pair == probe.pair))
+                .collect();
+            let by_face = faces.gate(&probe, Gating::Faces);
+            assert_eq!(by_face.region(), Some(&in_face[..]), "after change {step}");
+            assert_eq!(
+                by_face.fallback(),
+                Some(&in_pair[..]),
+                "after change {step}"
+            );
+            let by_pair = faces.gate(&probe, Gating::Pairs);
+            assert_eq!(by_pair.region(), Some(&in_pair[..]), "after change {step}");
+            for c in 0..filed.len() {
+                assert_eq!(by_face.admits(c), in_face.contains(&c), "cell {c}");
+                assert_eq!(by_pair.admits(c), in_pair.contains(&c), "cell {c}");
             }
         }
-        let total_area = self.pairs.last().map_or(0.0, |p| p.2);
-        self.mean_tile_g = if total_area > 0.0 && weighted > 0.0 {
-            weighted / total_area
-        } else {
-            1.0
-        };
+        assert!(faces.occupied() > 0 && filed.len() > 500, "{}", filed.len());
     }
-
-    /// One draw (no ray is cast).
-    pub(crate) fn draw(&self, kernel: &Kernel, rng: &mut impl Rng) -> Draw {
-        let by_importance = rng.random::<f64>() < self.importance;
-        let (st, u) = match (by_importance, self.tile_cumulative.last()) {
-            (true, Some(&total)) if total > 0.0 => loop {
-                let x = rng.random::<f64>() * total;
-                let tile = self
-                    .tile_cumulative
-                    .partition_point(|&c| c <= x)
-                    .min(self.tile_cumulative.len() - 1);
-                let (s, t) = self.point_in_tile(tile, rng);
-                let u = kernel.unoccluded(s, t);
-                if u.zeta > 0.0 {
-                    break ([s, t], u);
-                }
-            },
-            (true, _) => loop {
-                let (st, u) = self.uniform(kernel, rng).expect("checked by Sampler::new");
-                if rng.random::<f64>() < g(u.zeta, self.clip) {
-                    break (st, u);
-                }
-            },
-            (false, _) => self.uniform(kernel, rng).expect("checked by Sampler::new"),
-        };
-        Draw {
-            weight: self.weight(st, u.zeta),
-            st,
-        }
-    }
-
-    /// The importance weight `p / q` of a sample at `st` with unoccluded ζ `zeta`, relative to
-    /// uniform draws (`p ∝ g`, `q` the mixture of uniform and importance draws).
-    pub(crate) fn weight(&self, st: [f64; 2], zeta: f64) -> f64 {
-        let relative = g(zeta, self.clip) / self.mean_g;
-        let proposal = match self.tile_of(st) {
-            Some(tile) => self.tile_g[tile] / self.mean_tile_g,
-            None => relative,
-        };
-        relative / ((1.0 - self.importance) + self.importance * proposal)
-    }
-
-    /// The tile holding `st`, if the pairs are listed.
-    fn tile_of(&self, [s, t]: [f64; 2]) -> Option<usize> {
-        if self.tile_g.is_empty() {
-            return None;
-        }
-        let rank = |x: f64| {
-            self.ranges
-                .partition_point(|r| r.1 <= x)
-                .min(self.ranges.len() - 1)
-        };
-        let (a, b) = (rank(s) as u32, rank(t) as u32);
-        // Pairs are listed in (sender, receiver) order.
-        let k = self
-            .pairs
-            .binary_search_by_key(&(a, b), |p| (p.0, p.1))
-            .ok()?;
-        let (ra, rb) = (self.ranges[a as usize], self.ranges[b as usize]);
-        let cell = |x: f64, r: (f64, f64)| {
-            (((x - r.0) / (r.1 - r.0) * TILES as f64) as usize).min(TILES - 1)
-        };
-        Some(k * TILES * TILES + cell(s, ra) * TILES + cell(t, rb))
-    }
-
-    /// A uniform point in tile `tile`.
-    fn point_in_tile(&self, tile: usize, rng: &mut impl Rng) -> (f64, f64) {
-        let (k, rest) = (tile / (TILES * TILES), tile % (TILES * TILES));
-        let (i, j) = (rest / TILES, rest % TILES);
-        let (a, b, _) = self.pairs[k];
-        let (ra, rb) = (self.ranges[a as usize], self.ranges[b as usize]);
-        let (ws, wt) = ((ra.1 - ra.0) / TILES as f64, (rb.1 - rb.0) / TILES as f64);
-        (
-            ra.0 + ws * (i as f64 + rng.random::<f64>()),
-            rb.0 + wt * (j as f64 + rng.random::<f64>()),
-        )
-    }
-
-    /// A uniform `(s, t)` on a pair where visibility varies and the unoccluded ζ is positive.
-    fn uniform(&self, kernel: &Kernel, rng: &mut impl Rng) -> Option<([f64; 2], Unoccluded)> {
-        for _ in 0..MAX_TRIES {
-            let (s, t) = match self.pairs.last() {
-                Some(&(_, _, total)) => {
-                    let x = rng.random::<f64>() * total;
-                    let k = self
-                        .pairs
-                        .partition_point(|p| p.2 <= x)
-                        .min(self.pairs.len() - 1);
-                    let (a, b, _) = self.pairs[k];
-                    let (ra, rb) = (self.ranges[a as usize], self.ranges[b as usize]);
-                    (
-                        ra.0 + (ra.1 - ra.0) * rng.random::<f64>(),
-                        rb.0 + (rb.1 - rb.0) * rng.random::<f64>(),
-                    )
-                }
-                None => (rng.random::<f64>(), rng.random::<f64>()),
-            };
-            let u = kernel.unoccluded(s, t);
-            if u.zeta > 0.0 && kernel.pair_class(u.sender, u.receiver) == PairClass::Varies {
-                return Some(([s, t], u));
-            }
-        }
-        None
-    }
-}
-
-/// `min(z / c, 1)²`.
-fn g(z: f64, c: f64) -> f64 {
-    (z / c).min(1.0).powi(2)
 }

@@ -42,8 +42,8 @@ pub fn document(f: &Findings) -> Result<String> {
         doc,
         "`flatland bench` on each scene: every method at every budget (basis functions: cells, \
          links, blocks), {} seed(s); the radiosity solved with each on {SOLVE_ELEMENTS} elements. \
-         `sgcs` is the default learner, `sgcs-paper` the paper's network with the least-squares \
-         refit, `sgcs-paper-norefit` the paper's network as printed; `hr` is hierarchical \
+         `default` is the default learner, `paper` the paper's network with the least-squares \
+         refit, `paper-norefit` the paper's network as printed; `hr` is hierarchical \
          radiosity with a brightness-weighted oracle (E'·ρ·F) and link values from exact \
          form factors times a 20-ray visibility estimate, its F_ε searched per budget by one \
          rule for every scene; `uniform` is a g × g grid of 20-ray block means. A default \
@@ -101,7 +101,8 @@ struct Compared {
 
 fn compare(b: &SceneBench) -> Option<Compared> {
     let at = |m: Method, f: fn(&BenchRow) -> Option<f64>| mean_at(&b.rows, m, HEADLINE_BUDGET, f);
-    let both = |f: fn(&BenchRow) -> Option<f64>| Some((at(Method::Sgcs, f)?, at(Method::Hr, f)?));
+    let both =
+        |f: fn(&BenchRow) -> Option<f64>| Some((at(Method::Default, f)?, at(Method::Hr, f)?));
     let solved = |r: &BenchRow| r.solve.map(|e| e.rel_l2_reflected);
     Some(Compared {
         grid: both(|r| Some(r.errors.grid))?,
@@ -109,14 +110,14 @@ fn compare(b: &SceneBench) -> Option<Compared> {
         l1: both(|r| Some(r.errors.l1_grid))?,
         build_s: both(|r| Some(r.wall_s))?,
         solved: (
-            at(Method::Sgcs, solved),
+            at(Method::Default, solved),
             at(Method::Hr, solved),
             b.exact_blocks.map(|e| e.rel_l2_reflected),
         ),
         worst_heldout: b
             .rows
             .iter()
-            .filter(|r| r.method == Method::Sgcs)
+            .filter(|r| r.method == Method::Default)
             .map(|r| r.errors.heldout)
             .fold(0.0, f64::max),
     })
@@ -493,9 +494,9 @@ fn scene_bench(doc: &mut String, b: &SceneBench) -> Result<()> {
     let grid = |r: &BenchRow| Some(r.errors.grid);
     let heldout = |r: &BenchRow| Some(r.errors.heldout);
     for (method, label) in [
-        (Method::Sgcs, "default learner"),
-        (Method::SgcsPaper, "paper's network with refit"),
-        (Method::SgcsPaperNoRefit, "paper's network as printed"),
+        (Method::Default, "default learner"),
+        (Method::Paper, "paper's network with refit"),
+        (Method::PaperNoRefit, "paper's network as printed"),
     ] {
         if let (Some(g), Some(h)) = (ratio(method, grid), ratio(method, heldout)) {
             writeln!(
@@ -565,7 +566,7 @@ mod tests {
                 grid: true,
                 heldout: true,
             },
-            rows: vec![row(Method::Sgcs, ours, ours), row(Method::Hr, 0.2, 0.2)],
+            rows: vec![row(Method::Default, ours, ours), row(Method::Hr, 0.2, 0.2)],
             hr_form_factor: None,
             exact_blocks: None,
         };

@@ -1,21 +1,18 @@
 //! The controls panel: scene, run, learner (preset and what the network learns), network,
-//! sampling, fit, view, export. Every parameter with its valid range and a hover text; what only a
-//! new fit can change says so and waits for Reset.
+//! sampling, fit, view, export. Every parameter with its valid range and a hover text; a change
+//! to what only a new fit can change starts one (see `ViewerApp::sync_params`).
 
 use std::path::PathBuf;
 
-use egui::{Color32, DragValue, RichText};
+use egui::{DragValue, RichText};
 use kernel_fit::Schema;
 use kernel_fit::schema::{Bound, Range};
 use kernel_fit::{Gating, Preset, Resampling, Target};
 use sgcs::{InsertRule, Insertion, OutputMode, OutputRule, Resource};
 
 use super::ViewerApp;
-use crate::settings::{SceneChoice, waiting_for_reset, with_preset};
+use crate::settings::{SceneChoice, with_preset};
 use crate::worker::Command;
-
-/// Colour of a notice that something waits for the user (a reset).
-const PENDING: Color32 = Color32::from_rgb(255, 190, 90);
 
 impl ViewerApp {
     pub(super) fn controls(&mut self, ui: &mut egui::Ui) {
@@ -107,13 +104,13 @@ impl ViewerApp {
     fn learner_controls(&mut self, ui: &mut egui::Ui) {
         ui.heading("Learner");
         self.preset_selector(ui);
-        let waiting = waiting_for_reset(&self.settings.params, &self.fit_params);
         let p = &mut self.settings.params;
+        let mut target = p.target;
         choice(
             ui,
             "target",
-            "what the network learns (a new fit: applies on Reset)",
-            &mut p.target,
+            "what the network learns (starts a new fit)",
+            &mut target,
             &[
                 (
                     Target::Visibility,
@@ -129,13 +126,15 @@ impl ViewerApp {
                 ),
             ],
         );
+        // What only some learners have comes along with the target (`FitParams::learning`).
+        *p = p.learning(target);
         let visibility = p.target == Target::Visibility;
         ui.add_enabled_ui(visibility, |ui| {
             choice(
                 ui,
                 "gating",
-                "which known discontinuities no cell may straddle (target V only; applies on \
-                 Reset)",
+                "which known discontinuities no cell may straddle (target V only; starts a new \
+                 fit)",
                 &mut p.gating,
                 &[
                     (Gating::Off, "off", "every cell responds everywhere"),
@@ -162,23 +161,9 @@ impl ViewerApp {
             ui.checkbox(&mut p.weighted, "weighted errors")
                 .on_hover_text(
                     "each sample's error counts with its importance weight p/q, so growth follows \
-                 the error of ζ, not of V (target V only; applies on Reset)",
+                 the error of ζ, not of V (target V only; starts a new fit)",
                 );
         });
-        if !waiting.is_empty() {
-            ui.horizontal_wrapped(|ui| {
-                ui.label(
-                    RichText::new(format!("{}: apply on Reset", waiting.join(", "))).color(PENDING),
-                );
-                if ui
-                    .button("Start a new fit")
-                    .on_hover_text("Reset: a fresh fit with these parameters")
-                    .clicked()
-                {
-                    self.reset();
-                }
-            });
-        }
     }
 
     /// Default or Paper: choosing one starts a new fit with that learner.
@@ -273,7 +258,7 @@ impl ViewerApp {
                 row(
                     ui,
                     "seed",
-                    "every random choice (applies on Reset)",
+                    "every random choice (starts a new fit)",
                     &mut p.seed,
                     0..=u64::MAX,
                     "any",

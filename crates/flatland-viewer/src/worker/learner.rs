@@ -15,7 +15,7 @@ use std::time::{Duration, Instant};
 
 use flatland_geom::{Kernel, Scene};
 use flatland_solve::Reference;
-use kernel_fit::{Fit, FitParams, FitSummary, ModelFile, StopReason};
+use kernel_fit::{Fit, FitParams, FitSummary, LiveParams, ModelFile, StopReason};
 
 use super::published::{APPROX_RES, LitState, REFERENCE_RES, World};
 use super::{Command, Mailbox, Shared};
@@ -175,17 +175,15 @@ impl Learner {
         self.dirty = true;
     }
 
-    fn set_params(&mut self, params: FitParams) {
+    fn set_params(&mut self, live: LiveParams) {
         let Some(fit) = &mut self.fit else {
             return;
         };
-        // A fit that is exact from the start has no samples to train on: it stays stopped
-        // whatever its parameters (`Fit::set_params` would clear the stop).
-        if fit.stopped() == Some(StopReason::Exact) {
-            return;
-        }
-        match fit.set_params(params) {
-            Ok(()) => self.summary = None,
+        match fit.set_params(live) {
+            // A fit that goes on under the new rules has no final errors yet; one with nothing
+            // to learn stays stopped (`StopReason::Exact`) and keeps them.
+            Ok(()) if fit.stopped().is_none() => self.summary = None,
+            Ok(()) => {}
             Err(e) => self.report(e.to_string()),
         }
     }
@@ -327,7 +325,7 @@ impl Learner {
         if self.summary.is_some() || reason == StopReason::Interrupted {
             return;
         }
-        let refit = fit.params().refit && fit.params().target != kernel_fit::Target::Visibility;
+        let refit = fit.head().refit().is_some();
         self.set_busy(Some(if refit {
             "least-squares refit of the output weights…"
         } else {

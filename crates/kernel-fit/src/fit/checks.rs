@@ -2,11 +2,14 @@
 //! from them: a file the tools wrote and a user edited loads with a one-line error naming the
 //! field and the valid range, never a panic, an allocation abort or garbage numbers.
 //!
-//! The scene (validated by its deserializer), the network's topology and the parameters' own
-//! ranges (`sgcs::Network`'s deserializer, [`FitParams::validate`]) are checked where they are
-//! defined; this adds what only the whole model knows.
+//! The scene (validated by its deserializer), the network's topology, the head's saved fields
+//! (the model's deserializer) and the parameters' ranges and combinations
+//! ([`FitParams::check`]) are checked where they are defined; this adds what only the whole
+//! model knows.
 
-use super::{Checkpoint, FitState, INPUT_DIM, LearnedKernel};
+use super::state::LoadedState;
+use super::{Checkpoint, INPUT_DIM, LearnedKernel};
+use crate::model::head::ModelHead;
 use crate::{FitParams, FitSummary, Target, limits};
 
 /// Largest magnitude of a sample's input or target: what `sgcs` accepts.
@@ -28,12 +31,24 @@ pub(crate) fn params(p: &FitParams) -> Result<(), Bad> {
             &format!("params.{name}"),
             format!("is {value}, but must be in {range}"),
         )),
+        Err(crate::FitError::Meaningless {
+            name,
+            value,
+            other,
+            other_value,
+            valid,
+        }) => Err(bad(
+            &format!("params.{name}"),
+            format!(
+                "is {value}, which means nothing with `params.{other}` = {other_value}: {valid}"
+            ),
+        )),
         Err(other) => Err(other.to_string()),
     }
 }
 
-/// A learned kernel: the network's shape, the input frame, the output scale and the emission
-/// factors agree with each other and with `target`, and no prediction can overflow.
+/// A learned kernel: the network's shape, the input frame and the output scale agree with each
+/// other, the head learns `target`, and no prediction can overflow.
 pub(crate) fn learned_kernel(m: &LearnedKernel, target: Target) -> Result<(), Bad> {
     let net = &m.network;
     if net.steps() > limits::MAX_COUNT {
@@ -91,47 +106,20 @@ pub(crate) fn learned_kernel(m: &LearnedKernel, target: Target) -> Result<(), Ba
             format!("is {scale}, but must be finite and > 0"),
         ));
     }
-    if m.target != target {
+    if m.target() != target {
         return Err(bad(
             "model.target",
-            format!("is {:?}, but the parameters say {target:?}", m.target),
+            format!(
+                "is {}, but the parameters say {}",
+                m.target().name(),
+                target.name()
+            ),
         ));
     }
-    let edges = m.scene.edges().len();
-    let factor_max = match target {
-        Target::Zeta | Target::Visibility if !m.emission_factor.is_empty() => {
-            return Err(bad(
-                "model.emission_factor",
-                format!(
-                    "has {} values, but a model of ζ or of V (target `zeta`, `visibility`) \
-                     has none",
-                    m.emission_factor.len()
-                ),
-            ));
-        }
-        Target::Zeta | Target::Visibility => 1.0,
-        Target::FactoredEmission => {
-            if m.emission_factor.len() != edges {
-                return Err(bad(
-                    "model.emission_factor",
-                    format!(
-                        "has {} values, but must have one per edge of the scene ({edges})",
-                        m.emission_factor.len()
-                    ),
-                ));
-            }
-            if let Some(v) = m
-                .emission_factor
-                .iter()
-                .find(|v| !(v.is_finite() && **v >= 0.0))
-            {
-                return Err(bad(
-                    "model.emission_factor",
-                    format!("contains {v}, but every value must be finite and ≥ 0"),
-                ));
-            }
-            m.emission_factor.iter().copied().fold(0.0, f64::max)
-        }
+    // The emission factors are checked against the scene when the model is read.
+    let factor_max = match &m.head {
+        ModelHead::FactoredEmission { emission } => emission.iter().copied().fold(0.0, f64::max),
+        ModelHead::Zeta | ModelHead::Visibility(_) => 1.0,
     };
     // |ζ̃| ≤ Σ_c |v_c| · scale · max E' (activations are at most 1): keep it finite.
     let weights: f64 = (0..net.len()).map(|c| net.output(c)[0].abs()).sum();
@@ -181,7 +169,17 @@ pub(crate) fn summary(s: &FitSummary, cells: usize) -> Result<(), Bad> {
 }
 
 /// A checkpoint, before the reference it names is built: every field of the state.
-pub(super) fn checkpoint(c: &Checkpoint<FitState>) -> Result<(), Bad> {
+pub(super) fn checkpoint(c: &Checkpoint<LoadedState>) -> Result<(), Bad> {
+    reference_size(c)?;
+    let s = &c.state;
+    params(&s.params)?;
+    learned_kernel(&s.model, s.params.target)?;
+    samples(s)?;
+    counters(s)
+}
+
+/// The size of the reference a checkpoint names (checked before it is built).
+fn reference_size(c: &Checkpoint<LoadedState>) -> Result<(), Bad> {
     if !limits::GRID_RES.contains(&c.reference_res) {
         return Err(bad(
             "reference_res",
@@ -204,15 +202,28 @@ pub(super) fn checkpoint(c: &Checkpoint<FitState>) -> Result<(), Bad> {
             ),
         ));
     }
-    let s = &c.state;
-    params(&s.params)?;
-    learned_kernel(&s.model, s.params.target)?;
-    let steps = s.model.network.steps();
+    Ok(())
+}
+
+/// The samples and where they come from: S₀ at least, the sampler of a visibility fit, every
+/// sample in range.
+fn samples(s: &LoadedState) -> Result<(), Bad> {
     // Only a fit with nothing to learn (geometry decides every visibility) has no sample.
     if s.samples.is_empty() && s.stop != Some(super::StopReason::Exact) {
         return Err(bad(
             "state.samples",
             "is empty, but a fit has at least S₀ (unless it stopped as exact)",
+        ));
+    }
+    // The visibility learner draws with its sampler; only a fit with nothing to learn has none.
+    if s.params.target == Target::Visibility
+        && s.sampler.is_none()
+        && s.stop != Some(super::StopReason::Exact)
+    {
+        return Err(bad(
+            "state.sampler",
+            "is missing, but a visibility fit draws its samples with it (unless it stopped as \
+             exact)",
         ));
     }
     for (i, sample) in s.samples.iter().enumerate() {
@@ -230,6 +241,12 @@ pub(super) fn checkpoint(c: &Checkpoint<FitState>) -> Result<(), Bad> {
             ));
         }
     }
+    Ok(())
+}
+
+/// The counters of the state: rays, cells' wins, growth, the learning curve and the times.
+fn counters(s: &LoadedState) -> Result<(), Bad> {
+    let steps = s.model.network.steps();
     if s.rays > limits::MAX_COUNT {
         return Err(bad(
             "state.rays",
@@ -301,8 +318,8 @@ mod tests {
             target_cells: 12,
             initial_samples: 60,
             heldout: 64,
-            target,
-            ..FitParams::default()
+            refit: false,
+            ..FitParams::default().learning(target)
         };
         let mut fit = Fit::new(kernel, reference, params).unwrap();
         fit.run(1000, |_| ControlFlow::Continue(())).unwrap();

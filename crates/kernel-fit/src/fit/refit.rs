@@ -1,31 +1,38 @@
-//! The least-squares refit of the output weights and the choice of its ridge weight.
+//! The least-squares refit of the output weights that ends a fit of ζ or k, and the choice of
+//! its ridge weight.
 
-use super::*;
+use std::ops::ControlFlow;
+use std::time::Instant;
+
+use super::Fit;
+use crate::{FitError, Refit};
+
+/// Every this-many-th training sample is held back to choose the refit's ridge weight.
+const VALIDATION_STRIDE: usize = 2;
+/// Ridge candidates: `refit.ridge × 10^k` for k in 0..RIDGE_DECADES.
+const RIDGE_DECADES: i32 = 7;
 
 impl Fit {
     /// Refits every output weight by ridge least squares over the training samples, keeping
-    /// centres and widths (an improvement beyond the paper; see `sgcs::Network::refit_outputs`).
+    /// centres and widths (an improvement beyond the paper; see `sgcs::Network::refit_outputs`),
+    /// telling `progress` how far it is; the callback can stop it ([`FitError::Interrupted`];
+    /// the weights are then unchanged). Called by [`Fit::finish`] for a head with a refit.
     ///
     /// The ridge weight is chosen on the training samples alone: every
     /// `VALIDATION_STRIDE`-th sample of the uniform set S₀ is held back, each candidate
-    /// `params.ridge × 10^k` is fitted on the rest and scored on it, and the learned
+    /// `refit.ridge × 10^k` is fitted on the rest and scored on it, and the learned
     /// (delta-rule) weights compete too. The winner is refitted on all samples; if the learned
     /// weights win, nothing changes. So the refit never trusts a solve that merely interpolates
     /// its samples. The normal equations are assembled once (in bounded memory, in parallel)
     /// and every candidate is one sparse Cholesky factorisation; scoring needs no sample again
     /// (see `sgcs::RefitSystem`).
-    pub fn refit(&mut self) -> Result<RefitChoice, FitError> {
-        self.refit_with_progress(|_| ControlFlow::Continue(()))
-    }
-
-    /// [`refit`](Fit::refit), telling `progress` how far it is; the callback can stop it
-    /// ([`FitError::Interrupted`]; the weights are then unchanged).
-    pub fn refit_with_progress(
+    pub(super) fn refit(
         &mut self,
+        refit: Refit,
         mut progress: impl FnMut(sgcs::RefitProgress) -> ControlFlow<()>,
-    ) -> Result<RefitChoice, FitError> {
+    ) -> Result<(), FitError> {
         let started = Instant::now();
-        let result = self.refit_inner(&mut progress);
+        let result = self.refit_inner(refit, &mut progress);
         self.state.refit_s += started.elapsed().as_secs_f64();
         self.state.wall_s += started.elapsed().as_secs_f64();
         result.map_err(|e| match e {
@@ -36,8 +43,9 @@ impl Fit {
 
     fn refit_inner(
         &mut self,
+        refit: Refit,
         progress: &mut dyn FnMut(sgcs::RefitProgress) -> ControlFlow<()>,
-    ) -> Result<RefitChoice, FitError> {
+    ) -> Result<(), FitError> {
         // Validate on uniform samples only: every VALIDATION_STRIDE-th sample of S₀. The θ sets
         // over-represent critical zones, so scoring on them rewards a fit that is good there and
         // poor elsewhere.
@@ -58,10 +66,7 @@ impl Fit {
         drop((inputs, targets, held_back));
         let Some(learned) = system.validation_error(network.outputs()) else {
             // Nothing held back (a tiny S₀): no honest way to choose; keep the learned weights.
-            return Ok(RefitChoice {
-                ridge: None,
-                validation_error: f64::NAN,
-            });
+            return Ok(());
         };
         let mut best = (learned, None);
         let solves = RIDGE_DECADES as usize + 1;
@@ -78,7 +83,7 @@ impl Fit {
         };
         for k in 0..RIDGE_DECADES {
             stage(k as usize)?;
-            let ridge = self.state.params.ridge * 10f64.powi(k);
+            let ridge = refit.ridge * 10f64.powi(k);
             let (weights, _) = system.solve(ridge, sgcs::RefitPart::Fitting)?;
             let error = system.validation_error(&weights).unwrap_or(f64::INFINITY);
             if error < best.0 {
@@ -94,9 +99,6 @@ impl Fit {
             done: solves,
             total: solves,
         });
-        Ok(RefitChoice {
-            ridge: best.1,
-            validation_error: best.0,
-        })
+        Ok(())
     }
 }

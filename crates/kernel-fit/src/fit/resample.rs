@@ -1,6 +1,13 @@
 //! θ-resampling: new sample sets where the network is poor (critical cells) or absent.
 
-use super::*;
+use std::time::Instant;
+
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+
+use super::source::Candidate;
+use super::{Fit, rays_of};
+use crate::{LearnedKernel, Resampling};
 
 impl Fit {
     /// A new sample set chosen by θ(ξ) = ρ_ACC(ξ) ∨ ¬ρ_A(ξ) (the printed ∧ is an erratum: a
@@ -16,7 +23,7 @@ impl Fit {
     }
 
     fn resample_inner(&mut self) {
-        let p = self.state.params;
+        let p = self.valid.live;
         let cells = self.state.model.network.len() as f64;
         let wanted = ((cells / p.psi).ceil() as usize)
             .saturating_sub(self.state.samples.len())
@@ -47,12 +54,12 @@ impl Fit {
                 continue;
             }
             let next = chunk.min(scan_limit - scanned);
-            let (sampler, kernel) = (&self.state.sampler, &self.kernel);
-            let mut rng = self.state.resample_rng.clone();
+            let (source, kernel) = (&self.state.source, &self.kernel);
+            let mut rng: ChaCha8Rng = self.state.resample_rng.clone();
             let model = &self.state.model;
             let (keep, drawn) = rayon::join(
                 || theta_keeps(model, &critical, p.phi, &candidates),
-                || (next > 0).then(|| draw_candidates(sampler.as_ref(), kernel, next, &mut rng)),
+                || (next > 0).then(|| source.draw(kernel, next, &mut rng)),
             );
             ahead = drawn.map(|candidates| (candidates, rng));
             accepted.extend(
@@ -66,29 +73,17 @@ impl Fit {
         accepted.truncate(wanted);
         if accepted.len() < wanted {
             // θ found too few places worth a ray; do not rescan every step.
-            self.state.resample_not_before = self.steps() + u64::from(p.network.lambda);
+            self.state.resample_not_before = self.steps() + u64::from(p.rates.lambda);
         }
         if accepted.is_empty() {
             return;
         }
-        let new = if self.state.sampler.is_some() {
-            visibility_samples(
-                &self.kernel,
-                self.state.model.frame,
-                &self.state.params,
-                &accepted,
-            )
-        } else {
-            let points: Vec<[f64; 2]> = accepted.iter().map(|c| c.st).collect();
-            make_samples(
-                &self.kernel,
-                &self.state.model.scene,
-                self.state.model.frame,
-                p.target,
-                self.state.model.output_scale,
-                &points,
-            )
-        };
+        let new = self.state.source.label(
+            &self.kernel,
+            self.state.model.frame,
+            self.state.model.output_scale,
+            &accepted,
+        );
         self.state.rays += rays_of(&self.kernel, &new);
         self.state.set_starts.push(self.state.samples.len());
         self.state.samples.extend(new);
@@ -97,30 +92,9 @@ impl Fit {
 
     /// `n` θ candidates from the resampling stream.
     fn candidates(&mut self, n: usize) -> Vec<Candidate> {
-        draw_candidates(
-            self.state.sampler.as_ref(),
-            &self.kernel,
-            n,
-            &mut self.state.resample_rng,
-        )
-    }
-}
-
-/// `n` θ candidates: uniform `(s, t)`, or a visibility model's sampler draws.
-fn draw_candidates(
-    sampler: Option<&Sampler>,
-    kernel: &Kernel,
-    n: usize,
-    rng: &mut ChaCha8Rng,
-) -> Vec<Candidate> {
-    match sampler {
-        Some(sampler) => draw_points(sampler, kernel, n, rng),
-        None => (0..n)
-            .map(|_| Candidate {
-                st: [rng.random::<f64>(), rng.random::<f64>()],
-                weight: 1.0,
-            })
-            .collect(),
+        self.state
+            .source
+            .draw(&self.kernel, n, &mut self.state.resample_rng)
     }
 }
 
@@ -139,11 +113,7 @@ fn theta_keeps(
         .map(|c| {
             let [s, t] = c.st;
             let xi = model.input(s, t);
-            let key = model
-                .geometry
-                .as_ref()
-                .and_then(|g| FaceKey::at(&g.kernel, &g.kernel.unoccluded(s, t)));
-            let gate = key.as_ref().and_then(|key| model.gate(key));
+            let gate = model.gate_at(s, t);
             let (d_a, d_acc) = match &gate {
                 Some(gate) => model.network.activation_sums_gated(&xi, critical, gate),
                 None => model.network.activation_sums(&xi, critical),
@@ -151,4 +121,40 @@ fn theta_keeps(
             d_acc > phi || d_a <= phi
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::test_support::*;
+    use crate::{FitParams, Resampling};
+
+    #[test]
+    fn theta_resampling_beats_uniform_at_the_same_ray_budget_on_fig3() {
+        let kernel = fig3();
+        let (mut theta, mut uniform) = ((0.0, 0), (0.0, 0));
+        for seed in 1..=3 {
+            let t = run(&mut fit_with(&kernel, FitParams { seed, ..paper(200) }));
+            let u = run(&mut fit_with(
+                &kernel,
+                FitParams {
+                    seed,
+                    resampling: Resampling::Uniform,
+                    ..paper(200)
+                },
+            ));
+            theta = (theta.0 + t.errors.heldout, theta.1 + t.rays);
+            uniform = (uniform.0 + u.errors.heldout, uniform.1 + u.rays);
+        }
+        // Both stop at 200 cells with ≈ 20 samples per cell; θ's short scans may top a set up
+        // later, so allow it 2 % more rays.
+        assert!(
+            theta.1 as f64 <= 1.02 * uniform.1 as f64,
+            "{theta:?} vs {uniform:?} rays"
+        );
+        // Measured: summed held-out errors 1.29 vs 1.58 over seeds 1-3; demand a 10 % margin.
+        assert!(
+            theta.0 < 0.9 * uniform.0,
+            "θ {theta:?} vs uniform {uniform:?}"
+        );
+    }
 }

@@ -1,7 +1,8 @@
-//! The learned model: [`LearnedKernel`] (in `learned`; its transfer operator in `operator`),
-//! and model files — scene fingerprint,
-//! parameters and network in one versioned JSON, written atomically.
+//! The learned model: [`LearnedKernel`] (in `learned`; its learner's head in `head`, its
+//! transfer operator in `operator`), and model files — scene fingerprint, parameters and
+//! network in one versioned JSON, written atomically.
 
+pub(crate) mod head;
 pub(crate) mod learned;
 mod operator;
 
@@ -123,4 +124,37 @@ impl ModelFile {
 /// The scene fingerprint as 16 lower-case hex digits.
 pub fn fingerprint_hex(scene: &Scene) -> String {
     format!("{:016x}", scene.fingerprint())
+}
+
+#[cfg(test)]
+mod tests {
+    use rand::RngExt;
+
+    use crate::Preset;
+    use crate::fit::test_support::*;
+    use flatland_solve::Representation;
+
+    /// A visibility model saved and loaded predicts exactly the same (its faces are rebuilt).
+    #[test]
+    fn visibility_models_round_trip_through_model_files() {
+        let kernel = maze();
+        let mut fit = fit_with(&kernel, preset(Preset::Default, 60));
+        let summary = run(&mut fit);
+        let dir = std::env::temp_dir().join(format!("flatland-vismodel-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("model.json");
+        let file = crate::ModelFile::new(fit.model().clone(), *fit.params(), Some(summary));
+        file.save(&path).unwrap();
+        let loaded = crate::ModelFile::load(&path).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        loaded.model.check_invariants().unwrap();
+        let mut r = crate::seeds::stream(5, 0);
+        for _ in 0..3000 {
+            let (s, t) = (r.random::<f64>(), r.random::<f64>());
+            assert_eq!(
+                loaded.model.zeta(s, t).to_bits(),
+                fit.model().zeta(s, t).to_bits()
+            );
+        }
+    }
 }
