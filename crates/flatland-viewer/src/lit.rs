@@ -1,11 +1,11 @@
 //! The lit scene: the radiosity `B` solved with the kernel as learned so far, beside the
-//! exact `B`, made on the learner's thread (`worker`) and drawn by `views`.
+//! exact `B`, made beside the learner (`worker`) and drawn by `views`.
 //!
 //! Per scene, once: a [`Mesh`] and an [`ExactReference`] (the exact kernel solved on a mesh four
 //! times finer), whose `B` at the mesh's collocation points is what every learned solve is
 //! measured against ([`LitSetup`]). While the network learns, the learned kernel is solved on
-//! that mesh again at most every [`LIT_EVERY`], and never for more than [`LIT_SHARE`] of the
-//! learner's time — or, when the learner spends its time waiting for the pace of growth, for
+//! that mesh again at most every [`LIT_EVERY`], and for no more than [`LIT_SHARE`] of the
+//! time (of its core) — or, when the learner spends its time waiting for the pace of growth, for
 //! at most [`LIT_SHARE_IDLE`] of it ([`solve_interval`]): a visibility model integrates its own
 //! kernel exactly in 5–40 ms at 512 elements on `fig3`, but in 0.3–1 s on a floor plan of 220
 //! edges with a few hundred cells; the paper's network needs quadrature of ζ̃ (two network

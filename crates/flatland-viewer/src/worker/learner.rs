@@ -1,7 +1,6 @@
-//! The learner's loop: read commands, train a slice at the pace asked for, publish, solve the
-//! lit scene. Training and pacing are in [`train`], publishing in [`publish`], the lit scene in
-//! [`lit`]. Long work (the lit scene's exact reference and solves) stops as soon as a command
-//! is waiting and is taken up again after it.
+//! The learner's loop: read commands, train a slice at the pace asked for, publish, start and
+//! pick up the lit scene's solves. Training and pacing are in [`train`], publishing in
+//! [`publish`], the lit scene (solved beside the learner, on a thread of its own) in [`lit`].
 
 mod lit;
 mod publish;
@@ -9,7 +8,6 @@ mod train;
 
 use std::path::Path;
 use std::sync::Arc;
-use std::sync::atomic::Ordering;
 use std::sync::mpsc::{Receiver, RecvTimeoutError, TryRecvError};
 use std::time::{Duration, Instant};
 
@@ -85,13 +83,6 @@ impl Learner {
         (self.repaint)();
     }
 
-    /// A stop flag for long work: true once a command is waiting.
-    fn command_waiting(&self) -> impl Fn() -> bool + Sync + use<> {
-        let shared = Arc::clone(&self.shared);
-        let handled = self.handled;
-        move || shared.sent.load(Ordering::Acquire) > handled
-    }
-
     /// Whether it trains now (continuously, or steps asked for).
     fn training(&self) -> bool {
         self.running || self.steps_left > 0
@@ -137,6 +128,8 @@ impl Learner {
             publish::PUBLISH_EVERY.saturating_sub(self.published.since_last())
         } else if self.lit_pending() {
             Duration::ZERO
+        } else if self.lit.busy() {
+            lit::LIT_POLL
         } else {
             Duration::from_millis(200)
         }
