@@ -61,6 +61,9 @@ pub struct Options {
 struct Cursor {
     /// The training time shown; `None`: live, the newest moment.
     at: Option<Duration>,
+    /// The moment scrubbed to, by its number in the timeline (moments recorded within one
+    /// training instant, before Play or while paused, share a time).
+    picked: Option<u64>,
     /// Replaying at this many times the speed it was recorded at.
     replaying: Option<f32>,
     /// The speed Replay uses.
@@ -198,7 +201,7 @@ impl ViewerApp {
             drag: None,
             textures: heatmaps::Textures::default(),
             fps: fps::FpsMeter::default(),
-            export: export::Exports::new(&ctx),
+            export: export::Exports::new(),
             settings,
         };
         app.worker.send(Command::Pace(app.pace()));
@@ -265,10 +268,7 @@ impl ViewerApp {
             return;
         }
         let steps = status.growth.steps;
-        let before = self
-            .timeline
-            .latest()
-            .filter(|m| m.world.id == world.id);
+        let before = self.timeline.latest().filter(|m| m.world.id == world.id);
         let learned = self
             .approx
             .as_ref()

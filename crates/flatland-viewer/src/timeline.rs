@@ -249,6 +249,19 @@ impl Timeline {
         self.kept.last_mut().map(|k| &mut k.moment)
     }
 
+    /// The number the moment at `position` was recorded as (it stays while others are thinned
+    /// out around it).
+    #[must_use]
+    pub fn number(&self, position: usize) -> Option<u64> {
+        self.kept.get(position).map(|k| k.index)
+    }
+
+    /// The position of the moment recorded as `number`, while it is kept.
+    #[must_use]
+    pub fn position_of(&self, number: u64) -> Option<usize> {
+        self.kept.binary_search_by_key(&number, |k| k.index).ok()
+    }
+
     /// The position of the last kept moment at or before training time `at` (the first if
     /// `at` is before it).
     #[must_use]
@@ -353,6 +366,18 @@ mod tests {
         assert_eq!(t.cells_at(at(250)), 5);
         assert_eq!(t.cells_at(at(0)), 3);
         assert_eq!(Timeline::default().position_at(at(5)), None);
+    }
+
+    #[test]
+    fn a_moment_is_found_again_by_its_number_while_the_timeline_thins() {
+        let mut t = timeline_of(16, 16);
+        let number = t.number(4).unwrap();
+        assert_eq!((number, t.position_of(number)), (4, Some(4)));
+        let w = world(1);
+        t.record(moment(&w, 16, 3)); // over the cap: every second one stays
+        assert_eq!(t.position_of(4), Some(2), "kept, two places earlier");
+        assert_eq!(t.position_of(5), None, "thinned out");
+        assert_eq!(t.number(t.len()), None);
     }
 
     #[test]

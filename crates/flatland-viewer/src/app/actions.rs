@@ -132,8 +132,10 @@ impl ViewerApp {
     /// Shows the kept moment at `position` (0: the first), and stops a replay.
     pub fn scrub_to(&mut self, position: usize) {
         let last = self.timeline.len().saturating_sub(1);
-        if let Some(m) = self.timeline.get(position.min(last)) {
+        let position = position.min(last);
+        if let Some(m) = self.timeline.get(position) {
             self.cursor.at = Some(m.at());
+            self.cursor.picked = self.timeline.number(position);
         }
         self.cursor.replaying = None;
     }
@@ -141,6 +143,7 @@ impl ViewerApp {
     /// Follows the running learner again.
     pub fn go_live(&mut self) {
         self.cursor.at = None;
+        self.cursor.picked = None;
         self.cursor.replaying = None;
     }
 
@@ -167,7 +170,10 @@ impl ViewerApp {
         let dt = ctx.input(|i| i.stable_dt).min(0.1);
         let next = at + Duration::from_secs_f64(f64::from(dt * speed));
         match self.timeline.latest() {
-            Some(latest) if next < latest.at() => self.cursor.at = Some(next),
+            Some(latest) if next < latest.at() => {
+                self.cursor.at = Some(next);
+                self.cursor.picked = None;
+            }
             _ => self.go_live(),
         }
     }

@@ -322,7 +322,7 @@ impl ViewerApp {
                 .on_hover_text("the window as a PNG, named after scene, learner and step")
                 .clicked()
             {
-                self.export_png();
+                self.export_png(ui.ctx());
             }
             if ui
                 .button("Save model")

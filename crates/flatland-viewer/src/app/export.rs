@@ -17,17 +17,15 @@ use crate::worker::Command;
 pub(super) struct Exports {
     /// The folder.
     pub(super) dir: PathBuf,
-    ctx: egui::Context,
     done_tx: Sender<Result<PathBuf, String>>,
     done_rx: Receiver<Result<PathBuf, String>>,
 }
 
 impl Exports {
-    pub(super) fn new(ctx: &egui::Context) -> Exports {
+    pub(super) fn new() -> Exports {
         let (done_tx, done_rx) = mpsc::channel();
         Exports {
             dir: PathBuf::from("."),
-            ctx: ctx.clone(),
             done_tx,
             done_rx,
         }
@@ -43,21 +41,21 @@ impl Exports {
         }
     }
 
-    /// Asks for a screenshot of the next frame, to be written to `path`.
-    fn request_png(&self, path: PathBuf) {
+    /// Asks `ctx` (the window's context, the one that draws the frames) for a screenshot of
+    /// the next frame, to be written to `path`.
+    fn request_png(&self, ctx: &egui::Context, path: PathBuf) {
         let done = self.done_tx.clone();
-        let ctx = self.ctx.clone();
+        let repaint = ctx.clone();
         let callback = ScreenshotCallback::new(move |image: Arc<ColorImage>| {
             // Encoding 1280 × 800 takes tens of milliseconds: not on the render thread.
             let _ = std::thread::Builder::new()
                 .name("flatland-png".into())
                 .spawn(move || {
                     let _ = done.send(write_png(&path, &image).map(|()| path));
-                    ctx.request_repaint();
+                    repaint.request_repaint();
                 });
         });
-        self.ctx
-            .send_viewport_cmd(ViewportCommand::Screenshot(callback));
+        ctx.send_viewport_cmd(ViewportCommand::Screenshot(callback));
     }
 }
 
@@ -105,15 +103,15 @@ impl ViewerApp {
         )
     }
 
-    /// Saves the window as drawn in the next frame to `{stem}-step{N}.png` in the export folder,
-    /// `N` the step of the moment shown.
-    pub fn export_png(&mut self) {
+    /// Saves the window `ctx` draws, as drawn in the next frame, to `{stem}-step{N}.png` in the
+    /// export folder, `N` the step of the moment shown.
+    pub fn export_png(&mut self, ctx: &egui::Context) {
         let steps = self.shown().map_or(0, crate::timeline::Moment::steps);
         let path = self
             .export
             .dir
             .join(format!("{}-step{steps}.png", self.export_stem()));
-        self.export.request_png(path);
+        self.export.request_png(ctx, path);
         self.message = Some(("saving the view…".into(), false));
     }
 

@@ -122,19 +122,17 @@ impl ViewerApp {
     }
     /// The moment the plots show: the newest when live, else the one scrubbed to.
     pub fn shown(&self) -> Option<&Moment> {
-        match self.cursor.at {
-            None => self.timeline.latest(),
-            Some(at) => self
-                .timeline
-                .position_at(at)
-                .and_then(|p| self.timeline.get(p)),
-        }
+        self.shown_position().and_then(|p| self.timeline.get(p))
     }
     /// The position of the shown moment in the timeline (0: the first).
     pub fn shown_position(&self) -> Option<usize> {
         match self.cursor.at {
             None => self.timeline.len().checked_sub(1),
-            Some(at) => self.timeline.position_at(at),
+            Some(at) => self
+                .cursor
+                .picked
+                .and_then(|n| self.timeline.position_of(n))
+                .or_else(|| self.timeline.position_at(at)),
         }
     }
 }
