@@ -526,11 +526,18 @@ fn scrubbing_the_timeline_shows_an_earlier_state_and_live_returns() {
 
 #[test]
 fn the_edges_overlay_can_be_switched_off_and_only_joins_cells_of_one_face() {
-    let mut h = harness(quick_settings());
+    // The default learner's S₀ and cells on fig3: some faces end up with more than one cell.
+    let mut settings = quick_settings();
+    settings.params.initial_samples = Settings::default().params.initial_samples;
+    settings.params.target_cells = Settings::default().params.target_cells;
+    let mut h = harness(settings);
     wait_for(&mut h, "the reference", ready);
-    h.state_mut().settings_mut().step_size = 4000;
+    // Grown to the end: early on every cell has a face of its own, later some faces get more.
+    h.state_mut().settings_mut().step_size = 30_000;
     h.get_by_label("Step").click();
-    wait_for(&mut h, "4000 steps", |a| a.steps() == 4000);
+    wait_for(&mut h, "the fit to stop", |a| {
+        a.stopped().is_some() && a.caught_up() && a.shown().is_some_and(|m| m.steps() == a.steps())
+    });
     let m = h.state().shown().unwrap();
     let growth = &m.status.growth;
     assert!(
@@ -559,7 +566,10 @@ fn the_view_and_the_model_are_saved_named_after_scene_learner_and_step() {
         export_dir: Some(dir.clone()),
         ..Options::default()
     };
-    let app = ViewerApp::with_options(egui::Context::default(), quick_settings(), &options);
+    // The default learner (its S₀ too), so the files are named after it.
+    let mut settings = quick_settings();
+    settings.params.initial_samples = Settings::default().params.initial_samples;
+    let app = ViewerApp::with_options(egui::Context::default(), settings, &options);
     let mut h = harness_of(app);
     wait_for(&mut h, "the reference", ready);
     h.state_mut().settings_mut().step_size = 500;
@@ -598,7 +608,9 @@ fn the_view_and_the_model_are_saved_named_after_scene_learner_and_step() {
             .message()
             .is_some_and(|(m, _)| m.starts_with("saved the view"))
     });
-    let back = image::open(&png).unwrap().to_rgba8();
+    let back = image::open(&png)
+        .unwrap_or_else(|e| panic!("{e}: {:?}", h.state().message()))
+        .to_rgba8();
     assert_eq!(back.dimensions(), (8, 6));
 
     // The model: the running fit, as `flatland eval` reads it.
