@@ -478,6 +478,10 @@ fn scrubbing_the_timeline_shows_an_earlier_state_and_live_returns() {
     assert_eq!(app.shown_position(), Some(0));
     let first = app.shown().unwrap();
     assert_eq!((first.steps(), first.cells()), (0, 3), "the first cells");
+    assert!(
+        first.status.growth.cells.iter().all(|c| c.st.is_some()),
+        "drawn where they are, before they have won a sample"
+    );
     assert!(app.cells() >= live_cells, "the learner went on meanwhile");
     h.get_by_label_contains("moment 1/");
 

@@ -40,7 +40,8 @@ pub type SamplePoint = ([f32; 2], u32);
 /// One cell as the overlay draws it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CellMark {
-    /// Mean `(s, t)` of the samples it won (paper Fig. 3c); `None` until it has won one.
+    /// Mean `(s, t)` of the samples it won (paper Fig. 3c); before it has won one, the `(s, t)`
+    /// of the sample nearest to it in the input space; `None` without samples.
     pub st: Option<[f32; 2]>,
     /// δ_c, in the unit-box input frame.
     pub width: f32,

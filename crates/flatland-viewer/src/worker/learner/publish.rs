@@ -89,6 +89,25 @@ impl PublishState {
     }
 }
 
+/// Where to draw cell `c` before it has won a sample (the first cells, a cell just
+/// inserted): at the `(s, t)` of the sample nearest to it in the network's input space, where
+/// it would win first. Looks at up to [`PLACING_SAMPLES`] of them, spread over all.
+fn nearest_sample(fit: &Fit, c: usize, samples: &[SamplePoint]) -> Option<[f32; 2]> {
+    let model = fit.model();
+    let at = fit.network().position(c);
+    let every = samples.len().div_ceil(PLACING_SAMPLES).max(1);
+    samples
+        .iter()
+        .step_by(every)
+        .map(|&(st, _)| {
+            let x = model.input(f64::from(st[0]), f64::from(st[1]));
+            let d: f64 = x.iter().zip(at).map(|(a, b)| (a - b) * (a - b)).sum();
+            (d, st)
+        })
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, st)| st)
+}
+
 /// Most statuses waiting in the mailbox: a UI that draws no frames (a minimized window) finds
 /// every second one of the older ones, not an ever longer queue.
 const MAX_QUEUED: usize = 64;
@@ -105,6 +124,9 @@ fn queue(waiting: &mut Vec<Status>, status: Status) {
     waiting.push(status);
 }
 
+/// Most samples looked at to place a cell that has won none.
+const PLACING_SAMPLES: usize = 4096;
+
 /// The network of `fit` as the overlay draws it: its cells and the edges within faces.
 fn growth(fit: &Fit, snap: &Snapshot, run_time: Duration) -> Growth {
     let st = fit.cell_st();
@@ -115,10 +137,14 @@ fn growth(fit: &Fit, snap: &Snapshot, run_time: Duration) -> Growth {
         cells: snap
             .cells
             .iter()
-            .map(|c| CellMark {
-                st: c.st.map(|[s, t]| [s as f32, t as f32]),
-                width: c.width as f32,
-                critical: c.critical,
+            .enumerate()
+            .map(|(c, cell)| CellMark {
+                st: cell
+                    .st
+                    .map(|[s, t]| [s as f32, t as f32])
+                    .or_else(|| nearest_sample(fit, c, &snap.samples)),
+                width: cell.width as f32,
+                critical: cell.critical,
             })
             .collect(),
         face_edges: face_edges(&fit.network().edges(), &groups),
