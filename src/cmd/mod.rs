@@ -132,8 +132,8 @@ pub fn progress_bar(len: u64, unit: &str) -> ProgressBar {
     bar
 }
 
-/// What `cargo run --release` does with no arguments: the viewer on the bundled scene, or,
-/// without a display, the headless fit and its summary.
+/// What `cargo run --release` does with no arguments: the viewer, or, without a display, the
+/// headless fit of the bundled scene and its summary.
 pub fn default_job() -> Result<()> {
-    view::run(&view::Args { scene: None })
+    view::run(&view::Args::default())
 }

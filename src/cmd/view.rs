@@ -4,21 +4,76 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 
-/// Arguments of `flatland view`.
-#[derive(clap::Args, Debug)]
+/// Arguments of `flatland view` (the default: none given).
+#[derive(clap::Args, Debug, Default)]
 pub struct Args {
-    /// Scene file (.ron or .json). Default: the scene of the last session, else bundled `fig3`.
+    /// Scene file (.ron or .json); in the window also a scene the viewer offers by name (fig3,
+    /// maze, floorplan, hall, or floorplan-N, hall-N: a generated scene of N edges). Default:
+    /// the scene of the last session, else a generated floor plan of 300 edges.
     #[arg(long, value_name = "FILE")]
     pub scene: Option<PathBuf>,
+    /// Open paused instead of learning at once.
+    #[arg(long)]
+    pub paused: bool,
+    /// Target cell count of the fit.
+    #[arg(long, value_name = "N")]
+    pub cells: Option<usize>,
+    /// Pace of growth in cells per second of training, or `max` (as fast as this machine can).
+    #[arg(long, value_name = "CELLS_PER_S", value_parser = parse_growth)]
+    pub growth: Option<f64>,
+    /// Ignore the settings remembered from the last session (they are still saved on exit).
+    #[arg(long)]
+    pub fresh: bool,
+    /// Print the frame rate, frame times and the learner's speed to stderr every two seconds.
+    #[arg(long)]
+    pub fps_log: bool,
+    /// Folder for "Save view" and "Save model". Default: the current folder.
+    #[arg(long, value_name = "DIR")]
+    pub export_dir: Option<PathBuf>,
+}
+
+/// `max`, or a positive number of cells per second.
+fn parse_growth(text: &str) -> Result<f64, String> {
+    if text == "max" {
+        return Ok(f64::INFINITY);
+    }
+    match text.parse::<f64>() {
+        Ok(r) if r > 0.0 && r.is_finite() => Ok(r),
+        _ => Err(format!(
+            "expected `max` or cells per second > 0, got {text:?}"
+        )),
+    }
 }
 
 /// Runs `flatland view`: the viewer when a display is available; otherwise one line saying so,
-/// then the headless fit of the same scene.
+/// then the headless fit of the same scene (the window's options do not apply to it).
 pub fn run(args: &Args) -> Result<()> {
     if flatland_viewer::display_available() {
-        return Ok(flatland_viewer::run(args.scene.clone())?);
+        return Ok(flatland_viewer::run_with(flatland_viewer::Options {
+            scene: args.scene.clone(),
+            paused: args.paused,
+            target_cells: args.cells,
+            growth: args.growth,
+            fresh_settings: args.fresh,
+            fps_log: args.fps_log,
+            export_dir: args.export_dir.clone(),
+        })?);
     }
     eprintln!("no display available (DISPLAY is not set): running the headless fit instead");
     let fit_args = super::fit::Args::for_scene(args.scene.clone());
     super::fit::run(&fit_args)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn growth_is_max_or_a_positive_rate() {
+        assert_eq!(parse_growth("max"), Ok(f64::INFINITY));
+        assert_eq!(parse_growth("12.5"), Ok(12.5));
+        for bad in ["0", "-3", "fast", "inf", "NaN"] {
+            assert!(parse_growth(bad).is_err(), "{bad}");
+        }
+    }
 }

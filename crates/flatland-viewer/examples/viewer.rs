@@ -1,7 +1,8 @@
 //! Opens the viewer with every option on the command line (used by `scripts/screenshot.sh`):
 //!
 //! `cargo run --release -p flatland-viewer --example viewer -- [--scene FILE] [--paused]
-//! [--cells N] [--fresh] [--fps-log]` (it learns at once unless `--paused`)
+//! [--cells N] [--growth CELLS_PER_S|max] [--fresh] [--fps-log] [--export-dir DIR]` (it learns
+//! at once unless `--paused`)
 
 use std::path::PathBuf;
 
@@ -15,6 +16,13 @@ fn main() {
             // Learning at once is the default; kept so older command lines still work.
             "--play" => options.paused = false,
             "--cells" => options.target_cells = args.next().and_then(|n| n.parse().ok()),
+            "--growth" => {
+                options.growth = args.next().and_then(|g| match g.as_str() {
+                    "max" => Some(f64::INFINITY),
+                    g => g.parse().ok().filter(|r: &f64| *r > 0.0),
+                });
+            }
+            "--export-dir" => options.export_dir = args.next().map(PathBuf::from),
             "--fresh" => options.fresh_settings = true,
             "--fps-log" => options.fps_log = true,
             other => {

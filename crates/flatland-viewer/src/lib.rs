@@ -1,13 +1,16 @@
 //! The flatland viewer: watch the cells of a supervised growing cell structures network grow
-//! over the `(s, t)` plot of a Flatland radiosity kernel, live, while it learns.
+//! over the `(s, t)` plot of a Flatland radiosity kernel, live, while it learns — and scrub back
+//! through the growth afterwards.
 //!
 //! An eframe (glow) desktop app on top of [`kernel_fit`]; the library crates never depend on it.
 //!
 //! - **Kernel plot**: the exact `ζ(s, t)` as a heatmap (`t`, the receiver, to the right; `s`,
 //!   the sender, upwards; linear or log colour scale), the surface edges' boundaries on both
-//!   axes; over it the cells re-projected to the mean `(s, t)` of the samples they won (paper
-//!   Fig. 3c), sized by `δ_c`, cyan when critical, the network's edges, and optionally every
-//!   training sample coloured by the set that produced it.
+//!   axes, labelled where the labels have room; over it the cells re-projected to the mean
+//!   `(s, t)` of the samples they won (paper Fig. 3c), sized by `δ_c`, cyan when critical,
+//!   ringed when new, the network's edges between cells of one face (the others join cells that
+//!   never answer the same ray), and optionally every training sample coloured by its set. A
+//!   legend under the plot says what each mark means.
 //! - **ζ̃ and |ζ̃ − ζ|** beside it, on the same colour scale (paper Fig. 3d). Hovering any of the
 //!   three shows `G`, `V`, `k`, `ζ` and the learned value at the pointer; for the default
 //!   learner also its `Ṽ` and whether the geometry or the cells of that face decide it.
@@ -21,16 +24,28 @@
 //!   where it is (`Fit::set_kernel`).
 //! - **Curves**: held-out relative L2 of ζ and of the solved `B − E` against steps and rays,
 //!   cells and samples.
-//! - **Controls**: play, pause, step, reset, speed; the learner preset (the default learner
-//!   or the paper's network) and every parameter of both (docs/ALGORITHM.md §8) with its valid
-//!   range; a live parameter ([`kernel_fit::LiveParams`]) reaches the running fit, any other
-//!   (target, gating, importance, the network's rules, …) starts a new fit with it.
-//!   Settings persist, with the preset chosen; settings saved by an older viewer load with the
-//!   current learner.
+//! - **Timeline**: every moment the learner published is kept (thinned to every 2^k-th past a
+//!   cap, the first and latest always), and a slider shows any of them — kernel plot, cells, lit
+//!   scene and curves as they were then; Replay plays the run back at a chosen speed, Live
+//!   returns to the running learner ([`timeline`]).
+//! - **Controls**: play, pause, step, reset, the pace of growth; the learner preset (the
+//!   default learner or the paper's network) and every parameter of both (docs/ALGORITHM.md
+//!   §8) with its valid range; a live parameter ([`kernel_fit::LiveParams`]) reaches the
+//!   running fit, any other (target, gating, importance, the network's rules, …) starts a new
+//!   fit with it. Settings persist, with the preset chosen; settings saved by an older viewer
+//!   load with the current learner. Export saves the window as a PNG and the run as the model
+//!   file `flatland eval` reads.
+//!
+//! The first launch opens a generated floor plan ([`scenes`]) and grows its network at a pace
+//! of cells per second rather than as fast as the machine goes: on `fig3` the default learner
+//! is exact after 17 000 steps, which a fast machine runs before the window has drawn a useful
+//! frame. With the pace, growth is there to watch for a while on any machine.
 //!
 //! Training runs on its own thread, which owns the [`kernel_fit::Fit`]; the UI sends commands
 //! and takes published snapshots without ever waiting for the learner. Textures are rebuilt
-//! only when the data behind them changes.
+//! only when the data behind them changes, and what is drawn over the plots is rastered at the
+//! plot's size in screen pixels, so a frame costs the same for 24 edges and 3 cells as for
+//! 1000 edges and 6400 cells.
 //!
 //! ```no_run
 //! // What `flatland view` does: a window if there is a display, else a one-line note.
@@ -46,7 +61,11 @@
 mod app;
 mod colormap;
 pub mod lit;
+pub mod scenes;
 mod settings;
+#[cfg(test)]
+mod test_support;
+pub mod timeline;
 mod views;
 mod worker;
 
@@ -55,7 +74,8 @@ use std::path::PathBuf;
 pub use app::{Options, ViewerApp, stop_text};
 pub use colormap::{colour, grid_image, samples_image, set_color};
 pub use settings::{SceneChoice, Settings, with_preset};
-pub use worker::{Lit, LitState};
+pub use timeline::{Moment, Prefix, Timeline};
+pub use worker::{CellMark, Growth, LearnedGrid, Lit, LitState, Status, World};
 
 /// Why the viewer could not run.
 #[derive(Debug, thiserror::Error)]
@@ -101,8 +121,9 @@ fn limit_learner_threads() {
         .build_global();
 }
 
-/// Opens the viewer on `scene` (a `.ron`/`.json` file), or on the scene remembered from the last
-/// run, else the bundled `fig3`, learning at once. Returns when the window is closed.
+/// Opens the viewer on `scene` (a `.ron`/`.json` file, or a scene it offers by name:
+/// [`scenes::named`]), or on the scene remembered from the last run, else the generated floor
+/// plan, learning at once. Returns when the window is closed.
 pub fn run(scene: Option<PathBuf>) -> Result<(), ViewerError> {
     run_with(Options {
         scene,
@@ -110,12 +131,15 @@ pub fn run(scene: Option<PathBuf>) -> Result<(), ViewerError> {
     })
 }
 
-/// [`run`] with all options (start paused, target cells, fresh settings, frame-rate log).
+/// [`run`] with all options (start paused, target cells, pace, fresh settings, frame-rate log,
+/// export folder).
 pub fn run_with(options: Options) -> Result<(), ViewerError> {
-    if let Some(path) = &options.scene {
+    if let Some(path) = &options.scene
+        && let SceneChoice::File(file) = scenes::choice_for(path)
+    {
         // Refuse a bad file before a window opens.
-        flatland_geom::Scene::load(path).map_err(|source| ViewerError::Scene {
-            path: path.clone(),
+        flatland_geom::Scene::load(&file).map_err(|source| ViewerError::Scene {
+            path: file.clone(),
             source,
         })?;
     }

@@ -1,12 +1,14 @@
 //! The lit scene: the radiosity `B` solved with the kernel as learned so far, beside the
-//! exact `B`, made on the learner's thread (`worker`) and drawn by `views`.
+//! exact `B`, made beside the learner (`worker`) and drawn by `views`.
 //!
 //! Per scene, once: a [`Mesh`] and an [`ExactReference`] (the exact kernel solved on a mesh four
 //! times finer), whose `B` at the mesh's collocation points is what every learned solve is
 //! measured against ([`LitSetup`]). While the network learns, the learned kernel is solved on
-//! that mesh again at most every [`LIT_EVERY`], and never for more than [`LIT_SHARE`] of the
-//! learner's time ([`solve_interval`]): a visibility model integrates its own kernel exactly in
-//! 5–40 ms at 512 elements; the paper's network needs quadrature of ζ̃ (two network
+//! that mesh again at most every [`LIT_EVERY`], and for no more than [`LIT_SHARE`] of the
+//! time (of its core) — or, when the learner spends its time waiting for the pace of growth, for
+//! at most [`LIT_SHARE_IDLE`] of it ([`solve_interval`]): a visibility model integrates its own
+//! kernel exactly in 5–40 ms at 512 elements on `fig3`, but in 0.3–1 s on a floor plan of 220
+//! edges with a few hundred cells; the paper's network needs quadrature of ζ̃ (two network
 //! evaluations per element pair), so it is solved on [`NETWORK_ELEMENTS`] elements.
 
 use std::time::Duration;
@@ -22,6 +24,9 @@ pub const LIT_EVERY: Duration = Duration::from_millis(500);
 /// Largest share of the learner's time the solves may take: a solve that took `c` waits at
 /// least `c / LIT_SHARE` for the next.
 pub const LIT_SHARE: f64 = 0.1;
+/// Largest share when the learner waits for the pace of growth: solves may take the time it
+/// would spend waiting, up to this share (growth catches up after a solve).
+pub const LIT_SHARE_IDLE: f64 = 0.5;
 /// Elements for a network that learns ζ or k (the paper's), whose operator is quadrature:
 /// measured at 400 cells ≈ 150 ms for 128 elements, ≈ 600 ms for 256.
 pub const NETWORK_ELEMENTS: usize = 128;
@@ -40,10 +45,12 @@ pub fn lit_elements(kernel: &Kernel, target: Target) -> usize {
     }
 }
 
-/// How long to wait after a solve that took `cost` before the next one.
+/// How long to wait after a solve that took `cost` before the next one, when the learner spends
+/// the share `idle` of its time waiting for the pace of growth (0 when it trains flat out).
 #[must_use]
-pub fn solve_interval(cost: Duration) -> Duration {
-    LIT_EVERY.max(cost.div_f64(LIT_SHARE))
+pub fn solve_interval(cost: Duration, idle: f64) -> Duration {
+    let share = LIT_SHARE.max(idle.min(LIT_SHARE_IDLE));
+    LIT_EVERY.max(cost.div_f64(share))
 }
 
 /// What the lit view needs of one scene, made once per scene (after a reset or an edit).
@@ -152,11 +159,20 @@ mod tests {
 
     #[test]
     fn solves_are_spaced_by_time_and_by_their_cost() {
-        assert_eq!(solve_interval(Duration::ZERO), LIT_EVERY);
-        assert_eq!(solve_interval(Duration::from_millis(20)), LIT_EVERY);
+        assert_eq!(solve_interval(Duration::ZERO, 0.0), LIT_EVERY);
+        assert_eq!(solve_interval(Duration::from_millis(20), 0.0), LIT_EVERY);
         assert_eq!(
-            solve_interval(Duration::from_millis(150)),
+            solve_interval(Duration::from_millis(150), 0.0),
             Duration::from_millis(1500)
+        );
+        // A learner that waits for the pace lends its waiting time, up to half.
+        assert_eq!(
+            solve_interval(Duration::from_millis(400), 0.25),
+            Duration::from_millis(1600)
+        );
+        assert_eq!(
+            solve_interval(Duration::from_millis(400), 0.9),
+            Duration::from_millis(800)
         );
     }
 

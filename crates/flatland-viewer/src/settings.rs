@@ -39,9 +39,9 @@ pub struct Settings {
     pub scene: SceneChoice,
     /// Pieces per surface edge (1: the scene as written).
     pub subdivide: usize,
-    /// Training speed limit, steps per second.
-    pub speed: f64,
-    /// Ignore the speed limit.
+    /// Pace of growth, cells per second of training (the learner's `train` module says why).
+    pub growth: f64,
+    /// Ignore the pace: grow as fast as the machine can.
     pub unlimited: bool,
     /// Steps done by one press of "Step".
     pub step_size: u64,
@@ -49,7 +49,7 @@ pub struct Settings {
     pub log_scale: bool,
     /// Show the cells over the kernel.
     pub show_cells: bool,
-    /// Show the network's edges between cells.
+    /// Show the network's edges between cells of one face.
     pub show_edges: bool,
     /// Show the training samples, coloured by set.
     pub show_samples: bool,
@@ -63,11 +63,10 @@ impl Default for Settings {
             preset: Preset::Default,
             params: FitParams::default(),
             learner_defaults: Some(Preset::Default.params()),
-            scene: SceneChoice::Bundled(flatland_geom::bundled::DEFAULT.into()),
+            scene: SceneChoice::Bundled(crate::scenes::DEFAULT.into()),
             subdivide: 1,
-            // Slow enough to watch: the default learner is exact on fig3 after about 20 000
-            // steps (a few seconds), the paper's network reaches 400 cells in 20 s.
-            speed: 6_000.0,
+            // Slow enough to watch: the default 400 cells grow over 20 s.
+            growth: 20.0,
             unlimited: false,
             step_size: 1,
             log_scale: true,

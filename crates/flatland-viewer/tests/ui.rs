@@ -14,15 +14,17 @@ use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use flatland_geom::DVec2;
 use flatland_viewer::{Options, Settings, ViewerApp};
+use kernel_fit::ModelFile;
 use kernel_fit::{Gating, Preset, StopReason, Target};
 use sgcs::Insertion;
 
 /// Longest wait for one condition; reached only if something is broken.
 const DEADLINE: Duration = Duration::from_secs(120);
 
-/// Small, quick settings: few held-out points, a small S₀.
+/// Small, quick settings: fig3, few held-out points, a small S₀, growth as fast as it goes.
 fn quick_settings() -> Settings {
     let mut s = Settings::default();
+    s.scene = flatland_viewer::SceneChoice::Bundled("fig3".into());
     s.params.heldout = 256;
     s.params.initial_samples = 200;
     s.params.eval_every = 500;
@@ -413,4 +415,220 @@ fn a_scene_without_occluders_is_exact_at_once() {
         "{:?}",
         lit.solve.errors
     );
+}
+
+/// A fresh folder for one test's files.
+fn temp_dir(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("flatland-viewer-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn the_first_launch_grows_a_floor_plan_at_the_pace_not_at_the_machines_speed() {
+    // The defaults of a first launch (the floor plan, 20 cells per second), with a smaller
+    // held-out set so the reference is quick.
+    let mut settings = Settings::default();
+    settings.params.heldout = 256;
+    assert!(!settings.unlimited);
+    let pace = settings.growth;
+    let app = ViewerApp::with_options(egui::Context::default(), settings, &Options::default());
+    assert_eq!(app.scene_label(), flatland_viewer::scenes::DEFAULT);
+    let mut h = harness_of(app);
+    wait_for(&mut h, "cells to grow without a click", |a| {
+        a.running() && a.cells() > 12
+    });
+    // Every moment so far: no more cells than the pace allows (3 to start, one at once, a
+    // second's credit saved up), however fast the machine is.
+    for p in 0..h.state().moments() {
+        h.state_mut().scrub_to(p);
+        let m = h.state().shown().unwrap();
+        let allowed = 3.0 + 1.0 + pace * (m.at().as_secs_f64() + 1.0);
+        assert!(
+            m.cells() as f64 <= allowed,
+            "{} cells after {:?} of training at {pace} cells/s",
+            m.cells(),
+            m.at()
+        );
+    }
+    assert!(h.state().stopped().is_none(), "still growing");
+}
+
+#[test]
+fn scrubbing_the_timeline_shows_an_earlier_state_and_live_returns() {
+    let mut settings = quick_settings();
+    settings.params.target_cells = 5000; // still growing while the test looks
+    settings.scene = flatland_viewer::SceneChoice::Bundled("maze".into());
+    let mut h = harness(settings);
+    wait_for(&mut h, "the reference", ready);
+    h.get_by_label("Play").click();
+    wait_for(&mut h, "growth over several moments", |a| {
+        a.cells() > 20 && a.moments() > 8
+    });
+    assert!(h.state().is_live());
+    let live_cells = h.state().shown().unwrap().cells();
+
+    // To the start: the first cells, step 0, and the label says which moment.
+    h.get_by_role_and_label(Role::Slider, "timeline")
+        .set_value_accesskit(0.0);
+    h.run_steps(2);
+    let app = h.state();
+    assert!(!app.is_live());
+    assert_eq!(app.shown_position(), Some(0));
+    let first = app.shown().unwrap();
+    assert_eq!((first.steps(), first.cells()), (0, 3), "the first cells");
+    assert!(
+        first.status.growth.cells.iter().all(|c| c.st.is_some()),
+        "drawn where they are, before they have won a sample"
+    );
+    assert!(app.cells() >= live_cells, "the learner went on meanwhile");
+    h.get_by_label_contains("moment 1/");
+
+    // Halfway: an earlier state than live, later than the start.
+    let half = h.state().moments() / 2;
+    h.get_by_role_and_label(Role::Slider, "timeline")
+        .set_value_accesskit(half as f64);
+    h.run_steps(2);
+    let mid = h.state().shown().unwrap();
+    assert!(
+        mid.steps() > 0 && mid.steps() < h.state().steps(),
+        "{}",
+        mid.steps()
+    );
+
+    // Live follows the learner again.
+    h.get_by_label("Live").click();
+    h.run_steps(1);
+    assert!(h.state().is_live());
+    wait_for(&mut h, "the newest moment", |a| {
+        a.shown().is_some_and(|m| m.steps() == a.steps())
+    });
+
+    // Replay at ×8 from the start walks forward through the moments, then goes live (the
+    // learner paused, so the replay has an end to reach on a slow machine too).
+    h.get_by_label("Pause").click();
+    wait_for(&mut h, "the pause", |a| a.caught_up() && !a.running());
+    h.state_mut().scrub_to(0);
+    h.get_by_label("×8").click();
+    h.get_by_label("Replay").click();
+    h.run_steps(1);
+    assert!(h.state().replaying());
+    // Forward in training time at every frame, until it reaches the newest moment.
+    let deadline = Instant::now() + DEADLINE;
+    let mut last = std::time::Duration::ZERO;
+    while h.state().replaying() {
+        h.run_steps(1);
+        let at = h.state().shown().unwrap().at();
+        assert!(at >= last, "{at:?} after {last:?}");
+        last = at;
+        assert!(Instant::now() < deadline, "the replay never ended");
+    }
+    assert!(h.state().is_live());
+    assert!(!h.state().replaying());
+}
+
+#[test]
+fn the_edges_overlay_can_be_switched_off_and_only_joins_cells_of_one_face() {
+    // The default learner's S₀ and cells on fig3: some faces end up with more than one cell.
+    let mut settings = quick_settings();
+    settings.params.initial_samples = Settings::default().params.initial_samples;
+    settings.params.target_cells = Settings::default().params.target_cells;
+    let mut h = harness(settings);
+    wait_for(&mut h, "the reference", ready);
+    // Grown to the end: early on every cell has a face of its own, later some faces get more.
+    h.state_mut().settings_mut().step_size = 30_000;
+    h.get_by_label("Step").click();
+    wait_for(&mut h, "the fit to stop", |a| {
+        a.stopped().is_some() && a.caught_up() && a.shown().is_some_and(|m| m.steps() == a.steps())
+    });
+    let m = h.state().shown().unwrap();
+    let growth = &m.status.growth;
+    assert!(
+        !growth.face_edges.is_empty(),
+        "cells of one face are joined"
+    );
+    assert!(h.state().settings().show_edges);
+
+    h.get_by_label("network edges within a face").click();
+    h.run_steps(2);
+    assert!(!h.state().settings().show_edges, "edges off");
+    assert!(h.state().settings().show_cells, "cells stay");
+    h.get_by_label_contains("cells (size ~ δ_c").click();
+    h.run_steps(2);
+    assert!(!h.state().settings().show_cells);
+    h.get_by_label("network edges within a face").click();
+    h.run_steps(2);
+    assert!(h.state().settings().show_edges, "edges on again");
+}
+
+#[test]
+fn the_view_and_the_model_are_saved_named_after_scene_learner_and_step() {
+    let dir = temp_dir("export");
+    let options = Options {
+        paused: true,
+        export_dir: Some(dir.clone()),
+        ..Options::default()
+    };
+    // The default learner (its S₀ too), so the files are named after it.
+    let mut settings = quick_settings();
+    settings.params.initial_samples = Settings::default().params.initial_samples;
+    let app = ViewerApp::with_options(egui::Context::default(), settings, &options);
+    let mut h = harness_of(app);
+    wait_for(&mut h, "the reference", ready);
+    h.state_mut().settings_mut().step_size = 500;
+    h.get_by_label("Step").click();
+    wait_for(&mut h, "500 steps", |a| a.steps() == 500 && a.caught_up());
+    wait_for(&mut h, "the moment of step 500", |a| {
+        a.shown().is_some_and(|m| m.steps() == 500)
+    });
+
+    // The view: the app asks egui for a screenshot; the harness has no renderer, so the test
+    // answers it with a picture, as eframe does with the window's pixels.
+    h.get_by_label("Save view").click();
+    let mut answered = false;
+    for _ in 0..5 {
+        h.run_steps(1);
+        for command in h
+            .output()
+            .viewport_output
+            .values()
+            .flat_map(|v| v.commands.iter())
+        {
+            if let egui::ViewportCommand::Screenshot(callback) = command {
+                let image = egui::ColorImage::filled([8, 6], egui::Color32::from_rgb(1, 2, 3));
+                callback.clone().complete(std::sync::Arc::new(image));
+                answered = true;
+            }
+        }
+        if answered {
+            break;
+        }
+    }
+    assert!(answered, "Save view asks for a screenshot");
+    let png = dir.join("fig3-default-step500.png");
+    wait_until(&mut h, "the PNG", |h| {
+        h.state()
+            .message()
+            .is_some_and(|(m, _)| m.starts_with("saved the view"))
+    });
+    let back = image::open(&png)
+        .unwrap_or_else(|e| panic!("{e}: {:?}", h.state().message()))
+        .to_rgba8();
+    assert_eq!(back.dimensions(), (8, 6));
+
+    // The model: the running fit, as `flatland eval` reads it.
+    h.get_by_label("Save model").click();
+    wait_until(&mut h, "the model file", |h| {
+        h.state()
+            .message()
+            .is_some_and(|(m, _)| m.starts_with("saved the model"))
+    });
+    let model = ModelFile::load(&dir.join("fig3-default-step500.model.json")).unwrap();
+    assert_eq!(model.model.network().len(), h.state().cells());
+    let fig3 = flatland_geom::bundled::scene("fig3").unwrap();
+    model
+        .check_scene(&fig3, std::path::Path::new("fig3"))
+        .unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
 }

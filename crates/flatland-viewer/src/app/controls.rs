@@ -1,6 +1,6 @@
 //! The controls panel: scene, run, learner (preset and what the network learns), network,
-//! sampling, fit, view. Every parameter with its valid range and a hover text; a change to
-//! what only a new fit can change starts one (see `ViewerApp::sync_params`).
+//! sampling, fit, view, export. Every parameter with its valid range and a hover text; a change
+//! to what only a new fit can change starts one (see `ViewerApp::sync_params`).
 
 use std::path::PathBuf;
 
@@ -29,12 +29,14 @@ impl ViewerApp {
         self.fit_controls(ui);
         ui.separator();
         self.view_controls(ui);
+        ui.separator();
+        self.export_controls(ui);
     }
 
     fn scene_controls(&mut self, ui: &mut egui::Ui) {
         ui.heading("Scene");
         ui.horizontal_wrapped(|ui| {
-            for (name, about, _) in flatland_geom::bundled::SCENES {
+            for (name, about) in crate::scenes::offered() {
                 let selected = self.settings.scene == SceneChoice::Bundled(name.to_string());
                 if ui
                     .selectable_label(selected, name)
@@ -71,20 +73,29 @@ impl ViewerApp {
         });
     }
 
+    /// The pace of growth (see the learner's `train` module for why cells, not steps).
     fn run_controls(&mut self, ui: &mut egui::Ui) {
         ui.heading("Run");
         ui.horizontal(|ui| {
             ui.spacing_mut().slider_width = 80.0;
-            let r = ui.add_enabled(
-                !self.settings.unlimited,
-                egui::Slider::new(&mut self.settings.speed, 100.0..=1_000_000.0)
-                    .logarithmic(true)
-                    .text("steps/s")
-                    .max_decimals(0),
-            );
-            let u = ui.checkbox(&mut self.settings.unlimited, "max");
+            let r = ui
+                .add_enabled(
+                    !self.settings.unlimited,
+                    egui::Slider::new(&mut self.settings.growth, 1.0..=2000.0)
+                        .logarithmic(true)
+                        .text("cells/s")
+                        .max_decimals(0),
+                )
+                .on_hover_text(
+                    "how fast the network may grow, in cells per second of training: the same \
+                     on a fast machine as on a slow one (training between insertions runs at \
+                     full speed)",
+                );
+            let u = ui
+                .checkbox(&mut self.settings.unlimited, "max")
+                .on_hover_text("grow as fast as this machine can");
             if r.changed() || u.changed() {
-                self.worker.send(Command::Speed(self.speed()));
+                self.send_pace();
             }
         });
     }
@@ -275,9 +286,14 @@ impl ViewerApp {
         );
         ui.checkbox(
             &mut self.settings.show_cells,
-            "cells (size ~ δ_c, cyan = critical)",
+            "cells (size ~ δ_c, cyan = critical, ringed = new)",
         );
-        ui.checkbox(&mut self.settings.show_edges, "network edges");
+        ui.checkbox(&mut self.settings.show_edges, "network edges within a face")
+            .on_hover_text(
+                "the network's edges that join two cells of one face of the visibility \
+                 structure (the paper's network: of one pair of surface edges); edges across \
+                 faces join cells that never answer the same ray",
+            );
         ui.checkbox(&mut self.settings.show_samples, "samples, coloured by set");
         let lit = ui
             .checkbox(&mut self.settings.lit, "lit scene (solve B while learning)")
@@ -296,6 +312,41 @@ impl ViewerApp {
             self.settings.params = with_preset(self.settings.preset, &self.settings.params);
         }
     }
+
+    /// Save the view as a PNG and the run as a model file, into a folder.
+    fn export_controls(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Export");
+        ui.horizontal(|ui| {
+            if ui
+                .button("Save view")
+                .on_hover_text("the window as a PNG, named after scene, learner and step")
+                .clicked()
+            {
+                self.export_png(ui.ctx());
+            }
+            if ui
+                .button("Save model")
+                .on_hover_text(
+                    "the running fit as the model file `flatland eval --model` reads (the \
+                     learner's network now, whatever moment is shown)",
+                )
+                .clicked()
+            {
+                self.export_model();
+            }
+        });
+        ui.horizontal(|ui| {
+            let label = ui.label("into");
+            let mut dir = self.export.dir.display().to_string();
+            if ui
+                .add(egui::TextEdit::singleline(&mut dir).desired_width(200.0))
+                .labelled_by(label.id)
+                .changed()
+            {
+                self.export.dir = PathBuf::from(dir);
+            }
+        });
+    }
 }
 
 /// The network's rates and counts, one row each.
@@ -313,7 +364,7 @@ fn network_rates(ui: &mut egui::Ui, n: &mut sgcs::Params) {
         });
 }
 
-/// How the network's output is made, learned and grown.
+/// How the network's output is made and learned, and how it grows.
 fn network_rules(ui: &mut egui::Ui, n: &mut sgcs::Params) {
     choice(
         ui,
@@ -355,6 +406,11 @@ fn network_rules(ui: &mut egui::Ui, n: &mut sgcs::Params) {
             ),
         ],
     );
+    growth_rules(ui, n);
+}
+
+/// Where a new cell goes, what it starts with, and what decides where to grow.
+fn growth_rules(ui: &mut egui::Ui, n: &mut sgcs::Params) {
     choice(
         ui,
         "insertion",

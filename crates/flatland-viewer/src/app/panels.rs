@@ -1,0 +1,239 @@
+//! The central area at the moment shown: the exact ζ with the cells over it, the learned ζ and
+//! the error, the scene (lit by the learned kernel) and the exact lit scene, the curves.
+
+use std::sync::Arc;
+
+use egui::{Rect, UiBuilder};
+
+use super::ViewerApp;
+use super::heatmaps::Request;
+use super::layout::Layout;
+use super::readout::{Learned, readout_text};
+use super::top_bar::error_text;
+use crate::timeline::Moment;
+use crate::views::{self, LitPaint, NEW_FOR, PlotFrame};
+use crate::worker::{Command, KernelGrid, Lit, LitState, World};
+
+/// The kernel plot's exact ζ is computed at its width in pixels rounded up to a multiple of
+/// this (so a window resized by a few pixels does not ask again).
+const PLOT_RES_STEP: usize = 32;
+
+/// What the panels show this frame: a world, and its moment (once one was published).
+pub(super) struct Shown {
+    pub(super) world: Arc<World>,
+    pub(super) moment: Option<Moment>,
+    /// Whether it is the running learner's newest state.
+    pub(super) live: bool,
+    /// Cells with this id or more were inserted in the last [`NEW_FOR`] before the moment.
+    pub(super) new_from: usize,
+    /// The exact ζ at the plot's resolution, once the learner has made it for this world.
+    pub(super) kernel_grid: Option<Arc<KernelGrid>>,
+}
+
+impl ViewerApp {
+    /// The world and moment to draw: the newest when live (the world may be newer than any
+    /// moment: a scene just edited), else the moment scrubbed to and its own world.
+    fn shown_now(&self) -> Option<Shown> {
+        let live = self.is_live();
+        let moment = self.shown().cloned();
+        let world = match (&moment, live) {
+            (Some(m), false) => Arc::clone(&m.world),
+            _ => Arc::clone(self.world.as_ref()?),
+        };
+        let moment = moment.filter(|m| m.world.id == world.id);
+        let new_from = moment.as_ref().map_or(0, |m| {
+            self.timeline.cells_at(m.at().saturating_sub(NEW_FOR))
+        });
+        let kernel_grid = self.kernel_grid.clone().filter(|g| g.world == world.id);
+        Some(Shown {
+            world,
+            moment,
+            live,
+            new_from,
+            kernel_grid,
+        })
+    }
+
+    /// The lit scene of the moment shown, when it belongs to the scene drawn (not while an
+    /// edited scene's reference is being made).
+    fn shown_lit<'a>(&self, shown: &'a Shown) -> Option<&'a Lit> {
+        let lit = shown.moment.as_ref()?.lit.as_deref()?;
+        let current = !shown.live || self.scene == shown.world.scene;
+        (lit.setup.world == shown.world.id && current).then_some(lit)
+    }
+
+    pub(super) fn main_area(&mut self, ui: &mut egui::Ui) {
+        let full = ui.available_rect_before_wrap();
+        let Some(shown) = self.shown_now() else {
+            ui.centered_and_justified(|ui| {
+                ui.label(self.busy.unwrap_or("waiting for the learner…"))
+            });
+            return;
+        };
+        let layout = Layout::of(full, self.settings.lit);
+        self.kernel_panels(ui, &layout, &shown);
+        self.scene_panels(ui, &layout, &shown);
+        let history = shown
+            .moment
+            .as_ref()
+            .map_or(&[][..], |m| m.status.history.as_slice());
+        let lit = self.shown_lit(&shown);
+        ui.scope_builder(UiBuilder::new().max_rect(layout.curves), |ui| {
+            views::curves(ui, history, lit);
+        });
+    }
+
+    /// The exact ζ with the cells over it, the learned ζ and the error; the readout of the
+    /// hovered `(s, t)`.
+    fn kernel_panels(&mut self, ui: &mut egui::Ui, layout: &Layout, shown: &Shown) {
+        let ctx = ui.ctx().clone();
+        let ppp = ctx.pixels_per_point();
+        let mut kernel_frame = PlotFrame::new(layout.kernel, true);
+        let (approx_frame, error_frame) = (
+            PlotFrame::new(layout.approx, false),
+            PlotFrame::new(layout.error, false),
+        );
+        let pixels = |f: &PlotFrame| ((f.plot.width() * ppp).round() as usize).clamp(16, 2048);
+        let request = Request {
+            sides: [pixels(&kernel_frame), pixels(&approx_frame)],
+            px_per_point: ppp,
+            log: self.settings.log_scale,
+            show_samples: self.settings.show_samples,
+            show_cells: self.settings.show_cells,
+            show_edges: self.settings.show_edges,
+        };
+        let res = request.sides[0].div_ceil(PLOT_RES_STEP) * PLOT_RES_STEP;
+        if res != self.plot_res {
+            self.plot_res = res;
+            self.worker.send(Command::PlotResolution(res));
+        }
+        let textures = self.textures.of(&ctx, shown, &request);
+        kernel_frame.scale = Some(textures.scale);
+        let big = views::Overlay {
+            boundaries: Some(textures.boundaries_big),
+            samples: textures.samples,
+            cells: textures.overlay,
+        };
+        let small = views::Overlay {
+            boundaries: Some((textures.boundaries_small, &[])),
+            ..views::Overlay::default()
+        };
+        let learned_title = match shown.moment.as_ref().map(|m| m.status.params.target) {
+            Some(kernel_fit::Target::Visibility) => "learned ζ (unoccluded ζ × V)",
+            _ => "learned ζ (SGCS)",
+        };
+        let panels = [
+            (
+                kernel_frame,
+                "ζ(s, t) exact, with the cells",
+                Some(textures.kernel),
+                big,
+            ),
+            (approx_frame, learned_title, textures.approx, small),
+            (error_frame, "|learned − exact|", textures.error, small),
+        ];
+        let mut hovered = None;
+        for (frame, title, texture, overlay) in &panels {
+            let st = views::kernel_plot(
+                ui,
+                frame,
+                title,
+                *texture,
+                &shown.world.scene,
+                overlay,
+                &self.hover,
+            );
+            hovered = hovered.or(st);
+        }
+        self.hover.st = hovered;
+        if let Some([s, t]) = self.hover.st
+            && let Some(pointer) = ui.input(|i| i.pointer.hover_pos())
+        {
+            let text = readout_text(&shown.world.kernel, self.learned_source(shown), s, t);
+            views::readout_box(&ctx, pointer, &text);
+        }
+    }
+
+    /// The learned value under the pointer: the live model, or a past moment's grid.
+    fn learned_source<'a>(&'a self, shown: &'a Shown) -> Learned<'a> {
+        if shown.live
+            && let Some(a) = self
+                .approx
+                .as_ref()
+                .filter(|a| a.grid.world == shown.world.id)
+        {
+            return Learned::Model(&a.model);
+        }
+        match shown.moment.as_ref().and_then(|m| m.learned.as_deref()) {
+            Some(grid) => Learned::Grid(grid),
+            None => Learned::Unknown,
+        }
+    }
+
+    /// The scene (lit by the learned B when there is one; hovered ray, hovered s, dragged end
+    /// points when live) and, with the lit view on, the scene lit by the exact kernel.
+    fn scene_panels(&mut self, ui: &mut egui::Ui, layout: &Layout, shown: &Shown) {
+        let lit = self.shown_lit(shown);
+        let learned_paint = lit.map(|l| LitPaint {
+            mesh: &l.setup.mesh,
+            b: &l.solve.b,
+            top: l.setup.top,
+        });
+        let scene_title = match lit {
+            Some(l) => format!(
+                "lit by the learned kernel: B − E rel. L2 {} ({} el., {:.0} ms)",
+                error_text(l.solve.errors.rel_l2_reflected, true),
+                l.setup.mesh.len(),
+                1e3 * l.solve.solve_s
+            ),
+            None => "scene".to_owned(),
+        };
+        let scene = if shown.live {
+            self.scene.clone()
+        } else {
+            shown.world.scene.clone()
+        };
+        let scene_out = views::scene_view(
+            ui,
+            &views::SceneFrame {
+                rect: layout.scene,
+                title: &scene_title,
+                world: &shown.world,
+                lit: learned_paint.as_ref(),
+                editable: shown.live,
+            },
+            &scene,
+            &self.hover,
+            &mut self.drag,
+        );
+        self.hover.scene_s = scene_out.hovered_s;
+        if let Some((from, to)) = scene_out.moved {
+            self.move_point(from, to);
+        }
+        if let Some(rect) = layout.exact {
+            self.exact_panel(ui, rect, shown, lit);
+        }
+    }
+
+    /// The scene lit by the exact kernel, or why it is not there yet.
+    fn exact_panel(&self, ui: &mut egui::Ui, rect: Rect, shown: &Shown, lit: Option<&Lit>) {
+        let title = "lit by the exact kernel";
+        if let Some(l) = lit {
+            let paint = LitPaint {
+                mesh: &l.setup.mesh,
+                b: &l.setup.exact,
+                top: l.setup.top,
+            };
+            views::lit_view(ui, rect, title, &shown.world.scene, &paint);
+            return;
+        }
+        let why = match (&self.lit, shown.live) {
+            (_, false) => "no lit scene had been solved at this moment",
+            (Some(LitState::Failed(why)), true) => why.as_str(),
+            (Some(LitState::Off), true) => "the lit scene is off (View)",
+            (Some(LitState::Pending(what)), true) => what,
+            _ => "solving the exact radiosity…",
+        };
+        views::placeholder(ui, rect, title, why);
+    }
+}

@@ -1,0 +1,165 @@
+//! The learning curves under the plots: the held-out error of ζ and of the solved `B − E`
+//! against steps and rays, cells and samples, and `B(s)` of the learned and exact kernels.
+
+use egui::{Color32, Stroke};
+use egui_plot::{Legend, Line, LineStyle, Plot, PlotPoints, Polygon};
+use flatland_solve::Mesh;
+use kernel_fit::HistoryPoint;
+
+use super::EMITTER;
+use crate::lit::LitPoint;
+use crate::worker::Lit;
+
+/// `B(s)` along the surfaces: the learned solution as steps (one per element), the exact one
+/// on the finer mesh as a line, emitters shaded. The axis stops above the brightest
+/// non-emitter; emitters leave the plot.
+fn b_curves(ui: &mut egui::Ui, lit: &Lit, height: f32) {
+    let setup = &lit.setup;
+    let (mesh, b) = (&setup.mesh, &lit.solve.b);
+    let fine = setup.reference.mesh();
+    let exact = &setup.reference.solution().radiosity;
+    let lit_max = |mesh: &Mesh, b: &[f64]| {
+        (0..mesh.len())
+            .filter(|&i| mesh.edge_of(i).emission == 0.0)
+            .map(|i| b[i])
+            .filter(|v| v.is_finite())
+            .fold(0.0_f64, f64::max)
+    };
+    let mut y_max = 1.25 * lit_max(mesh, b).max(lit_max(fine, exact));
+    if y_max <= 0.0 || !y_max.is_finite() {
+        y_max = 1.0;
+    }
+    let clip = |v: f64| if v.is_finite() { v.min(y_max) } else { y_max };
+    let exact_points: PlotPoints<'static> = fine
+        .elements()
+        .iter()
+        .zip(exact)
+        .map(|(e, &v)| [e.s_mid, clip(v)])
+        .collect();
+    let learned_points: PlotPoints<'static> = mesh
+        .elements()
+        .iter()
+        .zip(b)
+        .flat_map(|(e, &v)| [[e.s[0], clip(v)], [e.s[1], clip(v)]])
+        .collect();
+    let emitters: Vec<[f64; 2]> = mesh
+        .edges()
+        .iter()
+        .filter(|e| e.emission > 0.0)
+        .map(|e| e.s)
+        .collect();
+    Plot::new("b-of-s")
+        .height(height)
+        .legend(Legend::default())
+        .allow_scroll(false)
+        .allow_zoom(false)
+        .allow_drag(false)
+        .allow_double_click_reset(false)
+        .show(ui, |p| {
+            p.set_plot_bounds_x(0.0..=1.0);
+            p.set_plot_bounds_y(0.0..=y_max);
+            for (k, [s0, s1]) in emitters.into_iter().enumerate() {
+                let name = if k == 0 { "emitter" } else { "" };
+                p.polygon(
+                    Polygon::new(name, vec![[s0, 0.0], [s1, 0.0], [s1, y_max], [s0, y_max]])
+                        .fill_color(EMITTER.gamma_multiply(0.25))
+                        .stroke(Stroke::NONE),
+                );
+            }
+            p.line(
+                Line::new(format!("exact ({} el.)", fine.len()), exact_points)
+                    .color(Color32::from_gray(200))
+                    .width(1.5),
+            );
+            p.line(
+                Line::new(format!("learned ({} el.)", mesh.len()), learned_points)
+                    .color(Color32::from_rgb(249, 140, 10))
+                    .width(2.0),
+            );
+        });
+}
+
+/// A learning curve. Never aggregated into a band: egui_plot fills the span of points that share
+/// a pixel column, which turned a vertical drop (errors falling while the rays stay the same)
+/// into a filled wedge.
+fn curve(name: &str, points: PlotPoints<'static>) -> Line<'static> {
+    Line::new(name, points).allow_band(false)
+}
+
+/// The learning curves: held-out error of ζ (and, with the lit scene, of the solved `B − E`)
+/// against steps and against rays; cells and samples; and `B(s)` when the lit scene exists.
+pub fn curves(ui: &mut egui::Ui, history: &[HistoryPoint], lit: Option<&Lit>) {
+    let lit_history = lit.map_or(&[][..], |l| &l.history[..]);
+    let h = (ui.available_height() - 22.0).max(60.0);
+    let series = |f: &dyn Fn(&HistoryPoint) -> [f64; 2]| -> PlotPoints<'static> {
+        history.iter().map(f).collect()
+    };
+    let lit_series = |f: &dyn Fn(&LitPoint) -> [f64; 2]| -> PlotPoints<'static> {
+        lit_history.iter().map(f).collect()
+    };
+    let columns = if lit.is_some() { 4 } else { 3 };
+    ui.columns(columns, |cols| {
+        cols[0].label("rel. L2 vs steps");
+        Plot::new("err-steps")
+            .height(h)
+            .include_y(0.0)
+            .legend(Legend::default())
+            .allow_scroll(false)
+            .allow_zoom(false)
+            .allow_drag(false)
+            .show(&mut cols[0], |p| {
+                p.line(curve(
+                    "ζ held out",
+                    series(&|h| [h.steps as f64, h.rel_l2_heldout]),
+                ));
+                if !lit_history.is_empty() {
+                    p.line(curve(
+                        "solved B − E",
+                        lit_series(&|h| [h.steps as f64, h.rel_l2_reflected]),
+                    ));
+                }
+            });
+        cols[1].label("rel. L2 vs rays cast");
+        Plot::new("err-rays")
+            .height(h)
+            .include_y(0.0)
+            .legend(Legend::default())
+            .allow_scroll(false)
+            .allow_zoom(false)
+            .allow_drag(false)
+            .show(&mut cols[1], |p| {
+                p.line(curve(
+                    "ζ held out",
+                    series(&|h| [h.rays as f64, h.rel_l2_heldout]),
+                ));
+                if !lit_history.is_empty() {
+                    p.line(curve(
+                        "solved B − E",
+                        lit_series(&|h| [h.rays as f64, h.rel_l2_reflected]),
+                    ));
+                }
+            });
+        if let Some(lit) = lit {
+            cols[3].label("B(s): learned vs exact");
+            b_curves(&mut cols[3], lit, h);
+        }
+        cols[2].label("cells and samples vs steps");
+        Plot::new("counts")
+            .height(h)
+            .include_y(0.0)
+            .legend(Legend::default())
+            .allow_scroll(false)
+            .allow_zoom(false)
+            .allow_drag(false)
+            .show(&mut cols[2], |p| {
+                p.line(curve("cells", series(&|h| [h.steps as f64, h.cells as f64])).width(2.5));
+                p.line(
+                    curve(
+                        "samples / 20",
+                        series(&|h| [h.steps as f64, h.samples as f64 / 20.0]),
+                    )
+                    .style(LineStyle::dashed_dense()),
+                );
+            });
+    });
+}

@@ -1,0 +1,217 @@
+//! A scene's edges: by role, or each element in the colour of its radiosity with a colour bar
+//! (the lit scene, [`lit_view`]); front-side ticks and surface indices only where they have
+//! room, so a scene of a thousand edges is drawn as lines, not as a smear of labels.
+
+use std::collections::HashSet;
+
+use egui::{Align2, Color32, FontId, Painter, Rect, Sense, Stroke, pos2, vec2};
+use flatland_geom::{Role, Scene};
+use flatland_solve::Mesh;
+
+use super::scene::View;
+use super::widgets::{gradient, legend, panel_frame, short};
+use super::{BLOCKER, EMITTER, LIT_BLOCKER, SURFACE, TITLE_H};
+use crate::colormap::colour;
+
+/// Width of the colour bar beside a lit scene, labels included.
+pub(super) const COLOUR_BAR_W: f32 = 58.0;
+/// Height of the scene view's line under the title (the hovered ray's k).
+pub(super) const INFO_H: f32 = 12.0;
+/// An edge shorter than this on screen gets no front-side tick.
+const MIN_TICKED: f32 = 8.0;
+/// An edge shorter than this on screen gets no index.
+const MIN_LABELLED: f32 = 18.0;
+/// Cells of the grid labels are placed on: one label per cell at most.
+const LABEL_CELL: [f32; 2] = [18.0, 12.0];
+
+/// The scene view's colours, for its legend.
+pub(super) const LEGEND: [(&str, Color32); 3] = [
+    ("emitter", EMITTER),
+    ("surface", SURFACE),
+    ("blocker", BLOCKER),
+];
+/// The lit scene's legend (surfaces are coloured by B).
+pub(super) const LIT_LEGEND: [(&str, Color32); 2] =
+    [("• emitter", EMITTER), ("blocker", LIT_BLOCKER)];
+
+/// A scene's edges coloured by a radiosity: `b` per element of `mesh`, on a linear scale from
+/// 0 to `top` (emitters, brighter, are drawn at the top colour and marked).
+#[derive(Clone, Copy, Debug)]
+pub struct LitPaint<'a> {
+    /// The elements.
+    pub mesh: &'a Mesh,
+    /// B per element.
+    pub b: &'a [f64],
+    /// The value drawn in the top colour.
+    pub top: f64,
+}
+
+impl LitPaint<'_> {
+    fn color(&self, b: f64) -> Color32 {
+        colour(b / self.top)
+    }
+}
+
+/// Where a scene is drawn inside its panel `rect`: below the title, clear of the border, and
+/// left of the colour bar when it is lit.
+pub(super) fn scene_area(rect: Rect, lit: bool) -> Rect {
+    let right = if lit { COLOUR_BAR_W } else { 18.0 };
+    Rect::from_min_max(
+        rect.min + vec2(18.0, TITLE_H + INFO_H + 6.0),
+        rect.max - vec2(right, 16.0),
+    )
+}
+
+/// Every edge of `scene`: by role, or (with `lit`) each element in the colour of its B,
+/// emitters marked with a sun on their front side; front-side ticks and surface indices where
+/// there is room for them.
+pub(super) fn draw_edges(
+    painter: &Painter,
+    view: &View,
+    scene: &Scene,
+    lit: Option<&LitPaint<'_>>,
+    weak: Color32,
+) {
+    if let Some(lit) = lit {
+        for (el, &b) in lit.mesh.elements().iter().zip(lit.b) {
+            painter.line_segment(
+                [view.screen(el.a), view.screen(el.b)],
+                Stroke::new(5.0, lit.color(b)),
+            );
+        }
+    }
+    let mut labels = LabelGrid::default();
+    for (i, e) in scene.edges().iter().enumerate() {
+        let (color, width) = match (e.role, lit.is_some()) {
+            (Role::Blocker, false) => (BLOCKER, 3.0),
+            (Role::Blocker, true) => (LIT_BLOCKER, 3.0),
+            (Role::Surface, true) => (Color32::from_gray(150), 0.0),
+            (Role::Surface, false) if e.emission > 0.0 => (EMITTER, 4.0),
+            (Role::Surface, false) => (SURFACE, 2.0),
+        };
+        let (a, b) = (view.screen(e.a), view.screen(e.b));
+        if width > 0.0 {
+            painter.line_segment([a, b], Stroke::new(width, color));
+        }
+        let length = a.distance(b);
+        let n = e.normal();
+        let n = vec2(n.x as f32, -n.y as f32);
+        if length >= MIN_TICKED {
+            let ticks = ((length / 22.0) as usize).clamp(1, 16);
+            let tick = Stroke::new(1.0, color.gamma_multiply(0.8));
+            for k in 0..ticks {
+                let p = a + (b - a) * ((k as f32 + 0.5) / ticks as f32);
+                painter.line_segment([p, p + n * 6.0], tick);
+                if e.two_sided {
+                    painter.line_segment([p, p - n * 6.0], tick);
+                }
+            }
+        }
+        if e.role != Role::Surface {
+            continue;
+        }
+        let mid = a + (b - a) * 0.5 + n * 13.0;
+        if lit.is_some() && e.emission > 0.0 {
+            painter.circle_filled(mid, 6.0, EMITTER);
+            painter.circle_stroke(mid, 6.0, Stroke::new(1.0, Color32::BLACK));
+        } else if length >= MIN_LABELLED && labels.take(mid) {
+            painter.text(
+                mid,
+                Align2::CENTER_CENTER,
+                i.to_string(),
+                FontId::proportional(10.0),
+                weak,
+            );
+        }
+    }
+}
+
+/// The cells of a coarse screen grid that hold a label already.
+#[derive(Default)]
+struct LabelGrid(HashSet<(i32, i32)>);
+
+impl LabelGrid {
+    /// Whether a label at `p` is free of the others (and then takes its cell).
+    fn take(&mut self, p: egui::Pos2) -> bool {
+        let cell = (
+            (p.x / LABEL_CELL[0]).floor() as i32,
+            (p.y / LABEL_CELL[1]).floor() as i32,
+        );
+        let near = (-1..=1).any(|dx| self.0.contains(&(cell.0 + dx, cell.1)));
+        !near && self.0.insert(cell)
+    }
+}
+
+/// A vertical colour bar at the right of `rect`: 0 at the bottom, `top` at the top.
+pub(super) fn colour_bar(painter: &Painter, rect: Rect, top: f64, text: Color32) {
+    let bar = Rect::from_min_max(
+        pos2(
+            rect.right() - COLOUR_BAR_W + 10.0,
+            rect.top() + TITLE_H + 22.0,
+        ),
+        pos2(rect.right() - COLOUR_BAR_W + 22.0, rect.bottom() - 34.0),
+    );
+    if bar.height() < 20.0 {
+        return;
+    }
+    gradient(painter, bar, 48, text);
+    let font = FontId::proportional(10.0);
+    painter.text(
+        bar.center_top() - vec2(0.0, 3.0),
+        Align2::CENTER_BOTTOM,
+        "B",
+        FontId::proportional(12.0),
+        text,
+    );
+    painter.text(
+        bar.right_top() + vec2(3.0, 0.0),
+        Align2::LEFT_TOP,
+        short(top),
+        font.clone(),
+        text,
+    );
+    painter.text(
+        bar.right_bottom() + vec2(3.0, 0.0),
+        Align2::LEFT_BOTTOM,
+        "0",
+        font.clone(),
+        text,
+    );
+    painter.text(
+        bar.center_bottom() + vec2(0.0, 4.0),
+        Align2::CENTER_TOP,
+        "emitters\nabove",
+        font,
+        text,
+    );
+}
+
+/// A scene lit by `lit` (not interactive): the exact solution beside the learned one.
+pub fn lit_view(ui: &mut egui::Ui, rect: Rect, title: &str, scene: &Scene, lit: &LitPaint<'_>) {
+    let _ = ui.allocate_rect(rect, Sense::hover());
+    let painter = ui.painter_at(rect);
+    let weak = ui.visuals().weak_text_color();
+    panel_frame(&painter, rect, title, ui.visuals().text_color());
+    let view = View::of(scene, scene_area(rect, true));
+    draw_edges(&painter, &view, scene, Some(lit), weak);
+    colour_bar(&painter, rect, lit.top, weak);
+    let _ = legend(&painter, rect, &LIT_LEGEND);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn labels_keep_their_distance() {
+        let mut grid = LabelGrid::default();
+        assert!(grid.take(pos2(100.0, 100.0)));
+        assert!(!grid.take(pos2(104.0, 101.0)), "the same cell");
+        assert!(
+            !grid.take(pos2(118.0, 100.0)),
+            "the next cell along the line"
+        );
+        assert!(grid.take(pos2(140.0, 100.0)));
+        assert!(grid.take(pos2(100.0, 115.0)), "the next row");
+    }
+}
