@@ -101,37 +101,9 @@ pub(crate) fn solve(
             }
             apply_system(op, &basis[k], &mut w);
             iterations += 1;
-            // Modified Gram–Schmidt, twice where it cancelled badly (keeps V orthonormal).
-            let before = norm(&w);
-            for (j, v) in basis.iter().enumerate() {
-                let c = dot(&w, v);
-                h[k][j] = c;
-                w.iter_mut().zip(v).for_each(|(wi, vi)| *wi -= c * vi);
-            }
-            if norm(&w) < 0.5 * before {
-                for (j, v) in basis.iter().enumerate() {
-                    let c = dot(&w, v);
-                    h[k][j] += c;
-                    w.iter_mut().zip(v).for_each(|(wi, vi)| *wi -= c * vi);
-                }
-            }
-            let next = norm(&w);
+            let next = orthogonalize(&mut w, &basis, &mut h[k]);
             h[k][k + 1] = next;
-            for (j, &(c, s)) in rotations.iter().enumerate() {
-                let (a, b) = (h[k][j], h[k][j + 1]);
-                h[k][j] = c * a + s * b;
-                h[k][j + 1] = -s * a + c * b;
-            }
-            let (a, b) = (h[k][k], h[k][k + 1]);
-            let rho = a.hypot(b);
-            let (c, s) = if rho == 0.0 {
-                (1.0, 0.0)
-            } else {
-                (a / rho, b / rho)
-            };
-            rotations.push((c, s));
-            h[k][k] = rho;
-            h[k][k + 1] = 0.0;
+            let (c, s) = rotate(&mut h[k], k, &mut rotations);
             g[k + 1] = -s * g[k];
             g[k] *= c;
             steps = k + 1;
@@ -141,20 +113,66 @@ pub(crate) fn solve(
             }
             basis.push(w.iter().map(|v| v / next).collect());
         }
-        // Back substitution for the Krylov coefficients, then update x.
-        let mut y = vec![0.0; steps];
-        for i in (0..steps).rev() {
-            let sum: f64 = (i + 1..steps).map(|j| h[j][i] * y[j]).sum();
-            y[i] = if h[i][i] == 0.0 {
-                0.0
-            } else {
-                (g[i] - sum) / h[i][i]
-            };
-        }
+        let y = back_substitute(&h, &g, steps);
         for (yi, v) in y.iter().zip(&basis) {
             x.iter_mut().zip(v).for_each(|(xi, vi)| *xi += yi * vi);
         }
     }
+}
+
+/// Modified Gram–Schmidt of `w` against `basis`, twice where it cancelled badly (keeps V
+/// orthonormal); the coefficients go into the Hessenberg column `h`. Returns `‖w‖` after.
+fn orthogonalize(w: &mut [f64], basis: &[Vec<f64>], h: &mut [f64]) -> f64 {
+    let before = norm(w);
+    for (j, v) in basis.iter().enumerate() {
+        let c = dot(w, v);
+        h[j] = c;
+        w.iter_mut().zip(v).for_each(|(wi, vi)| *wi -= c * vi);
+    }
+    if norm(w) < 0.5 * before {
+        for (j, v) in basis.iter().enumerate() {
+            let c = dot(w, v);
+            h[j] += c;
+            w.iter_mut().zip(v).for_each(|(wi, vi)| *wi -= c * vi);
+        }
+    }
+    norm(w)
+}
+
+/// Applies the earlier Givens rotations to Hessenberg column `h` (step `k`), then the new one
+/// that zeroes its subdiagonal, which it keeps and returns as `(cos, sin)`.
+fn rotate(h: &mut [f64], k: usize, rotations: &mut Vec<(f64, f64)>) -> (f64, f64) {
+    for (j, &(c, s)) in rotations.iter().enumerate() {
+        let (a, b) = (h[j], h[j + 1]);
+        h[j] = c * a + s * b;
+        h[j + 1] = -s * a + c * b;
+    }
+    let (a, b) = (h[k], h[k + 1]);
+    let rho = a.hypot(b);
+    let (c, s) = if rho == 0.0 {
+        (1.0, 0.0)
+    } else {
+        (a / rho, b / rho)
+    };
+    rotations.push((c, s));
+    h[k] = rho;
+    h[k + 1] = 0.0;
+    (c, s)
+}
+
+/// The Krylov coefficients of the first `steps` columns: back substitution in the rotated
+/// (upper-triangular) Hessenberg matrix, column-major in `h`.
+fn back_substitute(h: &[Vec<f64>], g: &[f64], steps: usize) -> Vec<f64> {
+    let mut y = vec![0.0; steps];
+    for i in (0..steps).rev() {
+        let sum: f64 = (i + 1..steps).map(|j| h[j][i] * y[j]).sum();
+        y[i] = if h[i][i] == 0.0 {
+            0.0
+        } else {
+            (g[i] - sum) / h[i][i]
+        };
+    }
+    y
 }
 
 #[cfg(test)]

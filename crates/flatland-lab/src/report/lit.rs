@@ -54,6 +54,9 @@ pub fn lit_scene_png(path: &Path, p: &Picture<'_>) -> Result<()> {
 
 type Area<'a> = DrawingArea<BitMapBackend<'a>, plotters::coord::Shift>;
 type DrawResult = std::result::Result<(), Box<dyn std::error::Error>>;
+/// The curves' axes: `s` against `B`.
+type Axes =
+    Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>;
 
 /// Each element in the colour of its B, blockers grey, emitters marked, a colour bar.
 fn draw_scene(area: &Area<'_>, p: &Picture<'_>) -> DrawResult {
@@ -239,10 +242,19 @@ fn draw_curves(area: &Area<'_>, p: &Picture<'_>) -> DrawResult {
             )])?;
         }
     }
-    // Legend entries drawn by hand (one per kind, not one per segment).
+    draw_legend(&mut chart, p, fine.len(), solution)
+}
+
+/// The legend of [`draw_curves`], drawn by hand: one entry per kind, not one per segment.
+fn draw_legend<'a>(
+    chart: &mut ChartContext<'a, BitMapBackend<'a>, Axes>,
+    p: &Picture<'_>,
+    fine_elements: usize,
+    solution: RGBColor,
+) -> DrawResult {
     chart
         .draw_series(LineSeries::new(std::iter::empty(), BLACK.stroke_width(2)))?
-        .label(format!("exact kernel, {} elements", fine.len()))
+        .label(format!("exact kernel, {fine_elements} elements"))
         .legend(|(x, y)| PathElement::new([(x, y), (x + 22, y)], BLACK.stroke_width(2)));
     chart
         .draw_series(LineSeries::new(
