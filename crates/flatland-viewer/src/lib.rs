@@ -73,9 +73,9 @@ use std::path::PathBuf;
 
 pub use app::{Options, ViewerApp, stop_text};
 pub use colormap::{colour, grid_image, samples_image, set_color};
-pub use settings::{SceneChoice, Settings, with_preset};
+pub use settings::{LearnerChoice, SceneChoice, Settings, with_preset};
 pub use timeline::{Moment, Prefix, Timeline};
-pub use worker::{CellMark, Growth, LearnedGrid, Lit, LitState, Status, World};
+pub use worker::{CellMark, Growth, LearnedGrid, LightRounds, Lit, LitState, Status, World};
 
 /// Why the viewer could not run.
 #[derive(Debug, thiserror::Error)]

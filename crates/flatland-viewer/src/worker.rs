@@ -25,8 +25,8 @@ use kernel_fit::{FitParams, LearnedKernel, LiveParams};
 use rayon::prelude::*;
 
 pub use published::{
-    APPROX_RES, Approx, CellMark, Growth, KernelGrid, LearnedGrid, Lit, LitState, REFERENCE_RES,
-    Status, World,
+    APPROX_RES, Approx, CellMark, Growth, KernelGrid, LearnedGrid, LightRounds, Lit, LitState,
+    REFERENCE_RES, Status, World,
 };
 
 /// What the UI asks of the learner.
@@ -44,8 +44,11 @@ pub enum Command {
         scene: Scene,
         /// Pieces per surface edge.
         subdivide: usize,
-        /// The fit's parameters.
+        /// The fit's parameters (of the network learners; the light-driven one keeps them
+        /// for when the user switches back).
         params: FitParams,
+        /// Run the light-driven learner ([`kernel_fit::LightFit`]) instead of the network.
+        light: bool,
     },
     /// New live parameters for the running fit (what else changes needs a new fit: `Reset`).
     Params(LiveParams),

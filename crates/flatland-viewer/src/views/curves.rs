@@ -118,6 +118,14 @@ pub fn curves(ui: &mut egui::Ui, history: &[HistoryPoint], lit: Option<&Lit>) {
                         lit_series(&|h| [h.steps as f64, h.rel_l2_reflected]),
                     ));
                 }
+                // The light-driven learner's own estimate of that error, per round.
+                let estimated: PlotPoints<'static> = lit_history
+                    .iter()
+                    .filter_map(|h| h.estimated.map(|e| [h.steps as f64, e]))
+                    .collect();
+                if !estimated.points().is_empty() {
+                    p.line(curve("estimated B − E", estimated).style(LineStyle::dashed_loose()));
+                }
             });
         cols[1].label("rel. L2 vs rays cast");
         Plot::new("err-rays")
