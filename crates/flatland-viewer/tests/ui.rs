@@ -269,7 +269,7 @@ fn switching_presets_starts_a_new_fit_with_that_learner() {
     assert_eq!(h.state().settings().preset, Preset::Default);
     let default_world = h.state().world_id();
 
-    h.get_by_label("Paper").click();
+    h.get_by_label("paper").click();
     wait_for(&mut h, "a fresh fit of the paper's network", |a| {
         a.world_id() > default_world
             && a.caught_up()
@@ -291,7 +291,7 @@ fn switching_presets_starts_a_new_fit_with_that_learner() {
     });
 
     let paper_world = h.state().world_id();
-    h.get_by_label("Default").click();
+    h.get_by_label("θ-driven").click();
     wait_for(&mut h, "a fresh fit of the default learner", |a| {
         a.world_id() > paper_world
             && a.caught_up()
@@ -300,6 +300,28 @@ fn switching_presets_starts_a_new_fit_with_that_learner() {
     });
     assert_eq!(h.state().settings().preset, Preset::Default);
     assert!(h.state().settings().is_preset());
+
+    // The light-driven learner, and back: the θ-driven network as it was.
+    let theta_world = h.state().world_id();
+    h.get_by_label("light-driven (default)").click();
+    h.get_by_label("Step").click();
+    wait_for(&mut h, "a round of the light-driven learner", |a| {
+        a.world_id() > theta_world
+            && a.caught_up()
+            && a.shown()
+                .is_some_and(|m| m.status.growth.light.is_some_and(|l| l.rounds == 1))
+    });
+    assert_eq!(h.state().settings().learner, LearnerChoice::Light);
+    assert!(!h.state().running(), "a step is one round");
+    let light_world = h.state().world_id();
+    h.get_by_label("θ-driven").click();
+    wait_for(&mut h, "the θ-driven network again", |a| {
+        a.world_id() > light_world
+            && a.caught_up()
+            && a.shown().is_some_and(|m| m.status.growth.light.is_none())
+    });
+    assert_eq!(h.state().settings().learner, LearnerChoice::Network);
+    assert_eq!(h.state().fit_params().unwrap().target, Target::Visibility);
 }
 
 /// A live parameter (a rate of the network) reaches the running fit; a fixed one (a rule of
