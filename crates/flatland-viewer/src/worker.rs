@@ -1,4 +1,5 @@
-//! The learner's thread and the UI's end of it. The thread owns the [`kernel_fit::Fit`]; the UI
+//! The learner's thread and the UI's end of it. The thread owns the [`kernel_fit::LightFit`] or
+//! the [`kernel_fit::Fit`]; the UI
 //! talks to it with [`Command`]s and reads what it publishes from a [`Mailbox`] with
 //! `try_lock`, so a frame never waits for training. Each publication also wakes whoever waits
 //! for one ([`WorkerHandle::wait`]: tests, which wait on what the learner says instead of
