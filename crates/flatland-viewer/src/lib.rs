@@ -13,7 +13,7 @@
 //!   ringed when new, the network's edges between cells of one face (the others join cells that
 //!   never answer the same ray), and optionally every training sample coloured by its set. The
 //!   light-driven learner's cells are one per face learned, at the `(s, t)` of the face's ray,
-//!   yellow where it found the face clear, magenta where blocked, ringed when the newest round
+//!   light blue where it found the face clear, magenta where blocked, ringed when the newest round
 //!   learned them. A legend under the plot says what each mark means.
 //! - **ζ̃ and |ζ̃ − ζ|** beside it, on the same colour scale (paper Fig. 3d). Hovering any of the
 //!   three shows `G`, `V`, `k`, `ζ` and the learned value at the pointer; for the default

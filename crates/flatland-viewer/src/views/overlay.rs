@@ -44,7 +44,7 @@ fn cell_radius(width: f32, side_pt: f32, cells: usize) -> f32 {
 }
 
 /// The network's edges within faces, then its cells: discs sized by δ_c, white, cyan when
-/// critical (a light-driven learner's face cells: yellow when clear, magenta when blocked),
+/// critical (a light-driven learner's face cells: light blue when clear, magenta when blocked),
 /// with a black rim, or a lime ring when new; drawn into a transparent
 /// `side × side` image (`t` to the right, `s` upwards). `px_per_point` scales the marks with
 /// the display's pixel density.

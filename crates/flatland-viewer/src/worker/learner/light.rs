@@ -232,6 +232,7 @@ impl Learner {
         run.history.push(LitPoint {
             steps: rounds as u64,
             rays: fit.history().last().map_or(0, |r| r.rays),
+            cells: run.shown,
             rel_l2_reflected: errors.rel_l2_reflected,
             estimated: fit.estimated_error(),
         });

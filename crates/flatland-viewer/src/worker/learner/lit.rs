@@ -281,6 +281,7 @@ impl Learner {
                     self.lit.history.push(LitPoint {
                         steps,
                         rays,
+                        cells,
                         rel_l2_reflected: solve.errors.rel_l2_reflected,
                         estimated: None,
                     });
