@@ -261,15 +261,11 @@ impl Learner {
         if !(force || (due && (changed || self.dirty))) {
             return;
         }
-        let (rounds, rays, estimated_error, stopped) =
-            run.fit.as_ref().map_or((0, 0, None, None), |f| {
-                (
-                    f.history().len(),
-                    f.rays(),
-                    f.estimated_error(),
-                    f.stopped(),
-                )
-            });
+        let (rounds, estimated_error, stopped) = run.fit.as_ref().map_or((0, None, None), |f| {
+            (f.history().len(), f.estimated_error(), f.stopped())
+        });
+        // One ray per face learned: the rays of the cells shown so far.
+        let rays = run.shown as u64;
         let stopped = stopped.filter(|_| run.stopped().is_some());
         let growth = Growth {
             steps: rounds as u64,
