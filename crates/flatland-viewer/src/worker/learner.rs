@@ -147,6 +147,9 @@ impl Learner {
         match command {
             Command::Play => {
                 self.running = true;
+                if let Some(run) = &mut self.light {
+                    run.resume();
+                }
                 self.last_tick = Instant::now();
                 self.pace.restart();
             }

@@ -65,6 +65,19 @@ impl LightRun {
         }
     }
 
+    /// Training goes on after a pause: the reveal picks up where it was, instead of showing at
+    /// once every cell that would have appeared meanwhile.
+    pub(super) fn resume(&mut self) {
+        let (_, rate) = self.reveal;
+        if rate.is_finite() && rate > 0.0 {
+            let done = (self.shown - self.newest_from) as f64 / rate;
+            let now = Instant::now();
+            self.reveal.0 = now
+                .checked_sub(Duration::from_secs_f64(done))
+                .unwrap_or(now);
+        }
+    }
+
     /// Why it stopped, once it has (and every cell is shown).
     pub(super) fn stopped(&self) -> Option<LightStop> {
         let fit = self.fit.as_ref()?;
@@ -301,5 +314,29 @@ impl Learner {
         self.published.mark_published();
         self.dirty = false;
         self.post(|m| super::publish::queue(&mut m.statuses, status));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn after_a_pause_the_reveal_goes_on_where_it_was() {
+        let mut run = LightRun::new(FitParams::default());
+        run.newest_from = 100;
+        run.shown = 150;
+        // 100 cells per second, started long ago (a pause of a minute since).
+        run.reveal = (Instant::now() - Duration::from_secs(60), 100.0);
+        run.resume();
+        let since = run.reveal.0.elapsed().as_secs_f64();
+        assert!((0.5..1.5).contains(&since), "{since} s: 50 cells at 100/s");
+        // Cells due now: where it paused, not a minute's worth.
+        let due = run.newest_from + (since * run.reveal.1) as usize;
+        assert!(due < 160, "{due}");
+        // A round shown at once has nothing to resume.
+        run.reveal = (Instant::now() - Duration::from_secs(60), f64::INFINITY);
+        run.resume();
+        assert!(run.reveal.0.elapsed() >= Duration::from_secs(59));
     }
 }
