@@ -1,6 +1,8 @@
-//! The flatland viewer: watch the cells of a supervised growing cell structures network grow
-//! over the `(s, t)` plot of a Flatland radiosity kernel, live, while it learns — and scrub back
-//! through the growth afterwards.
+//! The flatland viewer: watch a learner of a Flatland radiosity kernel at work over the
+//! `(s, t)` plot of that kernel, live — by default the light-driven learner
+//! ([`kernel_fit::LightFit`]: rounds of solving the scene and learning the faces the most
+//! light flows through), or the cells of a supervised growing cell structures network — and
+//! scrub back through the run afterwards.
 //!
 //! An eframe (glow) desktop app on top of [`kernel_fit`]; the library crates never depend on it.
 //!
@@ -9,8 +11,10 @@
 //!   axes, labelled where the labels have room; over it the cells re-projected to the mean
 //!   `(s, t)` of the samples they won (paper Fig. 3c), sized by `δ_c`, cyan when critical,
 //!   ringed when new, the network's edges between cells of one face (the others join cells that
-//!   never answer the same ray), and optionally every training sample coloured by its set. A
-//!   legend under the plot says what each mark means.
+//!   never answer the same ray), and optionally every training sample coloured by its set. The
+//!   light-driven learner's cells are one per face learned, at the `(s, t)` of the face's ray,
+//!   light blue where it found the face clear, magenta where blocked, ringed when the newest round
+//!   learned them. A legend under the plot says what each mark means.
 //! - **ζ̃ and |ζ̃ − ζ|** beside it, on the same colour scale (paper Fig. 3d). Hovering any of the
 //!   three shows `G`, `V`, `k`, `ζ` and the learned value at the pointer; for the default
 //!   learner also its `Ṽ` and whether the geometry or the cells of that face decide it.
@@ -23,25 +27,31 @@
 //!   changes the scene: the references are recomputed and the network keeps learning from
 //!   where it is (`Fit::set_kernel`).
 //! - **Curves**: held-out relative L2 of ζ and of the solved `B − E` against steps and rays,
-//!   cells and samples.
+//!   cells and samples; for the light-driven learner, per round, the `B − E` error measured
+//!   against the exact solve and the learner's own estimate of it.
 //! - **Timeline**: every moment the learner published is kept (thinned to every 2^k-th past a
 //!   cap, the first and latest always), and a slider shows any of them — kernel plot, cells, lit
 //!   scene and curves as they were then; Replay plays the run back at a chosen speed, Live
 //!   returns to the running learner ([`timeline`]).
-//! - **Controls**: play, pause, step, reset, the pace of growth; the learner preset (the
-//!   default learner or the paper's network) and every parameter of both (docs/ALGORITHM.md
-//!   §8) with its valid range; a live parameter ([`kernel_fit::LiveParams`]) reaches the
+//! - **Controls**: play, pause, step (a round of the light-driven learner), reset, the pace of
+//!   growth; the learner (light-driven, the default; θ-driven, the default network; or the
+//!   paper's network) and every parameter of the networks (docs/ALGORITHM.md §8) with its
+//!   valid range; a live parameter ([`kernel_fit::LiveParams`]) reaches the
 //!   running fit, any other (target, gating, importance, the network's rules, …) starts a new
 //!   fit with it. Settings persist, with the preset chosen; settings saved by an older viewer
 //!   load with the current learner. Export saves the window as a PNG and the run as the model
 //!   file `flatland eval` reads.
 //!
-//! The first launch opens a generated floor plan ([`scenes`]) and grows its network at a pace
-//! of cells per second rather than as fast as the machine goes: on `fig3` the default learner
-//! is exact after 17 000 steps, which a fast machine runs before the window has drawn a useful
-//! frame. With the pace, growth is there to watch for a while on any machine.
+//! The first launch opens a generated floor plan ([`scenes`]) and learns at a pace tied to wall
+//! time rather than as fast as the machine goes. The light-driven learner meets its tolerance
+//! on that floor plan in 7 rounds and under 0.2 s, so each round's new cells appear in the
+//! order learned over at most 2 s (at least the pace of cells per second asked for) before the
+//! next round runs: about 12 s of rounds to watch, the lit scene changing with each. A network
+//! grows at the pace of cells per second: on `fig3` the θ-driven learner is exact after 17 000
+//! steps, which a fast machine runs before the window has drawn a useful frame.
 //!
-//! Training runs on its own thread, which owns the [`kernel_fit::Fit`]; the UI sends commands
+//! Training runs on its own thread, which owns the [`kernel_fit::LightFit`] or the
+//! [`kernel_fit::Fit`]; the UI sends commands
 //! and takes published snapshots without ever waiting for the learner. Textures are rebuilt
 //! only when the data behind them changes, and what is drawn over the plots is rastered at the
 //! plot's size in screen pixels, so a frame costs the same for 24 edges and 3 cells as for
@@ -73,9 +83,9 @@ use std::path::PathBuf;
 
 pub use app::{Options, ViewerApp, stop_text};
 pub use colormap::{colour, grid_image, samples_image, set_color};
-pub use settings::{SceneChoice, Settings, with_preset};
+pub use settings::{LearnerChoice, SceneChoice, Settings, with_preset};
 pub use timeline::{Moment, Prefix, Timeline};
-pub use worker::{CellMark, Growth, LearnedGrid, Lit, LitState, Status, World};
+pub use worker::{CellMark, Growth, LearnedGrid, LightRounds, Lit, LitState, Status, World};
 
 /// Why the viewer could not run.
 #[derive(Debug, thiserror::Error)]

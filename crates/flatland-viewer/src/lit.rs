@@ -132,8 +132,12 @@ pub struct LitPoint {
     pub steps: u64,
     /// Rays cast by then.
     pub rays: u64,
+    /// Cells of the model solved.
+    pub cells: usize,
     /// Relative L2 error of the reflected part `B − E`.
     pub rel_l2_reflected: f64,
+    /// The light-driven learner's own estimate of that error (`None` for a network).
+    pub estimated: Option<f64>,
 }
 
 /// The brightest element of `b` that does not emit (emitters are 10–100× brighter than what

@@ -23,11 +23,24 @@ pub enum SceneChoice {
     File(PathBuf),
 }
 
+/// Which learner runs: the light-driven loop ([`kernel_fit::LightFit`], what `flatland solve`
+/// runs by default) or a network ([`kernel_fit::Fit`], with [`Settings::preset`]'s parameters).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum LearnerChoice {
+    /// Rounds of solving and learning where the light flows (docs/ALGORITHM.md §4a).
+    #[default]
+    Light,
+    /// A growing cell structures network trained step by step (the θ-driven or the paper's).
+    Network,
+}
+
 /// Everything the viewer remembers between runs (eframe persistence).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct Settings {
-    /// The learner the parameters started from ([`Preset::Default`] or [`Preset::Paper`]).
+    /// Which learner runs (settings saved before there was a choice: the light-driven one).
+    pub learner: LearnerChoice,
+    /// The network learner the parameters started from ([`Preset::Default`] or [`Preset::Paper`]).
     pub preset: Preset,
     /// The fit's parameters (the preset's, possibly changed in the panel).
     pub params: FitParams,
@@ -60,6 +73,7 @@ pub struct Settings {
 impl Default for Settings {
     fn default() -> Self {
         Settings {
+            learner: LearnerChoice::Light,
             preset: Preset::Default,
             params: FitParams::default(),
             learner_defaults: Some(Preset::Default.params()),

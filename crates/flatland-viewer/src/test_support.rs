@@ -69,12 +69,14 @@ pub fn moment(world: &Arc<World>, i: u64, cells: usize) -> Moment {
                 st: Some([0.5, 0.5]),
                 width: 0.1,
                 critical: false,
+                visible: None,
             };
             cells
         ],
         face_edges: Vec::new(),
         sets: 1,
         run_time: Duration::from_millis(100 * i),
+        light: None,
     };
     Moment {
         world: Arc::clone(world),

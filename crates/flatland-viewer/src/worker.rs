@@ -1,4 +1,5 @@
-//! The learner's thread and the UI's end of it. The thread owns the [`kernel_fit::Fit`]; the UI
+//! The learner's thread and the UI's end of it. The thread owns the [`kernel_fit::LightFit`] or
+//! the [`kernel_fit::Fit`]; the UI
 //! talks to it with [`Command`]s and reads what it publishes from a [`Mailbox`] with
 //! `try_lock`, so a frame never waits for training. Each publication also wakes whoever waits
 //! for one ([`WorkerHandle::wait`]: tests, which wait on what the learner says instead of
@@ -25,8 +26,8 @@ use kernel_fit::{FitParams, LearnedKernel, LiveParams};
 use rayon::prelude::*;
 
 pub use published::{
-    APPROX_RES, Approx, CellMark, Growth, KernelGrid, LearnedGrid, Lit, LitState, REFERENCE_RES,
-    Status, World,
+    APPROX_RES, Approx, CellMark, Growth, KernelGrid, LearnedGrid, LightRounds, Lit, LitState,
+    REFERENCE_RES, Status, World,
 };
 
 /// What the UI asks of the learner.
@@ -44,8 +45,11 @@ pub enum Command {
         scene: Scene,
         /// Pieces per surface edge.
         subdivide: usize,
-        /// The fit's parameters.
+        /// The fit's parameters (of the network learners; the light-driven one keeps them
+        /// for when the user switches back).
         params: FitParams,
+        /// Run the light-driven learner ([`kernel_fit::LightFit`]) instead of the network.
+        light: bool,
     },
     /// New live parameters for the running fit (what else changes needs a new fit: `Reset`).
     Params(LiveParams),

@@ -13,7 +13,7 @@ use egui::accesskit::Role;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use flatland_geom::DVec2;
-use flatland_viewer::{Options, Settings, ViewerApp};
+use flatland_viewer::{LearnerChoice, Options, Settings, ViewerApp};
 use kernel_fit::ModelFile;
 use kernel_fit::{Gating, Preset, StopReason, Target};
 use sgcs::Insertion;
@@ -21,9 +21,11 @@ use sgcs::Insertion;
 /// Longest wait for one condition; reached only if something is broken.
 const DEADLINE: Duration = Duration::from_secs(120);
 
-/// Small, quick settings: fig3, few held-out points, a small S₀, growth as fast as it goes.
+/// Small, quick settings: fig3, the θ-driven network, few held-out points, a small S₀, growth
+/// as fast as it goes.
 fn quick_settings() -> Settings {
     let mut s = Settings::default();
+    s.learner = LearnerChoice::Network;
     s.scene = flatland_viewer::SceneChoice::Bundled("fig3".into());
     s.params.heldout = 256;
     s.params.initial_samples = 200;
@@ -267,7 +269,7 @@ fn switching_presets_starts_a_new_fit_with_that_learner() {
     assert_eq!(h.state().settings().preset, Preset::Default);
     let default_world = h.state().world_id();
 
-    h.get_by_label("Paper").click();
+    h.get_by_label("paper").click();
     wait_for(&mut h, "a fresh fit of the paper's network", |a| {
         a.world_id() > default_world
             && a.caught_up()
@@ -289,7 +291,7 @@ fn switching_presets_starts_a_new_fit_with_that_learner() {
     });
 
     let paper_world = h.state().world_id();
-    h.get_by_label("Default").click();
+    h.get_by_label("θ-driven").click();
     wait_for(&mut h, "a fresh fit of the default learner", |a| {
         a.world_id() > paper_world
             && a.caught_up()
@@ -298,6 +300,28 @@ fn switching_presets_starts_a_new_fit_with_that_learner() {
     });
     assert_eq!(h.state().settings().preset, Preset::Default);
     assert!(h.state().settings().is_preset());
+
+    // The light-driven learner, and back: the θ-driven network as it was.
+    let theta_world = h.state().world_id();
+    h.get_by_label("light-driven (default)").click();
+    h.get_by_label("Step").click();
+    wait_for(&mut h, "a round of the light-driven learner", |a| {
+        a.world_id() > theta_world
+            && a.caught_up()
+            && a.shown()
+                .is_some_and(|m| m.status.growth.light.is_some_and(|l| l.rounds == 1))
+    });
+    assert_eq!(h.state().settings().learner, LearnerChoice::Light);
+    assert!(!h.state().running(), "a step is one round");
+    let light_world = h.state().world_id();
+    h.get_by_label("θ-driven").click();
+    wait_for(&mut h, "the θ-driven network again", |a| {
+        a.world_id() > light_world
+            && a.caught_up()
+            && a.shown().is_some_and(|m| m.status.growth.light.is_none())
+    });
+    assert_eq!(h.state().settings().learner, LearnerChoice::Network);
+    assert_eq!(h.state().fit_params().unwrap().target, Target::Visibility);
 }
 
 /// A live parameter (a rate of the network) reaches the running fit; a fixed one (a rule of
@@ -427,9 +451,10 @@ fn temp_dir(name: &str) -> std::path::PathBuf {
 
 #[test]
 fn the_first_launch_grows_a_floor_plan_at_the_pace_not_at_the_machines_speed() {
-    // The defaults of a first launch (the floor plan, 20 cells per second), with a smaller
-    // held-out set so the reference is quick.
+    // The defaults of a first launch (the floor plan, 20 cells per second) with the θ-driven
+    // network chosen, and a smaller held-out set so the reference is quick.
     let mut settings = Settings::default();
+    settings.learner = LearnerChoice::Network;
     settings.params.heldout = 256;
     assert!(!settings.unlimited);
     let pace = settings.growth;
@@ -453,6 +478,92 @@ fn the_first_launch_grows_a_floor_plan_at_the_pace_not_at_the_machines_speed() {
         );
     }
     assert!(h.state().stopped().is_none(), "still growing");
+}
+
+/// The light-driven learner's round of the moment shown, if it is the one learning.
+fn round_of(m: &flatland_viewer::Moment) -> Option<usize> {
+    m.status.growth.light.map(|l| l.rounds)
+}
+
+#[test]
+fn the_default_learner_publishes_rounds_its_cells_grow_and_the_timeline_scrubs_to_round_1() {
+    // A first launch: the light-driven learner on the floor plan, revealing each round's cells
+    // over time (a smaller held-out set so the reference is quick).
+    let mut settings = Settings::default();
+    settings.params.heldout = 256;
+    assert_eq!(settings.learner, LearnerChoice::Light);
+    let app = ViewerApp::with_options(egui::Context::default(), settings, &Options::default());
+    let mut h = harness_of(app);
+    h.get_by_label("light-driven (default)");
+    wait_for(&mut h, "three rounds without a click", |a| {
+        a.running() && a.lit().is_some_and(|l| l.steps >= 3)
+    });
+    let app = h.state();
+    let lit = app.lit().unwrap();
+    assert!(app.cells() > 100, "{} cells", app.cells());
+    assert!(app.rays() > 0);
+    // One point per round on the error curves: the measured B − E and the learner's estimate.
+    assert!(lit.history.len() >= 3, "{:?}", lit.history);
+    assert!(lit.history.iter().all(|p| p.estimated.is_some()));
+    assert!(
+        lit.history.windows(2).all(|p| p[0].steps < p[1].steps),
+        "{:?}",
+        lit.history
+    );
+    let last = lit.history.last().unwrap();
+    assert!(
+        last.rel_l2_reflected < lit.history[0].rel_l2_reflected,
+        "the lit scene converges: {:?}",
+        lit.history
+    );
+
+    // Every moment: cells only grow, and the lit B changes from one round to the next.
+    let mut cells = 0;
+    let mut by_round: Vec<(u64, Vec<f64>)> = Vec::new();
+    let mut round_1 = None;
+    for p in 0..app.moments() {
+        let m = app.timeline().get(p).unwrap();
+        assert!(m.cells() >= cells, "cells shrank at moment {p}");
+        cells = m.cells();
+        if round_1.is_none() && round_of(m) == Some(1) {
+            round_1 = Some(p);
+        }
+        if let Some(l) = &m.lit
+            && by_round.last().is_none_or(|(r, _)| *r != l.steps)
+        {
+            by_round.push((l.steps, l.solve.b.clone()));
+        }
+    }
+    assert!(cells > app.timeline().get(0).unwrap().cells(), "cells grew");
+    assert!(by_round.len() >= 2, "{} rounds lit", by_round.len());
+    assert!(
+        by_round.windows(2).all(|p| p[0].1 != p[1].1),
+        "the lit B changes between rounds"
+    );
+
+    // The timeline back to round 1: its cells (fewer than now) and its lit scene.
+    let round_1 = round_1.expect("a moment of round 1");
+    h.get_by_role_and_label(Role::Slider, "timeline")
+        .set_value_accesskit(round_1 as f64);
+    h.run_steps(2);
+    let app = h.state();
+    assert!(!app.is_live());
+    let shown = app.shown().unwrap();
+    assert_eq!(round_of(shown), Some(1));
+    assert!(shown.cells() < app.cells(), "an earlier state");
+    assert_eq!(shown.lit.as_ref().map(|l| l.steps), Some(1));
+    assert!(
+        shown
+            .status
+            .growth
+            .cells
+            .iter()
+            .all(|c| c.visible.is_some()),
+        "one cell per face, clear or blocked"
+    );
+    h.get_by_label("Live").click();
+    h.run_steps(1);
+    assert!(h.state().is_live());
 }
 
 #[test]

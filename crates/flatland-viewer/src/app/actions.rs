@@ -9,7 +9,7 @@ use kernel_fit::Preset;
 
 use super::ViewerApp;
 use crate::scenes;
-use crate::settings::SceneChoice;
+use crate::settings::{LearnerChoice, SceneChoice};
 use crate::views::{self, Hover};
 use crate::worker::Command;
 
@@ -49,14 +49,23 @@ impl ViewerApp {
             scene: self.scene.clone(),
             subdivide: self.settings.subdivide.max(1),
             params: self.settings.params,
+            light: self.settings.learner == LearnerChoice::Light,
         });
         self.fit_since = self.worker.sent();
         self.busy = Some("computing the reference kernel…");
     }
 
-    /// Switches to `preset`'s learner (target cells and seed kept) and starts a fresh fit.
+    /// Switches to `preset`'s network learner (target cells and seed kept) and starts a fresh
+    /// fit.
     pub fn choose_preset(&mut self, preset: Preset) {
+        self.settings.learner = LearnerChoice::Network;
         self.settings.choose_preset(preset);
+        self.reset();
+    }
+
+    /// Switches to the light-driven learner and starts a fresh run.
+    pub fn choose_light(&mut self) {
+        self.settings.learner = LearnerChoice::Light;
         self.reset();
     }
 

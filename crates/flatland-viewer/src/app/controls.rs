@@ -11,7 +11,7 @@ use kernel_fit::{Gating, Preset, Resampling, Target};
 use sgcs::{InsertRule, Insertion, OutputMode, OutputRule, Resource};
 
 use super::ViewerApp;
-use crate::settings::{SceneChoice, with_preset};
+use crate::settings::{LearnerChoice, SceneChoice, with_preset};
 use crate::worker::Command;
 
 impl ViewerApp {
@@ -22,11 +22,15 @@ impl ViewerApp {
         ui.separator();
         self.learner_controls(ui);
         ui.separator();
-        self.network_controls(ui);
-        ui.separator();
-        self.sampling_controls(ui);
-        ui.separator();
-        self.fit_controls(ui);
+        // The light-driven learner has none of the network's parameters.
+        let network = self.settings.learner == LearnerChoice::Network;
+        ui.add_enabled_ui(network, |ui| {
+            self.network_controls(ui);
+            ui.separator();
+            self.sampling_controls(ui);
+            ui.separator();
+            self.fit_controls(ui);
+        });
         ui.separator();
         self.view_controls(ui);
         ui.separator();
@@ -104,6 +108,12 @@ impl ViewerApp {
     fn learner_controls(&mut self, ui: &mut egui::Ui) {
         ui.heading("Learner");
         self.preset_selector(ui);
+        let network = self.settings.learner == LearnerChoice::Network;
+        ui.add_enabled_ui(network, |ui| self.network_learner_controls(ui));
+    }
+
+    /// What a network learner learns, and how (target, gating, importance, weighting).
+    fn network_learner_controls(&mut self, ui: &mut egui::Ui) {
         let p = &mut self.settings.params;
         let mut target = p.target;
         choice(
@@ -166,29 +176,42 @@ impl ViewerApp {
         });
     }
 
-    /// Default or Paper: choosing one starts a new fit with that learner.
+    /// Light-driven, θ-driven or paper: choosing one starts a new fit with that learner.
     fn preset_selector(&mut self, ui: &mut egui::Ui) {
-        ui.horizontal(|ui| {
-            ui.label("preset").on_hover_text(
-                "the parameters of a learner; choosing one starts a new fit (target cells and \
-                 seed are kept)",
+        ui.horizontal_wrapped(|ui| {
+            ui.label("learner").on_hover_text(
+                "which learner runs; choosing one starts a new fit (target cells and seed are \
+                 kept)",
             );
+            let light = self.settings.learner == LearnerChoice::Light;
+            if ui
+                .selectable_label(light, "light-driven (default)")
+                .on_hover_text(
+                    "rounds of solving and learning: each round solves the scene with what is \
+                     learned, then casts one ray per face of the blocks the most light flows \
+                     through (ALGORITHM.md §4a; what `flatland solve` runs). The network's \
+                     parameters below do not apply to it",
+                )
+                .clicked()
+            {
+                self.choose_light();
+            }
             let presets = [
                 (
                     Preset::Default,
-                    "Default",
+                    "θ-driven",
                     "learns only the visibility V, where geometry cannot decide it, in cells \
                      that never straddle a shadow boundary (ALGORITHM.md §4)",
                 ),
                 (
                     Preset::Paper,
-                    "Paper",
+                    "paper",
                     "the paper's network: learns ζ everywhere from γ(s, t), with least-squares \
                      refit (ALGORITHM.md §3)",
                 ),
             ];
             for (preset, name, hover) in presets {
-                let selected = self.settings.preset == preset;
+                let selected = !light && self.settings.preset == preset;
                 if ui
                     .selectable_label(selected, name)
                     .on_hover_text(hover)
@@ -197,7 +220,7 @@ impl ViewerApp {
                     self.choose_preset(preset);
                 }
             }
-            if !self.settings.is_preset() {
+            if !light && !self.settings.is_preset() {
                 ui.label(RichText::new("(changed)").weak())
                     .on_hover_text("parameters differ from the preset's");
             }

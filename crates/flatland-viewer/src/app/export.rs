@@ -92,11 +92,20 @@ fn file_part(label: &str) -> String {
 }
 
 impl ViewerApp {
-    /// Files of this run start with the scene and the learner: `floorplan-default`.
+    /// Files of this run start with the scene and the learner: `floorplan-light`,
+    /// `floorplan-default`.
     fn export_stem(&self) -> String {
         let scene = file_part(&self.scene_label);
         let (preset, _) = learner_parts(&self.fit_params);
-        let learner = preset.map_or("custom", kernel_fit::Preset::name);
+        let light = self
+            .status
+            .as_ref()
+            .is_some_and(|s| s.growth.light.is_some());
+        let learner = match preset {
+            _ if light => "light",
+            Some(preset) => preset.name(),
+            None => "custom",
+        };
         format!(
             "{}-{learner}",
             if scene.is_empty() { "scene" } else { &scene }

@@ -41,8 +41,10 @@ impl ViewerApp {
             _ => Arc::clone(self.world.as_ref()?),
         };
         let moment = moment.filter(|m| m.world.id == world.id);
-        let new_from = moment.as_ref().map_or(0, |m| {
-            self.timeline.cells_at(m.at().saturating_sub(NEW_FOR))
+        // The light-driven learner's new cells are its newest round's.
+        let new_from = moment.as_ref().map_or(0, |m| match &m.status.growth.light {
+            Some(light) => light.newest_from,
+            None => self.timeline.cells_at(m.at().saturating_sub(NEW_FOR)),
         });
         let kernel_grid = self.kernel_grid.clone().filter(|g| g.world == world.id);
         Some(Shown {
@@ -113,6 +115,10 @@ impl ViewerApp {
             boundaries: Some(textures.boundaries_big),
             samples: textures.samples,
             cells: textures.overlay,
+            face_cells: shown
+                .moment
+                .as_ref()
+                .is_some_and(|m| m.status.growth.light.is_some()),
         };
         let small = views::Overlay {
             boundaries: Some((textures.boundaries_small, &[])),
@@ -161,8 +167,9 @@ impl ViewerApp {
                 .approx
                 .as_ref()
                 .filter(|a| a.grid.world == shown.world.id)
+            && let Some(model) = &a.model
         {
-            return Learned::Model(&a.model);
+            return Learned::Model(model);
         }
         match shown.moment.as_ref().and_then(|m| m.learned.as_deref()) {
             Some(grid) => Learned::Grid(grid),

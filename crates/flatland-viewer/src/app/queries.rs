@@ -116,6 +116,10 @@ impl ViewerApp {
     pub fn replaying(&self) -> bool {
         self.cursor.replaying.is_some()
     }
+    /// Every moment kept, for scrubbing.
+    pub fn timeline(&self) -> &crate::Timeline {
+        &self.timeline
+    }
     /// Moments of this fit the timeline keeps.
     pub fn moments(&self) -> usize {
         self.timeline.len()

@@ -82,8 +82,14 @@ impl ViewerApp {
             }
         }
         if let Some(m) = self.shown() {
+            // The light-driven learner's steps are rounds.
+            let step = if m.status.growth.light.is_some() {
+                "round"
+            } else {
+                "step"
+            };
             let text = format!(
-                "{} {}/{} · {:.1} s · step {} · {} cells",
+                "{} {}/{} · {:.1} s · {step} {} · {} cells",
                 if self.is_live() { "live" } else { "moment" },
                 position + 1,
                 n,

@@ -3,16 +3,19 @@
 
 use egui::{Color32, DragValue, RichText};
 use flatland_solve::Errors;
-use kernel_fit::{FitParams, Preset, StopReason};
+use kernel_fit::{FitParams, LightStop, Preset, StopReason};
 
 use super::ViewerApp;
-use crate::worker::{Lit, Status};
+use crate::worker::{LightRounds, Lit, Status};
 
 impl ViewerApp {
     /// The top bar's numbers: the learner, its progress, the held-out error of ζ and (with the
     /// lit scene) of the solved `B − E`, its speed.
     fn stats_text(&self, st: &Status, lit: Option<&Lit>, heldout_defined: bool) -> String {
         let g = &st.growth;
+        if let Some(light) = &g.light {
+            return light_stats(light, g.rays, g.cells.len(), lit);
+        }
         let mut parts = vec![
             learner_name(&st.params),
             format!("steps {}", g.steps),
@@ -106,6 +109,11 @@ impl ViewerApp {
             return Some((m.clone(), *e));
         }
         let st = self.status.as_ref()?;
+        if let Some(light) = &st.growth.light {
+            return light
+                .stopped
+                .map(|r| (format!("stopped: {}", light_stop_text(r)), false));
+        }
         let r = st.stopped?;
         let errs = st
             .summary
@@ -123,6 +131,36 @@ impl ViewerApp {
             ""
         };
         Some((format!("stopped: {}{errs}{hint}", stop_text(r)), false))
+    }
+}
+
+/// The light-driven learner's numbers: its rounds, rays and cells, its own estimate of the
+/// error of `B − E` and the error measured against the exact solve.
+fn light_stats(light: &LightRounds, rays: u64, cells: usize, lit: Option<&Lit>) -> String {
+    let mut parts = vec![
+        "light-driven".to_string(),
+        format!("round {}", light.rounds),
+        format!("rays {rays}"),
+        format!("cells {cells} (one per face)"),
+    ];
+    if let Some(e) = light.estimated_error {
+        parts.push(format!("estimated B−E {}", error_text(e, true)));
+    }
+    if let Some(l) = lit {
+        let err = error_text(l.solve.errors.rel_l2_reflected, true);
+        parts.push(format!("measured B−E {err}"));
+    }
+    parts.join("  ")
+}
+
+/// Why the light-driven learner stopped, in words.
+#[must_use]
+pub fn light_stop_text(reason: LightStop) -> &'static str {
+    match reason {
+        LightStop::Tolerance => "the estimated error of B − E is within the tolerance (1 %)",
+        LightStop::Exact => "every block is resolved: the operator is exact on this mesh",
+        LightStop::Rays => "ray budget spent",
+        LightStop::Time => "time budget spent",
     }
 }
 

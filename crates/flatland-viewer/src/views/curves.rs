@@ -98,8 +98,22 @@ pub fn curves(ui: &mut egui::Ui, history: &[HistoryPoint], lit: Option<&Lit>) {
         lit_history.iter().map(f).collect()
     };
     let columns = if lit.is_some() { 4 } else { 3 };
+    // The light-driven learner's points are rounds, with its own estimate of the error.
+    let rounds = lit_history.iter().any(|h| h.estimated.is_some());
+    let estimated = |x: &dyn Fn(&LitPoint) -> f64| -> Option<Line<'static>> {
+        let points: PlotPoints<'static> = lit_history
+            .iter()
+            .filter_map(|h| h.estimated.map(|e| [x(h), e]))
+            .collect();
+        (!points.points().is_empty())
+            .then(|| curve("estimated B − E", points).style(LineStyle::dashed_loose()))
+    };
     ui.columns(columns, |cols| {
-        cols[0].label("rel. L2 vs steps");
+        cols[0].label(if rounds {
+            "rel. L2 vs rounds"
+        } else {
+            "rel. L2 vs steps"
+        });
         Plot::new("err-steps")
             .height(h)
             .include_y(0.0)
@@ -117,6 +131,9 @@ pub fn curves(ui: &mut egui::Ui, history: &[HistoryPoint], lit: Option<&Lit>) {
                         "solved B − E",
                         lit_series(&|h| [h.steps as f64, h.rel_l2_reflected]),
                     ));
+                }
+                if let Some(line) = estimated(&|h| h.steps as f64) {
+                    p.line(line);
                 }
             });
         cols[1].label("rel. L2 vs rays cast");
@@ -138,12 +155,19 @@ pub fn curves(ui: &mut egui::Ui, history: &[HistoryPoint], lit: Option<&Lit>) {
                         lit_series(&|h| [h.rays as f64, h.rel_l2_reflected]),
                     ));
                 }
+                if let Some(line) = estimated(&|h| h.rays as f64) {
+                    p.line(line);
+                }
             });
         if let Some(lit) = lit {
             cols[3].label("B(s): learned vs exact");
             b_curves(&mut cols[3], lit, h);
         }
-        cols[2].label("cells and samples vs steps");
+        cols[2].label(if rounds {
+            "cells vs rounds"
+        } else {
+            "cells and samples vs steps"
+        });
         Plot::new("counts")
             .height(h)
             .include_y(0.0)
@@ -153,6 +177,12 @@ pub fn curves(ui: &mut egui::Ui, history: &[HistoryPoint], lit: Option<&Lit>) {
             .allow_drag(false)
             .show(&mut cols[2], |p| {
                 p.line(curve("cells", series(&|h| [h.steps as f64, h.cells as f64])).width(2.5));
+                if rounds {
+                    p.line(
+                        curve("cells", lit_series(&|h| [h.steps as f64, h.cells as f64]))
+                            .width(2.5),
+                    );
+                }
                 p.line(
                     curve(
                         "samples / 20",

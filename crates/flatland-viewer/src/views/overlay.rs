@@ -11,7 +11,7 @@ use std::time::Duration;
 use egui::{Color32, ColorImage};
 use flatland_geom::Scene;
 
-use super::{BOUNDARY, CELL, CRITICAL, NET_EDGE, NEW_CELL};
+use super::{BOUNDARY, CELL, CRITICAL, FACE_BLOCKED, FACE_VISIBLE, NET_EDGE, NEW_CELL};
 use crate::worker::CellMark;
 
 /// A cell inserted less than this much training time before the moment shown is "new".
@@ -44,7 +44,8 @@ fn cell_radius(width: f32, side_pt: f32, cells: usize) -> f32 {
 }
 
 /// The network's edges within faces, then its cells: discs sized by δ_c, white, cyan when
-/// critical, with a black rim, or a lime ring when new; drawn into a transparent
+/// critical (a light-driven learner's face cells: light blue when clear, magenta when blocked),
+/// with a black rim, or a lime ring when new; drawn into a transparent
 /// `side × side` image (`t` to the right, `s` upwards). `px_per_point` scales the marks with
 /// the display's pixel density.
 #[must_use]
@@ -71,7 +72,12 @@ pub fn overlay_image(side: usize, px_per_point: f32, marks: &Marks<'_>) -> Color
             let Some(p) = p else { continue };
             let fresh = id >= marks.new_from;
             let r = cell_radius(c.width, side_pt, shown) * px_per_point;
-            let fill = if c.critical { CRITICAL } else { CELL };
+            let fill = match c.visible {
+                Some(true) => FACE_VISIBLE,
+                Some(false) => FACE_BLOCKED,
+                None if c.critical => CRITICAL,
+                None => CELL,
+            };
             let (rim, rim_w) = if fresh {
                 (NEW_CELL, 1.5 * px_per_point)
             } else {
@@ -186,6 +192,7 @@ mod tests {
             st: Some(st),
             width: 0.1,
             critical,
+            visible: None,
         }
     }
 

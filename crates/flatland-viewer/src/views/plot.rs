@@ -11,7 +11,7 @@ use flatland_geom::Scene;
 use flatland_lab::colormap::Scale;
 
 use super::widgets::{gradient, short, uv};
-use super::{CELL, CRITICAL, NET_EDGE, NEW_CELL, SCENE_MARK, TITLE_H};
+use super::{CELL, CRITICAL, FACE_BLOCKED, FACE_VISIBLE, NET_EDGE, NEW_CELL, SCENE_MARK, TITLE_H};
 
 /// Width of the colour bar beside the big kernel plot, labels included.
 const HEAT_BAR_W: f32 = 56.0;
@@ -85,6 +85,8 @@ pub struct Overlay<'a> {
     pub samples: Option<TextureId>,
     /// The cells and the network's edges within faces.
     pub cells: Option<TextureId>,
+    /// The cells are the light-driven learner's (one per face): the legend says so.
+    pub face_cells: bool,
 }
 
 /// One (s, t) panel: heatmap, boundaries, overlays, hover marks. Returns `(s, t)` under the
@@ -140,7 +142,7 @@ pub fn kernel_plot(
         }
         edge_labels(&painter, frame, scene, weak);
         axis_titles(&painter, frame, weak);
-        marks_legend(&painter, frame, weak);
+        marks_legend(&painter, frame, weak, overlay.face_cells);
         if let Some(scale) = frame.scale {
             scale_bar(&painter, frame, scale, weak);
         }
@@ -257,7 +259,7 @@ fn axis_titles(painter: &Painter, frame: &PlotFrame, color: Color32) {
 }
 
 /// What each mark over the kernel means, on a row under the plot (drawn as the marks are).
-fn marks_legend(painter: &Painter, frame: &PlotFrame, color: Color32) {
+fn marks_legend(painter: &Painter, frame: &PlotFrame, color: Color32, face_cells: bool) {
     let y = frame.plot.bottom() + 30.0 + LEGEND_H / 2.0;
     let mut x = frame.plot.left();
     let font = FontId::proportional(10.0);
@@ -277,6 +279,20 @@ fn marks_legend(painter: &Painter, frame: &PlotFrame, color: Color32) {
             painter.circle(p, 3.0, fill, Stroke::new(1.0, rim));
         }
     };
+    if face_cells {
+        entry(
+            &mut x,
+            &disc(FACE_VISIBLE, Color32::BLACK),
+            "face clear (V = 1)",
+        );
+        entry(
+            &mut x,
+            &disc(FACE_BLOCKED, Color32::BLACK),
+            "face blocked (V = 0)",
+        );
+        entry(&mut x, &disc(FACE_VISIBLE, NEW_CELL), "newest round");
+        return;
+    }
     entry(&mut x, &disc(CELL, Color32::BLACK), "cell (size ~ δ_c)");
     entry(&mut x, &disc(CRITICAL, Color32::BLACK), "critical");
     entry(&mut x, &disc(CELL, NEW_CELL), "new (last second)");

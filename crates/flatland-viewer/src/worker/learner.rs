@@ -1,7 +1,9 @@
 //! The learner's loop: read commands, train a slice at the pace asked for, publish, start and
 //! pick up the lit scene's solves. Training and pacing are in [`train`], publishing in
-//! [`publish`], the lit scene (solved beside the learner, on a thread of its own) in [`lit`].
+//! [`publish`], the lit scene (solved beside the learner, on a thread of its own) in [`lit`],
+//! the light-driven learner (rounds instead of steps) in [`light`].
 
+mod light;
 mod lit;
 mod publish;
 mod train;
@@ -27,6 +29,8 @@ pub(super) struct Learner {
     shared: Arc<Shared>,
     repaint: Box<dyn Fn() + Send>,
     fit: Option<Fit>,
+    /// The light-driven learner, when it is the one learning (then `fit` is `None`).
+    light: Option<light::LightRun>,
     world: Option<Arc<World>>,
     next_world: u64,
     running: bool,
@@ -57,6 +61,7 @@ impl Learner {
             shared,
             repaint,
             fit: None,
+            light: None,
             world: None,
             next_world: 1,
             running: false,
@@ -116,7 +121,9 @@ impl Learner {
                 }
             }
             self.train_slice();
+            self.light_slice();
             self.publish(false);
+            self.publish_light(false);
             self.publish_kernel_grid();
             self.update_lit();
         }
@@ -140,6 +147,9 @@ impl Learner {
         match command {
             Command::Play => {
                 self.running = true;
+                if let Some(run) = &mut self.light {
+                    run.resume();
+                }
                 self.last_tick = Instant::now();
                 self.pace.restart();
             }
@@ -157,7 +167,8 @@ impl Learner {
                 scene,
                 subdivide,
                 params,
-            } => self.reset(scene, subdivide, params),
+                light,
+            } => self.reset(scene, subdivide, params, light),
             Command::Params(params) => self.set_params(params),
             Command::Edit { scene, subdivide } => self.edit(scene, subdivide),
             Command::Lit(on) => self.switch_lit(on),
@@ -192,6 +203,13 @@ impl Learner {
     /// Saves the running fit (its model as it is now, with the final errors if it finished) as
     /// the model file `flatland eval` reads.
     fn export_model(&self, dir: &Path, stem: &str) {
+        if self.light.is_some() {
+            return self.report(
+                "the light-driven learner keeps no network: its model is the mesh's blocks \
+                 (choose the θ-driven learner to save a model file)"
+                    .into(),
+            );
+        }
         let Some(fit) = &self.fit else {
             return self.report("no fit to save yet".into());
         };
@@ -247,7 +265,7 @@ impl Learner {
         result
     }
 
-    fn reset(&mut self, scene: Scene, subdivide: usize, params: FitParams) {
+    fn reset(&mut self, scene: Scene, subdivide: usize, params: FitParams, light: bool) {
         if let Err(e) = params.validate() {
             self.report(e.to_string());
             return;
@@ -256,6 +274,15 @@ impl Learner {
             Ok(w) => w,
             Err(e) => return self.report(e),
         };
+        self.running = false;
+        self.steps_left = 0;
+        if light {
+            self.start_light(params);
+            self.run_time = Duration::ZERO;
+            self.lit.history.clear();
+            return self.install(world);
+        }
+        self.light = None;
         match Fit::new(
             Arc::clone(&world.kernel),
             Arc::clone(&world.reference),
@@ -274,6 +301,13 @@ impl Learner {
     }
 
     fn edit(&mut self, scene: Scene, subdivide: usize) {
+        if let Some(run) = &self.light {
+            // Its blocks belong to the old mesh: a fresh run on the changed scene.
+            let (params, running) = (run.params, self.running);
+            self.reset(scene, subdivide, params, true);
+            self.running = running;
+            return;
+        }
         let Some(params) = self.fit.as_ref().map(|f| *f.params()) else {
             return;
         };
@@ -305,6 +339,7 @@ impl Learner {
         // A fit can stop before its first step (nothing to learn: `StopReason::Exact`).
         self.finish_if_stopped();
         self.publish(true);
+        self.publish_light(true);
     }
 
     /// The final errors (after the paper's refit) of a fit that has stopped, once per stop.

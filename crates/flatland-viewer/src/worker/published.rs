@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use flatland_geom::{Kernel, Scene};
 use flatland_solve::Reference;
-use kernel_fit::{FitParams, FitSummary, HistoryPoint, LearnedKernel, StopReason};
+use kernel_fit::{FitParams, FitSummary, HistoryPoint, LearnedKernel, LightStop, StopReason};
 
 use crate::lit::{LitPoint, LitSetup, LitSolve};
 use crate::timeline::Prefix;
@@ -47,6 +47,9 @@ pub struct CellMark {
     pub width: f32,
     /// Whether it is critical (`τ_c > ω · mean τ`).
     pub critical: bool,
+    /// For a cell of the light-driven learner (one face, one ray): whether its ray found the
+    /// face clear; `None` for a network cell.
+    pub visible: Option<bool>,
 }
 
 /// The network at one moment: what the overlay and the counts show.
@@ -66,6 +69,22 @@ pub struct Growth {
     pub sets: usize,
     /// Time spent learning since the fit started, pauses excluded: the timeline's clock.
     pub run_time: Duration,
+    /// The light-driven learner's rounds, when it is the one learning.
+    pub light: Option<LightRounds>,
+}
+
+/// Where the light-driven learner is: its rounds so far, and which cells its newest round
+/// learned (the overlay rings them).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LightRounds {
+    /// Rounds solved so far.
+    pub rounds: usize,
+    /// Cells with this index or more were learned by the newest round.
+    pub newest_from: usize,
+    /// The estimated relative L2 error of the solved `B − E` after the newest round.
+    pub estimated_error: Option<f64>,
+    /// Why it stopped, once it has.
+    pub stopped: Option<LightStop>,
 }
 
 /// The learner's state as published at one moment.
@@ -124,8 +143,9 @@ pub struct LearnedGrid {
 pub struct Approx {
     /// The grid.
     pub grid: Arc<LearnedGrid>,
-    /// The model, for the learned value under the pointer.
-    pub model: LearnedKernel,
+    /// The model, for the learned value under the pointer (`None` for the light-driven
+    /// learner, whose grid is read instead).
+    pub model: Option<LearnedKernel>,
 }
 
 /// The lit scene as last published.

@@ -12,6 +12,7 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use flatland_solve::{SolveError, Stop};
+use kernel_fit::Target;
 
 use super::Learner;
 use crate::lit::{LitPoint, LitSetup, LitSolve, solve_interval};
@@ -125,6 +126,11 @@ impl LitWork {
             || self.solving.as_ref().is_some_and(|s| s.work.done())
     }
 
+    /// The current setup, if made.
+    pub(super) fn setup(&self) -> Option<Arc<LitSetup>> {
+        self.setup.clone()
+    }
+
     /// The model changed without a step (the refit): solve it again.
     pub(super) fn solve_again(&mut self) {
         self.steps = None;
@@ -146,6 +152,9 @@ impl Learner {
     /// Whether the lit scene has work that is due now (so the loop must not sleep): work done
     /// beside the learner to pick up, a setup to start, or a solve.
     pub(super) fn lit_pending(&self) -> bool {
+        if self.light.is_some() {
+            return self.light_setup_pending();
+        }
         let (Some(fit), Some(world)) = (&self.fit, &self.world) else {
             return false;
         };
@@ -165,10 +174,28 @@ impl Learner {
                         >= solve_interval(self.lit.cost, self.pace.idle_share())))
     }
 
+    /// Whether the light-driven learner's setup (its mesh and the exact `B`, needed whether or
+    /// not the lit view is on) is to be started or picked up.
+    fn light_setup_pending(&self) -> bool {
+        let Some(world) = &self.world else {
+            return false;
+        };
+        self.lit.failed != Some(world.id)
+            && (self.lit.finished()
+                || (!self.lit.busy()
+                    && self.lit.setup.as_ref().is_none_or(|s| s.world != world.id)))
+    }
+
     /// The setup of the current world once made; `None` while it is being made (started if
     /// it is not) or when it failed (then said in the mailbox).
-    fn lit_setup(&mut self) -> Option<Arc<LitSetup>> {
-        let (fit, world) = (self.fit.as_ref()?, self.world.as_ref()?);
+    pub(super) fn lit_setup(&mut self) -> Option<Arc<LitSetup>> {
+        let world = self.world.as_ref()?;
+        // The light-driven learner learns visibility on the lit view's mesh.
+        let target = match (&self.fit, &self.light) {
+            (Some(fit), _) => fit.params().target,
+            (None, Some(_)) => Target::Visibility,
+            (None, None) => return None,
+        };
         if let Some(s) = &self.lit.setup
             && s.world == world.id
         {
@@ -177,8 +204,7 @@ impl Learner {
         let made = match &self.lit.building {
             Some((w, b)) if *w == world.id => b.take()?,
             _ => {
-                let (id, kernel, target) =
-                    (world.id, Arc::clone(&world.kernel), fit.params().target);
+                let (id, kernel) = (world.id, Arc::clone(&world.kernel));
                 let work =
                     Background::start(move |stop| LitSetup::build(id, &kernel, target, stop));
                 self.lit.building = Some((id, work));
@@ -255,7 +281,9 @@ impl Learner {
                     self.lit.history.push(LitPoint {
                         steps,
                         rays,
+                        cells,
                         rel_l2_reflected: solve.errors.rel_l2_reflected,
+                        estimated: None,
                     });
                 }
                 LitState::Ready(Arc::new(Lit {

@@ -56,6 +56,11 @@ impl PublishState {
         self.last_publish.elapsed()
     }
 
+    /// A status was just published (by the light-driven learner).
+    pub(super) fn mark_published(&mut self) {
+        self.last_publish = Instant::now();
+    }
+
     /// A new world: everything is published again.
     pub(super) fn forget(&mut self) {
         self.published_steps = None;
@@ -113,7 +118,7 @@ fn nearest_sample(fit: &Fit, c: usize, samples: &[SamplePoint]) -> Option<[f32; 
 const MAX_QUEUED: usize = 64;
 
 /// Adds `status` to the waiting ones, thinned to every second one when the queue is full.
-fn queue(waiting: &mut Vec<Status>, status: Status) {
+pub(super) fn queue(waiting: &mut Vec<Status>, status: Status) {
     if waiting.len() >= MAX_QUEUED {
         let mut k = 0;
         waiting.retain(|_| {
@@ -145,11 +150,13 @@ fn growth(fit: &Fit, snap: &Snapshot, run_time: Duration) -> Growth {
                     .or_else(|| nearest_sample(fit, c, &snap.samples)),
                 width: cell.width as f32,
                 critical: cell.critical,
+                visible: None,
             })
             .collect(),
         face_edges: face_edges(&fit.network().edges(), &groups),
         sets: snap.sets,
         run_time,
+        light: None,
     }
 }
 
@@ -234,7 +241,7 @@ impl Learner {
                 steps,
                 values,
             }),
-            model,
+            model: Some(model),
         });
         p.approx_steps = Some(steps);
         p.last_approx = Instant::now();

@@ -41,6 +41,11 @@ impl Pace {
         self.credit = self.credit.min(self.max_credit());
     }
 
+    /// Cells per second; `None`: as fast as the machine goes.
+    pub(super) fn per_s(&self) -> Option<f64> {
+        self.per_s
+    }
+
     /// Training starts (again): one cell may come at once.
     pub(super) fn restart(&mut self) {
         self.credit = 1.0;
