@@ -356,8 +356,10 @@ mod tests {
         }
     }
 
-    /// Every block resolved, the learned operator is the exact one: the same B as the exact
-    /// kernel's solve on the same mesh.
+    /// Resolved to a tolerance of 1e-12, the learned operator is the exact one: the same B as
+    /// the exact kernel's solve on the same mesh. It may stop before every block is resolved:
+    /// in a closed scene a row whose prior is 0 or 1 is certain (its resolved light already
+    /// fills ρ, or its unresolved blocks can only all be clear), and its estimate is 0.
     #[test]
     fn resolving_every_block_gives_the_exact_solution() {
         let (kernel, mesh) = floor_plan();
@@ -366,7 +368,11 @@ mod tests {
             ..LightParams::default()
         };
         let (light, stop) = run(&kernel, &mesh, &params);
-        assert_eq!(stop, LightStop::Exact);
+        let estimate = light.history().last().unwrap().estimated_error;
+        assert!(
+            stop == LightStop::Exact || (stop == LightStop::Tolerance && estimate <= 1e-12),
+            "{stop:?}, estimate {estimate}"
+        );
         let exact = solve_operator(
             &exact_operator(&kernel, &mesh, &never).unwrap(),
             &mesh,
