@@ -109,10 +109,10 @@ impl TimedPlan {
         if self.seeds == 0 {
             return bad("seeds", "0".into(), "≥ 1");
         }
-        if !(self.max_seconds > 0.0) {
+        if self.max_seconds.is_nan() || self.max_seconds <= 0.0 {
             return bad("max-seconds", self.max_seconds.to_string(), "more than 0");
         }
-        if !(self.tracer_seconds > 0.0) {
+        if self.tracer_seconds.is_nan() || self.tracer_seconds <= 0.0 {
             return bad(
                 "tracer-seconds",
                 self.tracer_seconds.to_string(),

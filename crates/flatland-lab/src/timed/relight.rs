@@ -142,6 +142,9 @@ pub fn emission(mesh: &Mesh, lighting: &Lighting) -> Vec<f64> {
     e
 }
 
+/// A method that could not relight, and why.
+pub type Failure = (Contender, String);
+
 /// One method's lit scene under one lighting.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RelightRow {
@@ -374,50 +377,50 @@ pub(crate) fn relight_all(
     sweep: &[TimedRow],
     relits: &[Relit],
     exact: &[Vec<f64>],
-) -> (Vec<RelightRow>, Vec<(Contender, String)>) {
+) -> (Vec<RelightRow>, Vec<Failure>) {
     let mut rows = Vec::new();
     let mut failures = Vec::new();
+    let asked = |method: Contender| cx.plan.methods.contains(&method);
     let mut keep =
         |method, result: Result<Vec<RelightRow>>, rows: &mut Vec<RelightRow>| match result {
             Ok(r) => rows.extend(r),
             Err(e) => failures.push((method, format!("{e:#}"))),
         };
-    let learned = default_relit(cx, tolerance, relits, exact);
+    let learned = if asked(Contender::Default) {
+        default_relit(cx, tolerance, relits, exact)
+    } else {
+        Ok(Vec::new())
+    };
     let target = learned
         .as_ref()
         .ok()
         .and_then(|r| r.first())
         .map_or(0.0, |r| r.errors.rel_l2_reflected);
     keep(Contender::Default, learned, &mut rows);
-    keep(Contender::Exact, exact_relit(cx, relits, exact), &mut rows);
-    match matching(sweep, Contender::Hr, target) {
-        Some((Setting::Budget(b), note)) => keep(
-            Contender::Hr,
-            hr_relit(cx, b, &note, relits, exact),
-            &mut rows,
-        ),
-        _ => keep(
-            Contender::Hr,
-            Err(anyhow::anyhow!("no HR row in the sweep to match")),
-            &mut rows,
-        ),
+    if asked(Contender::Exact) {
+        keep(Contender::Exact, exact_relit(cx, relits, exact), &mut rows);
     }
-    match matching(sweep, Contender::Tracer, target) {
-        Some((Setting::Photons(p), note)) => keep(
-            Contender::Tracer,
-            tracer_relit(cx, p, &note, relits, exact),
-            &mut rows,
-        ),
-        _ => keep(
-            Contender::Tracer,
-            Err(anyhow::anyhow!("no tracer row in the sweep to match")),
-            &mut rows,
-        ),
+    if asked(Contender::Hr) {
+        let result = match matching(sweep, Contender::Hr, target) {
+            Some((Setting::Budget(b), note)) => hr_relit(cx, b, &note, relits, exact),
+            _ => Err(anyhow::anyhow!("no HR row in the sweep to match")),
+        };
+        keep(Contender::Hr, result, &mut rows);
+    }
+    if asked(Contender::Tracer) {
+        let result = match matching(sweep, Contender::Tracer, target) {
+            Some((Setting::Photons(p), note)) => tracer_relit(cx, p, &note, relits, exact),
+            _ => Err(anyhow::anyhow!("no tracer row in the sweep to match")),
+        };
+        keep(Contender::Tracer, result, &mut rows);
     }
     (rows, failures)
 }
 
-/// [`relight_all`] from the scene on: its lightings and their exact B, then every method.
+/// Relights `kernel`'s scene under `count` lightings: their exact B, then each method asked
+/// for — `default` at its default tolerance, `exact`, and HR and the tracer at the settings of
+/// `sweep` (the timed bench's rows) that matched default's error. A method that fails is
+/// returned with its reason.
 pub fn relight(
     scorer: &super::Scorer,
     kernel: &std::sync::Arc<Kernel>,
@@ -425,7 +428,7 @@ pub fn relight(
     sweep: &[TimedRow],
     count: usize,
     stop: &flatland_solve::Stop,
-) -> Result<(Vec<RelightRow>, Vec<(Contender, String)>)> {
+) -> Result<(Vec<RelightRow>, Vec<Failure>)> {
     let cx = Context {
         kernel,
         scorer,
@@ -480,12 +483,14 @@ mod tests {
     #[test]
     fn relighting_totals_are_the_sums_of_the_lightings() {
         let (kernel, scorer) = tiny();
-        let mut plan = TimedPlan::new(vec![Contender::Hr, Contender::Tracer]);
+        let mut plan = TimedPlan::new(Contender::ALL.to_vec());
+        plan.methods = vec![Contender::Hr, Contender::Tracer];
         plan.budgets = vec![200];
         plan.extend_budgets = false;
         plan.tracer_seconds = 0.1;
         plan.first_photons = 2_000;
         let sweep = run_timed(&kernel, &scorer, &plan, &never, |_| Ok(())).unwrap();
+        plan.methods = Contender::ALL.to_vec();
         let (rows, failures) = relight(&scorer, &kernel, &plan, &sweep, 4, &never).unwrap();
         assert!(failures.is_empty(), "{failures:?}");
         let all = summaries(&rows);

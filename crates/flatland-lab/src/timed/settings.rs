@@ -1,6 +1,7 @@
 //! The settings each method's sweep goes through, one after another: what comes next given the
 //! rows so far.
 
+use flatland_baselines::budget_tolerance;
 use flatland_solve::{ExactMethod, MAX_MESH_ELEMENTS, Mesh};
 
 use super::{Contender, MAX_DOUBLINGS, Setting, TimedPlan, TimedRow};
@@ -107,7 +108,13 @@ impl Sweep {
         }
         let failed = at_last.iter().all(|r| r.failed);
         let past_list = plan.budgets.last().is_none_or(|&b| asked > b);
-        if !plan.extend_budgets || self.doublings >= MAX_DOUBLINGS || (failed && past_list) {
+        // Past the list, a method that built less than asked (HR's finest linking, a learner
+        // that converged) cannot grow: more would repeat the row.
+        let capped = reached + budget_tolerance(asked) < asked;
+        if !plan.extend_budgets
+            || self.doublings >= MAX_DOUBLINGS
+            || (past_list && (failed || capped))
+        {
             return None;
         }
         self.doublings += 1;
@@ -149,6 +156,9 @@ mod tests {
             sweep.next(&plan, &range, &[&first, &last]),
             Some(Setting::Budget(10_000))
         );
+        // Its finest linking, 7000 links, at 10 000: nothing more to build.
+        let finest = row(Contender::Hr, Setting::Budget(10_000), 7000, 0.1);
+        assert_eq!(sweep.next(&plan, &range, &[&first, &last, &finest]), None);
     }
 
     #[test]
