@@ -1,70 +1,113 @@
-//! `flatland bench`: run time against error for the learners, hierarchical radiosity and a
-//! uniform grid.
+//! `flatland bench`: every method judged at equal time — the light-driven learner by
+//! tolerance, the other learners, hierarchical radiosity and the uniform grid by basis
+//! functions, the exact solve by elements, the light tracer by photons — each row timed to its
+//! lit scene and scored against one independent exact reference.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use anyhow::Result;
-use flatland_lab::bench::{BenchPlan, Method};
+use anyhow::{Context, Result};
+use flatland_lab::report::timed::{
+    OUTPUTS, PARTIAL, RELIGHT, RESULTS, relight_summary, table, within_table, write_plots,
+    write_relight, write_rows,
+};
+use flatland_lab::timed::{
+    Contender, DEFAULT_MAX_SECONDS, DEFAULT_TRACER_SECONDS, Scorer, TimedPlan, TimedRow, run_timed,
+};
+use flatland_lab::{interrupt, output};
+use flatland_solve::{DEFAULT_ERROR_BOUND, ExactReference, SolveParams, Stop, elements_for_error};
 
 use super::SceneArgs;
-use flatland_lab::report::bench::{OUTPUTS, run_kept, table, write_outputs};
-use flatland_lab::{interrupt, output};
 
 /// Arguments of `flatland bench`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// Methods, comma-separated: default (the default learner), paper (the paper's network
-    /// with the refit), paper-norefit, hr, uniform (`sgcs`, `sgcs-paper` and
-    /// `sgcs-paper-norefit` still name the first three).
+    /// Methods, comma-separated: default (the light-driven learner), first-shot (the learner
+    /// `flatland fit` trains), paper (the paper's network with the refit), paper-norefit, hr,
+    /// uniform, exact, tracer (`sgcs` still names default).
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "default,paper,paper-norefit,hr,uniform"
+        default_value = "default,first-shot,paper,paper-norefit,hr,uniform,exact,tracer"
     )]
     pub methods: Vec<String>,
-    /// Budgets (numbers of basis functions, each in [3, 10 000 000]), comma-separated.
-    #[arg(long, value_delimiter = ',', default_value = "50,100,200,400,800")]
-    pub budgets: Vec<usize>,
-    /// Seeds per random method and budget, in [1, 1000].
-    #[arg(long, default_value_t = 3)]
+    /// The light-driven learner's tolerances on its estimated error of B − E, each in (0, 1),
+    /// comma-separated; one row each.
+    #[arg(long, value_delimiter = ',', default_value = "0.3,0.1,0.03,0.01,0.003")]
+    pub tolerances: Vec<f64>,
+    /// Budgets (numbers of basis functions, each in [3, 10 000 000]) of first-shot, paper,
+    /// paper-norefit, hr and uniform, comma-separated: exactly these. Default: 50, 100, 200,
+    /// 400, 800, then doubling until a row is over --max-seconds.
+    #[arg(long, value_delimiter = ',')]
+    pub budgets: Option<Vec<usize>>,
+    /// Seeds per random method and setting, in [1, 1000].
+    #[arg(long, default_value_t = 1)]
     pub seeds: u64,
-    /// Reference grid resolution R in [16, 4096].
+    /// Reference grid resolution R of the ζ errors, in [16, 4096].
     #[arg(long, default_value_t = 256)]
     pub res: usize,
-    /// Solve the radiosity with every representation on N elements and report the error of
-    /// the solved B against the exact kernel's (0: no solve).
-    #[arg(long, value_name = "N", default_value_t = 256)]
-    pub solve_elements: usize,
-    /// Output folder for results.csv and the plots.
+    /// Elements every method's radiosity is solved on. Default: what `flatland solve` uses
+    /// (the fewest, from 512, whose exact solve's estimated error of B − E is below 1 %).
+    #[arg(long, value_name = "N")]
+    pub solve_elements: Option<usize>,
+    /// A method's sweep stops at its first row whose total time is above this many seconds.
+    #[arg(long, value_name = "S", default_value_t = DEFAULT_MAX_SECONDS)]
+    pub max_seconds: f64,
+    /// The tracer's photons double until its rows took this many seconds together.
+    #[arg(long, value_name = "S", default_value_t = DEFAULT_TRACER_SECONDS)]
+    pub tracer_seconds: f64,
+    /// Lightings of the relighting comparison (0: none; at most 1000).
+    #[arg(long, default_value_t = flatland_lab::timed::relight::LIGHTINGS)]
+    pub lightings: usize,
+    /// Output folder for results.csv, relight.csv and the plots.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
 }
 
-/// Most seeds per method and budget (each is a whole run).
+/// Most seeds per method and setting (each is a whole run).
 const MAX_SEEDS: u64 = 1000;
+
+impl Args {
+    /// The plan the arguments ask for, checked before any work.
+    fn plan(&self) -> Result<TimedPlan> {
+        let methods = self
+            .methods
+            .iter()
+            .map(|m| Contender::parse(m.trim()))
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut plan = TimedPlan::new(methods);
+        plan.tolerances = self.tolerances.clone();
+        if let Some(budgets) = &self.budgets {
+            for &budget in budgets {
+                super::check_cells("--budgets", budget)?;
+            }
+            plan.budgets = budgets.clone();
+            plan.extend_budgets = false;
+        }
+        anyhow::ensure!(
+            (1..=MAX_SEEDS).contains(&self.seeds),
+            "--seeds must be in [1, {MAX_SEEDS}], but is {}",
+            self.seeds
+        );
+        plan.seeds = self.seeds;
+        plan.max_seconds = self.max_seconds;
+        plan.tracer_seconds = self.tracer_seconds;
+        plan.validate()?;
+        super::check_res(self.res)?;
+        anyhow::ensure!(
+            self.lightings <= 1000,
+            "--lightings must be in [0, 1000], but is {}",
+            self.lightings
+        );
+        Ok(plan)
+    }
+}
 
 /// Runs `flatland bench`.
 pub fn run(args: &Args) -> Result<()> {
-    let methods = args
-        .methods
-        .iter()
-        .map(|m| Method::parse(m.trim()))
-        .collect::<Result<Vec<_>, _>>()?;
-    let mut plan = BenchPlan::new(methods, args.budgets.clone(), args.seeds);
-    plan.solve_elements = (args.solve_elements > 0).then_some(args.solve_elements);
-    plan.validate()?;
-    for &budget in &plan.budgets {
-        super::check_cells("--budgets", budget)?;
-    }
-    anyhow::ensure!(
-        (1..=MAX_SEEDS).contains(&args.seeds),
-        "--seeds must be in [1, {MAX_SEEDS}], but is {}",
-        args.seeds
-    );
-    super::check_res(args.res)?;
+    let plan = args.plan()?;
     let (kernel, label) = args.scene.kernel()?;
     output::folder(
         &args.out,
@@ -72,29 +115,117 @@ pub fn run(args: &Args) -> Result<()> {
         &args.scene.path().into_iter().collect::<Vec<_>>(),
     )?;
     let kernel = Arc::new(kernel);
-    let reference = Arc::new(flatland_lab::reference(&kernel, args.res, &plan.fit));
-    let defined = flatland_lab::Defined::of(&reference);
-    let total = plan.methods.len() * plan.budgets.len() * plan.seeds as usize;
+    let stop: &Stop = &interrupt::requested;
+    let scorer = scorer(&kernel, args, &plan, stop)?;
+    let partial = args.out.join(PARTIAL);
     eprintln!(
-        "bench of {label}: {total} runs (Ctrl-C stops; the rows so far are kept in {})",
-        args.out.join("results.csv").display()
+        "bench of {label}: solving on {} elements against a reference on {}; rows are kept in \
+         {} as they are made (Ctrl-C stops)",
+        scorer.mesh().len(),
+        scorer.reference_elements(),
+        partial.display()
     );
-    let bar = super::progress_bar(total as u64, "runs");
-    let rows = run_kept(&kernel, &reference, &plan, |rows| {
-        bar.set_position(rows.len() as u64);
-        write_outputs(&args.out, &label, rows, defined)?;
-        let kept = format!(
-            "{} of {total} runs kept in {} (and its plots)",
-            rows.len(),
-            args.out.join("results.csv").display()
-        );
-        let budget = rows.last().map_or(0, |r| r.budget);
-        bar.suspend(|| eprintln!("bench: budget {budget} done; {kept}"));
-        interrupt::keep(kept);
+    let rows = run_timed(&kernel, &scorer, &plan, stop, |rows| {
+        write_rows(&args.out, PARTIAL, &label, rows)?;
+        let last = rows.last().expect("called after a row");
+        report_row(last, rows.len(), &partial);
         Ok(())
     })?;
-    bar.finish_and_clear();
-    print!("{}", table(&rows, defined));
-    println!("wrote {}/results.csv and plots", args.out.display());
+    write_rows(&args.out, RESULTS, &label, &rows)?;
+    remove_partial(&partial)?;
+    write_plots(&args.out, &label, &rows)?;
+    print!("{}", table(&rows));
+    println!();
+    print!("{}", within_table(&rows));
+    println!("wrote {} and plots", args.out.join(RESULTS).display());
+    if args.lightings > 0 {
+        relight(args, &kernel, &scorer, &plan, &rows, &label)?;
+    }
     Ok(())
+}
+
+/// The relighting comparison: `relight.csv` and a summary line per method.
+fn relight(
+    args: &Args,
+    kernel: &Arc<flatland_geom::Kernel>,
+    scorer: &Scorer,
+    plan: &TimedPlan,
+    rows: &[TimedRow],
+    label: &str,
+) -> Result<()> {
+    eprintln!(
+        "bench: relighting {label} under {} lightings",
+        args.lightings
+    );
+    let stop: &Stop = &interrupt::requested;
+    let (relit, failures) =
+        flatland_lab::timed::relight::relight(scorer, kernel, plan, rows, args.lightings, stop)?;
+    interrupt::check()?;
+    for (method, why) in failures {
+        eprintln!("bench: relighting with {} failed: {why}", method.name());
+    }
+    write_relight(&args.out, label, &relit)?;
+    print!("{}", relight_summary(&relit));
+    println!("wrote {}", args.out.join(RELIGHT).display());
+    Ok(())
+}
+
+/// The mesh and exact references of the scene, as `flatland solve` chooses them.
+fn scorer(
+    kernel: &Arc<flatland_geom::Kernel>,
+    args: &Args,
+    plan: &TimedPlan,
+    stop: &Stop,
+) -> Result<Scorer> {
+    let zeta = Arc::new(flatland_lab::reference(kernel, args.res, &plan.fit));
+    let elements = match args.solve_elements {
+        Some(n) => n,
+        None => {
+            let params = SolveParams::default();
+            elements_for_error(kernel, DEFAULT_ERROR_BOUND, &params, stop)
+                .context("choosing the solve's elements")?
+                .1
+                .elements
+        }
+    };
+    interrupt::check()?;
+    let reference_elements = ExactReference::default_elements_for(kernel, elements);
+    let scorer = Scorer::new(kernel, elements, reference_elements, zeta, stop)
+        .context("the exact reference solve")?;
+    interrupt::check()?;
+    Ok(scorer)
+}
+
+/// One line on stderr per row (a failure with its reason), and the Ctrl-C note.
+fn report_row(row: &TimedRow, kept: usize, partial: &Path) {
+    let what = format!(
+        "{} {} {}",
+        row.method.name(),
+        row.setting.kind(),
+        row.setting.value()
+    );
+    let rows = if kept == 1 { "row" } else { "rows" };
+    let note = format!("{kept} {rows} kept in {}", partial.display());
+    if row.failed {
+        eprintln!("bench: {what} {}; {note}", row.note);
+    } else {
+        let error = row
+            .reflected_error()
+            .map_or("–".to_owned(), |e| format!("{e:.4}"));
+        eprintln!(
+            "bench: {what} done in {:.2} s, B − E error {error}; {note}",
+            row.total_s
+        );
+    }
+    interrupt::keep(note);
+}
+
+/// Removes the partial file once the results are written.
+fn remove_partial(partial: &Path) -> Result<()> {
+    interrupt::writing(|| match std::fs::remove_file(partial) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+            Err(e).with_context(|| format!("removing {}", partial.display()))
+        }
+        _ => Ok(()),
+    })
 }

@@ -246,7 +246,7 @@ pub fn run_bench(
 }
 
 /// The radiosity solve every row is scored with: one mesh and the exact kernel's B on it.
-struct Solver {
+pub(crate) struct Solver {
     mesh: Mesh,
     exact: Vec<f64>,
 }
@@ -262,6 +262,11 @@ impl Solver {
         )?;
         let exact = reference.radiosity_on(&mesh, &never)?;
         Ok(Solver { mesh, exact })
+    }
+
+    /// The solver of `mesh` whose exact B (at its collocation points) is `exact`.
+    pub(crate) fn of(mesh: Mesh, exact: Vec<f64>) -> Solver {
+        Solver { mesh, exact }
     }
 
     /// The errors of B solved with `rep`, and the solve's wall time.
@@ -335,7 +340,7 @@ fn baseline_row<A: Representation>(
 }
 
 /// The default learner at `budget` cells (it may stop with fewer when it has converged).
-fn learner_row(
+pub(crate) fn learner_row(
     kernel: &Arc<Kernel>,
     reference: &Arc<Reference>,
     fit: &FitParams,
@@ -359,7 +364,7 @@ fn learner_row(
 
 /// One fit of the paper's network at `budget` cells, ended with its refit: the row after the
 /// refit and the row before it.
-fn paper_rows(
+pub(crate) fn paper_rows(
     kernel: &Arc<Kernel>,
     reference: &Arc<Reference>,
     paper: &FitParams,

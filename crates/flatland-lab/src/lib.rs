@@ -44,6 +44,7 @@ pub mod report;
 pub mod results;
 pub mod rooms;
 pub mod stress;
+pub mod timed;
 
 pub use error::LabError;
 pub use measure::{Defined, error_text, reference};

@@ -21,13 +21,15 @@ pub struct Series {
 
 const WIDTH: u32 = 900;
 const HEIGHT: u32 = 600;
-const PALETTE: [RGBColor; 6] = [
+const PALETTE: [RGBColor; 8] = [
     RGBColor(31, 119, 180),
     RGBColor(255, 127, 14),
     RGBColor(44, 160, 44),
     RGBColor(214, 39, 40),
     RGBColor(148, 103, 189),
     RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
 ];
 
 /// Registers the one font every picture uses (once per process; later calls do nothing).

@@ -4,3 +4,4 @@ pub mod bench;
 pub mod figure;
 pub mod grid;
 pub mod lit;
+pub mod timed;

@@ -1,0 +1,250 @@
+//! The timed bench's runner: each method's sweep in turn, every row kept as it is made, a
+//! failure or panic at one setting turned into a row that says so.
+
+use std::collections::HashMap;
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::sync::Arc;
+
+use anyhow::Result;
+use flatland_geom::Kernel;
+use flatland_solve::Stop;
+
+use super::compute::Context;
+use super::settings::{ElementRange, Sweep};
+use super::{Contender, Scorer, Setting, TimedPlan, TimedRow};
+use crate::interrupt;
+
+/// Rows computed by a fit that gives two (the paper's network with and without its refit),
+/// waiting for the other method's sweep to reach them.
+type Spare = HashMap<(Contender, usize, u64), TimedRow>;
+
+/// Runs every method's sweep on `scorer`'s mesh, calling `kept` with the rows so far after each
+/// row (so they are on disk before the next one starts). A setting that fails gives a failed
+/// row and the sweep goes on; Ctrl-C (`stop`, [`interrupt`]) ends the run between rows.
+pub fn run_timed(
+    kernel: &Arc<Kernel>,
+    scorer: &Scorer,
+    plan: &TimedPlan,
+    stop: &Stop,
+    mut kept: impl FnMut(&[TimedRow]) -> Result<()>,
+) -> Result<Vec<TimedRow>> {
+    plan.validate()?;
+    let cx = Context {
+        kernel,
+        scorer,
+        plan,
+        stop,
+    };
+    let elements = ElementRange::new(kernel, scorer.mesh().len());
+    let mut rows: Vec<TimedRow> = Vec::new();
+    let mut spare = Spare::new();
+    for &method in &plan.methods {
+        let mut sweep = Sweep::new(method);
+        loop {
+            let mine: Vec<&TimedRow> = rows.iter().filter(|r| r.method == method).collect();
+            let Some(setting) = sweep.next(plan, &elements, &mine) else {
+                break;
+            };
+            let seeds = if method.seeded() { plan.seeds } else { 1 };
+            let mut over = false;
+            for seed in 1..=seeds {
+                let row = isolated(&cx, method, setting, seed, &mut spare);
+                interrupt::check()?;
+                if stop() {
+                    anyhow::bail!("stopped");
+                }
+                over |= row.total_s > plan.max_seconds;
+                rows.push(row);
+                if over && seed == seeds {
+                    let last = rows.last_mut().expect("just pushed");
+                    last.add_note("over --max-seconds: the sweep stops here");
+                }
+                kept(&rows)?;
+            }
+            if over {
+                break;
+            }
+        }
+    }
+    Ok(rows)
+}
+
+/// The row of `method` at `setting`, or a failed row with the error or panic that stopped it.
+fn isolated(
+    cx: &Context<'_>,
+    method: Contender,
+    setting: Setting,
+    seed: u64,
+    spare: &mut Spare,
+) -> TimedRow {
+    match catch_unwind(AssertUnwindSafe(|| {
+        computed(cx, method, setting, seed, spare)
+    })) {
+        Ok(Ok(row)) => row,
+        Ok(Err(e)) => TimedRow::failed(method, setting, seed, &format!("{e:#}")),
+        Err(panic) => {
+            let why = panic
+                .downcast_ref::<&str>()
+                .map(|s| (*s).to_owned())
+                .or_else(|| panic.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "a panic".to_owned());
+            TimedRow::failed(method, setting, seed, &format!("panicked: {why}"))
+        }
+    }
+}
+
+fn computed(
+    cx: &Context<'_>,
+    method: Contender,
+    setting: Setting,
+    seed: u64,
+    spare: &mut Spare,
+) -> Result<TimedRow> {
+    match (method, setting) {
+        (Contender::Default, Setting::Tolerance(t)) => Ok(cx.light(t)?.0),
+        (Contender::FirstShot, Setting::Budget(b)) => cx.first_shot(b, seed),
+        (Contender::Paper | Contender::PaperNoRefit, Setting::Budget(b)) => {
+            if let Some(row) = spare.remove(&(method, b, seed)) {
+                return Ok(row);
+            }
+            let (refit, norefit) = cx.paper(b, seed)?;
+            let (mine, other) = if method == Contender::Paper {
+                (refit, norefit)
+            } else {
+                (norefit, refit)
+            };
+            spare.insert((other.method, b, seed), other);
+            Ok(mine)
+        }
+        (Contender::Hr | Contender::Uniform, Setting::Budget(b)) => cx.baseline(method, b, seed),
+        (Contender::Exact, Setting::Elements(n)) => cx.exact(n),
+        (Contender::Tracer, Setting::Photons(p)) => cx.tracer(p, seed),
+        _ => anyhow::bail!("{} has no {} setting", method.name(), setting.kind()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::timed::scorer::tiny;
+    use flatland_solve::never;
+
+    /// Runs `plan`, recording the row count at every call of `kept`.
+    fn run(plan: &TimedPlan) -> (Vec<TimedRow>, Vec<Vec<TimedRow>>) {
+        let (kernel, scorer) = tiny();
+        let mut snapshots = Vec::new();
+        let rows = run_timed(&kernel, &scorer, plan, &never, |rows| {
+            snapshots.push(rows.to_vec());
+            Ok(())
+        })
+        .unwrap();
+        (rows, snapshots)
+    }
+
+    #[test]
+    fn a_failing_method_gives_failed_rows_and_the_rows_before_are_kept_first() {
+        let mut plan = TimedPlan::new(vec![Contender::Uniform, Contender::Hr]);
+        plan.budgets = vec![16, 36];
+        plan.extend_budgets = false;
+        // An HR that may not build its initial linking fails at every budget.
+        plan.hr.max_links = 5;
+        let (rows, snapshots) = run(&plan);
+        assert_eq!(snapshots.len(), rows.len(), "kept after every row");
+        for (k, s) in snapshots.iter().enumerate() {
+            assert_eq!(s[..], rows[..=k], "snapshot {k}");
+        }
+        let first_failure = rows.iter().position(|r| r.failed).expect("HR fails");
+        assert!(first_failure >= 2, "{rows:?}");
+        assert!(
+            rows[..first_failure]
+                .iter()
+                .all(|r| r.method == Contender::Uniform)
+        );
+        let hr: Vec<&TimedRow> = rows.iter().filter(|r| r.method == Contender::Hr).collect();
+        assert_eq!(hr.len(), 2, "each budget tried: {hr:?}");
+        assert!(
+            hr.iter()
+                .all(|r| r.failed && r.note.starts_with("failed: ")),
+            "{hr:?}"
+        );
+        assert!(
+            rows.iter()
+                .filter(|r| r.method == Contender::Uniform)
+                .all(|r| { !r.failed && r.reflected_error().is_some_and(f64::is_finite) })
+        );
+    }
+
+    #[test]
+    fn a_budget_below_what_hr_can_build_gives_one_noted_row() {
+        let mut plan = TimedPlan::new(vec![Contender::Hr]);
+        plan.budgets = vec![3, 4, 5];
+        plan.extend_budgets = false;
+        let (rows, _) = run(&plan);
+        assert_eq!(rows.len(), 1, "not repeated: {rows:?}");
+        let row = &rows[0];
+        assert!(!row.failed && row.basis_functions.unwrap() > 5, "{row:?}");
+        assert!(row.note.contains("initial linking"), "{row:?}");
+        assert!(row.reflected_error().is_some_and(f64::is_finite));
+    }
+
+    #[test]
+    fn default_rows_have_their_estimated_and_measured_errors() {
+        let mut plan = TimedPlan::new(vec![Contender::Default]);
+        plan.tolerances = vec![0.3, 0.05];
+        let (rows, _) = run(&plan);
+        assert_eq!(rows.len(), 2);
+        for r in &rows {
+            assert!(!r.failed, "{r:?}");
+            assert!(r.estimated_error.is_some_and(f64::is_finite), "{r:?}");
+            assert!(r.reflected_error().is_some_and(f64::is_finite), "{r:?}");
+            assert!(r.basis_functions.is_some() && r.bytes > 0, "{r:?}");
+            assert_eq!(r.total_s, r.build_s + r.solve_s);
+        }
+        let est = |r: &TimedRow| r.estimated_error.unwrap();
+        assert!(est(&rows[1]) <= est(&rows[0]), "{rows:?}");
+    }
+
+    #[test]
+    fn exact_doubles_its_elements_and_the_tracer_its_photons_within_its_time() {
+        let mut plan = TimedPlan::new(vec![Contender::Exact, Contender::Tracer]);
+        plan.tracer_seconds = 0.2;
+        plan.first_photons = 2_000;
+        let (rows, _) = run(&plan);
+        let elements: Vec<usize> = rows
+            .iter()
+            .filter(|r| r.method == Contender::Exact)
+            .filter_map(|r| r.basis_functions)
+            .collect();
+        assert!(
+            elements.len() >= 2 && *elements.last().unwrap() <= 4 * 64,
+            "{elements:?}"
+        );
+        assert!(
+            elements.windows(2).all(|w| w[1] == 2 * w[0]),
+            "{elements:?}"
+        );
+        let traced: Vec<&TimedRow> = rows
+            .iter()
+            .filter(|r| r.method == Contender::Tracer)
+            .collect();
+        assert!(!traced.is_empty());
+        assert!(
+            traced.iter().all(|r| r.zeta_error.is_none() && r.rays > 0),
+            "{traced:?}"
+        );
+        // It stops once its rows took the time asked for (the last may go over).
+        let before_last: f64 = traced[..traced.len() - 1].iter().map(|r| r.total_s).sum();
+        assert!(before_last < plan.tracer_seconds, "{traced:?}");
+    }
+
+    #[test]
+    fn a_sweep_stops_at_its_first_row_over_the_time_budget() {
+        let mut plan = TimedPlan::new(vec![Contender::Uniform]);
+        plan.budgets = vec![16, 36, 64];
+        plan.extend_budgets = false;
+        plan.max_seconds = 1e-9;
+        let (rows, _) = run(&plan);
+        assert_eq!(rows.len(), 1, "{rows:?}");
+        assert!(rows[0].note.contains("--max-seconds"), "{rows:?}");
+    }
+}
