@@ -100,18 +100,15 @@ pub fn log_ticks(lo: f64, hi: f64) -> (Vec<f64>, Vec<f64>) {
 /// Below this a plotted value counts as 0 (an exact model's error is 0 up to rounding).
 const ZERO_FLOOR: f64 = 1e-12;
 
-/// Draws a log–log chart of `series` to a PNG at `path` (atomically).
-pub fn log_log(
-    path: &Path,
-    title: &str,
-    x_label: &str,
-    y_label: &str,
-    series: &[Series],
-) -> Result<()> {
-    register_font();
-    // A 0 (no ray, an exact model) has no place on a log axis: it is drawn at the axis' lower
-    // end, which the caption then says. Values below `ZERO_FLOOR` count as 0.
-    let positive = |v: f64| v.is_finite() && v > ZERO_FLOOR;
+/// Whether `v` has a place on a log axis (values below [`ZERO_FLOOR`] count as 0).
+fn positive(v: f64) -> bool {
+    v.is_finite() && v > ZERO_FLOOR
+}
+
+/// The axes' ranges of a log–log chart of `series`, and its title. A 0 (no ray, an exact
+/// model) has no place on a log axis: it is drawn at the axis' lower end, which the title
+/// then says.
+fn log_axes(title: &str, series: &[Series]) -> ((f64, f64), (f64, f64), String) {
     let range = |values: Vec<f64>| {
         let (lo, hi) = values
             .iter()
@@ -136,13 +133,26 @@ pub fn log_log(
         .collect();
     let (x0, x1, x_zeros) = range(xs);
     let (y0, y1, y_zeros) = range(ys);
-    let at_floor = |v: f64, floor: f64| if positive(v) { v } else { floor * 1.15 };
     let title = match (x_zeros, y_zeros) {
         (false, false) => title.to_owned(),
         (true, false) => format!("{title} (0 drawn at the left end)"),
         (false, true) => format!("{title} (0 drawn at the bottom)"),
         (true, true) => format!("{title} (0 drawn at the left end and at the bottom)"),
     };
+    ((x0, x1), (y0, y1), title)
+}
+
+/// Draws a log–log chart of `series` to a PNG at `path` (atomically).
+pub fn log_log(
+    path: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+) -> Result<()> {
+    register_font();
+    let ((x0, x1), (y0, y1), title) = log_axes(title, series);
+    let at_floor = |v: f64, floor: f64| if positive(v) { v } else { floor * 1.15 };
     let title = title.as_str();
     let finite = |v: f64| v.is_finite();
 
