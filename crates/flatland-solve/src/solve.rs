@@ -515,16 +515,7 @@ mod tests {
         let kernel = Kernel::new(scene);
         let mesh = Mesh::new(&kernel, elements).unwrap();
         let op = exact_operator(&kernel, &mesh, &never).unwrap();
-        let solution = solve_operator(&op, &mesh, &SolveParams::default(), &never).unwrap();
-        let mut gathered = vec![0.0; mesh.len()];
-        op.apply(&solution.radiosity, &mut gathered);
-        let (mut emitted, mut absorbed) = (0.0, 0.0);
-        for (i, el) in mesh.elements().iter().enumerate() {
-            let edge = mesh.edge_of(i);
-            emitted += edge.emission * el.length;
-            absorbed += (1.0 - edge.reflectance) * gathered[i] / edge.reflectance * el.length;
-        }
-        (emitted, absorbed)
+        crate::test_support::power_balance(&op, &mesh)
     }
 
     #[test]

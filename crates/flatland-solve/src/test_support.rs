@@ -2,6 +2,8 @@
 //! scenes and random ones.
 
 use flatland_geom::{DVec2, Edge, Scene};
+
+use crate::{Mesh, SolveParams, TransferOperator, never, solve_operator};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -82,4 +84,19 @@ pub fn random_room(inside: usize, seed: u64) -> Scene {
         ends.push(b);
     }
     Scene::new(edges).expect("a valid random room")
+}
+
+/// Emitted and absorbed power of the solve with `op` on `mesh`: `∫ E dl` and `∫ (1 − ρ) H dl`,
+/// with H the irradiance `(K B)_i / ρ_i` (equal in a closed scene without blockers).
+pub fn power_balance(op: &dyn TransferOperator, mesh: &Mesh) -> (f64, f64) {
+    let solution = solve_operator(op, mesh, &SolveParams::default(), &never).unwrap();
+    let mut gathered = vec![0.0; mesh.len()];
+    op.apply(&solution.radiosity, &mut gathered);
+    let (mut emitted, mut absorbed) = (0.0, 0.0);
+    for (i, el) in mesh.elements().iter().enumerate() {
+        let edge = mesh.edge_of(i);
+        emitted += edge.emission * el.length;
+        absorbed += (1.0 - edge.reflectance) * gathered[i] / edge.reflectance * el.length;
+    }
+    (emitted, absorbed)
 }

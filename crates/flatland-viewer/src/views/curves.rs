@@ -108,57 +108,48 @@ pub fn curves(ui: &mut egui::Ui, history: &[HistoryPoint], lit: Option<&Lit>) {
         (!points.points().is_empty())
             .then(|| curve("estimated B − E", points).style(LineStyle::dashed_loose()))
     };
+    // One error plot against `x`: ζ held out, and with the lit scene its solved and estimated
+    // B − E.
+    let error_plot = |ui: &mut egui::Ui,
+                      id: &str,
+                      x: &dyn Fn(&HistoryPoint) -> f64,
+                      lit_x: &dyn Fn(&LitPoint) -> f64| {
+        Plot::new(id)
+            .height(h)
+            .include_y(0.0)
+            .legend(Legend::default())
+            .allow_scroll(false)
+            .allow_zoom(false)
+            .allow_drag(false)
+            .show(ui, |p| {
+                p.line(curve(
+                    "ζ held out",
+                    series(&|pt| [x(pt), pt.rel_l2_heldout]),
+                ));
+                if !lit_history.is_empty() {
+                    p.line(curve(
+                        "solved B − E",
+                        lit_series(&|pt| [lit_x(pt), pt.rel_l2_reflected]),
+                    ));
+                }
+                if let Some(line) = estimated(lit_x) {
+                    p.line(line);
+                }
+            });
+    };
     ui.columns(columns, |cols| {
         cols[0].label(if rounds {
             "rel. L2 vs rounds"
         } else {
             "rel. L2 vs steps"
         });
-        Plot::new("err-steps")
-            .height(h)
-            .include_y(0.0)
-            .legend(Legend::default())
-            .allow_scroll(false)
-            .allow_zoom(false)
-            .allow_drag(false)
-            .show(&mut cols[0], |p| {
-                p.line(curve(
-                    "ζ held out",
-                    series(&|h| [h.steps as f64, h.rel_l2_heldout]),
-                ));
-                if !lit_history.is_empty() {
-                    p.line(curve(
-                        "solved B − E",
-                        lit_series(&|h| [h.steps as f64, h.rel_l2_reflected]),
-                    ));
-                }
-                if let Some(line) = estimated(&|h| h.steps as f64) {
-                    p.line(line);
-                }
-            });
+        error_plot(&mut cols[0], "err-steps", &|pt| pt.steps as f64, &|pt| {
+            pt.steps as f64
+        });
         cols[1].label("rel. L2 vs rays cast");
-        Plot::new("err-rays")
-            .height(h)
-            .include_y(0.0)
-            .legend(Legend::default())
-            .allow_scroll(false)
-            .allow_zoom(false)
-            .allow_drag(false)
-            .show(&mut cols[1], |p| {
-                p.line(curve(
-                    "ζ held out",
-                    series(&|h| [h.rays as f64, h.rel_l2_heldout]),
-                ));
-                if !lit_history.is_empty() {
-                    p.line(curve(
-                        "solved B − E",
-                        lit_series(&|h| [h.rays as f64, h.rel_l2_reflected]),
-                    ));
-                }
-                if let Some(line) = estimated(&|h| h.rays as f64) {
-                    p.line(line);
-                }
-            });
+        error_plot(&mut cols[1], "err-rays", &|pt| pt.rays as f64, &|pt| {
+            pt.rays as f64
+        });
         if let Some(lit) = lit {
             cols[3].label("B(s): learned vs exact");
             b_curves(&mut cols[3], lit, h);
