@@ -448,6 +448,7 @@ impl Summary<'_> {
             "iterations": c.solution.iterations,
             "residual": c.solution.residual,
             "wall_s": c.solution.wall_s(),
+            "peak_memory_bytes": flatland_lab::memory::peak_bytes(),
             "build_s": self.build_s,
             "reference_elements": self.reference_elements,
             "discretization_error_estimate": self.discretization.estimate,
@@ -531,6 +532,12 @@ impl Summary<'_> {
             ),
         );
         row("building the kernel", format!("{:.3} s", self.build_s));
+        if let Some(peak) = flatland_lab::memory::peak_bytes() {
+            row(
+                "peak memory",
+                format!("{:.0} MB (the whole command)", peak as f64 / 1e6),
+            );
+        }
     }
 }
 

@@ -10,8 +10,8 @@
 //!   ([`colormap`]); log–log charts and heatmaps ([`plot`]); the bench's CSV, plots and tables,
 //!   the Fig. 3 panels, grid images and the lit scene ([`report`]).
 //! - What every command shares with the experiments: the one reference rule and when an error is
-//!   defined ([`reference()`], [`Defined`]), Ctrl-C that keeps what is done ([`interrupt`]), and
-//!   the rule for output paths ([`output`]).
+//!   defined ([`reference()`], [`Defined`]), Ctrl-C that keeps what is done ([`interrupt`]), the
+//!   rule for output paths ([`output`]), and the process's peak memory ([`memory`]).
 //!
 //! Errors: the bench plan's checks are a [`LabError`]; the long-running experiments and the
 //! writers end at the command line and return `anyhow` errors with their context as text.
@@ -38,6 +38,7 @@ pub mod colormap;
 mod error;
 pub mod interrupt;
 mod measure;
+pub mod memory;
 pub mod output;
 pub mod plot;
 pub mod report;
