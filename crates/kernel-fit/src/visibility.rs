@@ -11,7 +11,7 @@
 
 use foldhash::HashMap;
 
-use flatland_geom::{DVec2, Kernel, PairClass, PairEvents, Unoccluded};
+use flatland_geom::{DVec2, Kernel, PairClass, RayFace, Unoccluded};
 use flatland_solve::InputFrame;
 use sgcs::{CellId, Gate};
 
@@ -22,13 +22,13 @@ mod sampler;
 pub(crate) use sampler::{MAX_LISTED_PARENTS, Sampler};
 
 /// One face of a pair's visibility structure: the ordered pair of surface edges (sender rank,
-/// receiver rank), the sub-pair, and the side of each of the sub-pair's event points (bits).
-/// Visibility is the same for every ray of one face.
+/// receiver rank) and the ray's [`RayFace`] (sub-pair, the side of each of the sub-pair's
+/// event points as bits, the event points it meets). Visibility is the same for every ray of
+/// one face.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub(crate) struct FaceKey {
     pair: (u32, u32),
-    sub: u8,
-    sides: Box<[u64]>,
+    face: RayFace,
 }
 
 impl FaceKey {
@@ -39,27 +39,22 @@ impl FaceKey {
             return None;
         }
         let events = kernel.visibility_events(a, b)?;
-        let sub = events.sub_pair(x, y);
-        let points = events.points(sub);
-        let mut sides = vec![0u64; points.len().div_ceil(64)];
-        for (i, &v) in points.iter().enumerate() {
-            if PairEvents::side(x, y, v) {
-                sides[i / 64] |= 1 << (i % 64);
-            }
-        }
         Some(FaceKey {
             pair: (a as u32, b as u32),
-            sub: sub as u8,
-            sides: sides.into(),
+            face: events.face(x, y),
         })
     }
 
-    /// The face of pair `(a, b)` that a [`flatland_geom::SenderFace`] names.
+    /// The face of pair `(a, b)` that a [`flatland_geom::SenderFace`] names (its rays meet no
+    /// event point).
     pub(crate) fn of_stretch(a: usize, b: usize, face: flatland_geom::SenderFace) -> FaceKey {
         FaceKey {
             pair: (a as u32, b as u32),
-            sub: face.sub as u8,
-            sides: face.sides,
+            face: RayFace {
+                sub: face.sub,
+                sides: face.sides,
+                on_ray: Box::default(),
+            },
         }
     }
 
@@ -333,8 +328,11 @@ mod tests {
     fn random_key(rng: &mut impl rand::Rng, pairs: u32) -> FaceKey {
         FaceKey {
             pair: (rng.random_range(0..pairs), rng.random_range(0..pairs)),
-            sub: rng.random_range(0..2u8),
-            sides: vec![rng.random_range(0..4u64)].into(),
+            face: RayFace {
+                sub: rng.random_range(0..2),
+                sides: vec![rng.random_range(0..4u64)].into(),
+                on_ray: Box::default(),
+            },
         }
     }
 
