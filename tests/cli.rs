@@ -1312,8 +1312,8 @@ fn solve_with_the_default_learner_meets_its_tolerance_on_a_floor_plan_and_says_s
     assert!(estimated <= 0.02, "{json}");
     assert!(measured <= 2.0 * (estimated + discretization), "{json}");
     assert_eq!(
-        json["rays"], json["basis_functions"],
-        "one ray per cell: {json}"
+        json["probes"], json["basis_functions"],
+        "one probe per cell: {json}"
     );
     let out = flatland(&[
         "solve",

@@ -184,7 +184,7 @@ fn scorer(
             let params = SolveParams::default();
             elements_for_error(kernel, DEFAULT_ERROR_BOUND, &params, stop)
                 .context("choosing the solve's elements")?
-                .1
+                .estimate
                 .elements
         }
     };

@@ -10,8 +10,8 @@ use anyhow::{Context, Result, bail};
 use flatland_baselines::{BlockValue, HrParams, UniformParams, run_hr_at_budget, run_uniform};
 use flatland_geom::{Kernel, Scene, write_atomic};
 use flatland_solve::{
-    Comparison, DEFAULT_ERROR_BOUND, ErrorEstimate, ExactMethod, ExactReference, Mesh,
-    Representation, SolveError, SolveParams, Stop, elements_for_error, solve_against,
+    Comparison, DEFAULT_ERROR_BOUND, Discretization, ErrorEstimate, ExactMethod, ExactReference,
+    Mesh, Representation, SolveError, SolveParams, Stop, elements_for_error, solve_against,
 };
 use kernel_fit::{Fit, FitError, LightFit, LightParams, LightStop, ModelFile};
 
@@ -44,9 +44,9 @@ pub struct Args {
     /// bundled scenes).
     #[arg(long, value_name = "N")]
     pub elements: Option<usize>,
-    /// Elements of the exact reference solve the errors are measured against
-    /// (default: 4 × elements, at least 2048; at most 8192 on small scenes, whose exact
-    /// operator is dense).
+    /// Elements of the exact reference solve the errors are measured against (default:
+    /// 2 × elements, the finer solve the discretization error is estimated from, so it costs
+    /// nothing more; at most 8192 on small scenes, whose exact operator is dense).
     #[arg(long, value_name = "N")]
     pub reference_elements: Option<usize>,
     /// Seed of the fit or baseline built.
@@ -181,21 +181,25 @@ pub fn run(args: &Args) -> Result<()> {
             other => other.into(),
         }
     };
-    let discretization = discretization(&kernel, args.elements, &params, stop)
+    let found = discretization(&kernel, args.elements, &params, stop)
         .map_err(interrupted)
         .context("estimating the discretization error of the exact solve")?;
-    let elements = discretization.elements;
-    let mesh = Mesh::new(&kernel, elements).context("--elements")?;
-    let reference_elements = args
-        .reference_elements
-        .unwrap_or_else(|| ExactReference::default_elements_for(&kernel, elements));
-    check_elements(&kernel, reference_elements).context("--reference-elements")?;
+    let discretization = found.estimate;
+    let mesh = found.coarse.mesh().clone();
     let built = build(&choice, &kernel, &mesh, args, stop)?;
     interrupt::check()?;
-    let reference = ExactReference::new(&kernel, reference_elements, &params, stop)
-        .map_err(interrupted)
-        .context("the exact reference solve")?;
-    let exact = reference.radiosity_on(&mesh, stop).map_err(interrupted)?;
+    // The reference: the finer solve the estimate was made with, unless another is asked for.
+    let (reference, exact) = match args.reference_elements {
+        Some(n) if n != found.finer.mesh().len() => {
+            let reference = ExactReference::new(&kernel, n, &params, stop)
+                .map_err(interrupted)
+                .context("the exact reference solve")?;
+            let exact = reference.radiosity_on(&mesh, stop).map_err(interrupted)?;
+            (reference, exact)
+        }
+        _ => (found.finer, found.finer_on_coarse),
+    };
+    let reference_elements = reference.mesh().len();
     let comparison = solve_against(built.rep.as_ref(), &mesh, &exact, &params, stop)
         .map_err(interrupted)
         .with_context(|| format!("solving with the {} kernel", choice.label()))?;
@@ -249,19 +253,22 @@ fn check_elements(kernel: &Kernel, elements: usize) -> Result<(), SolveError> {
     Mesh::new(kernel, elements).map(|_| ())
 }
 
-/// The estimated discretization error of the exact solve on `elements` (from a solve on
-/// twice as many), or, without a count, the fewest elements whose estimate is below 1 %.
+/// The exact solve on `elements` with the solve on twice as many its discretization error is
+/// estimated from, or, without a count, the fewest elements whose estimate is below 1 %.
 fn discretization(
     kernel: &Kernel,
     elements: Option<usize>,
     params: &SolveParams,
     stop: &Stop,
-) -> Result<ErrorEstimate, SolveError> {
+) -> Result<Discretization, SolveError> {
     match elements {
-        Some(n) => {
-            ExactReference::new(kernel, n, params, stop)?.error_estimate(kernel, params, stop)
-        }
-        None => Ok(elements_for_error(kernel, DEFAULT_ERROR_BOUND, params, stop)?.1),
+        Some(n) => Discretization::of(
+            ExactReference::new(kernel, n, params, stop)?,
+            kernel,
+            params,
+            stop,
+        ),
+        None => elements_for_error(kernel, DEFAULT_ERROR_BOUND, params, stop),
     }
 }
 
@@ -289,7 +296,8 @@ struct Learned {
     /// Its estimate of the relative L2 error of the solved `B − E`.
     estimated_error: f64,
     rounds: usize,
-    rays: u64,
+    /// Probes: exact views swept (its cells).
+    probes: usize,
     stopped: LightStop,
 }
 
@@ -364,7 +372,7 @@ fn build(choice: &Choice, kernel: &Kernel, mesh: &Mesh, args: &Args, stop: &Stop
 fn learn(kernel: &Kernel, mesh: &Mesh, args: &Args, stop: &Stop) -> Result<(LightFit, Learned)> {
     let params = LightParams {
         tolerance: args.tolerance,
-        max_rays: args.basis.map_or(u64::MAX, |b| b as u64),
+        max_cells: args.basis.unwrap_or(usize::MAX),
         ..LightParams::default()
     };
     params
@@ -391,7 +399,7 @@ fn learn(kernel: &Kernel, mesh: &Mesh, args: &Args, stop: &Stop) -> Result<(Ligh
     let summary = Learned {
         estimated_error: fit.estimated_error().unwrap_or(f64::INFINITY),
         rounds: fit.history().len(),
-        rays: fit.rays(),
+        probes: fit.cells().len(),
         stopped,
     };
     Ok((fit, summary))
@@ -450,7 +458,7 @@ impl Summary<'_> {
         if let Some(l) = self.learned {
             json["estimated_rel_l2_reflected"] = l.estimated_error.into();
             json["rounds"] = l.rounds.into();
-            json["rays"] = l.rays.into();
+            json["probes"] = l.probes.into();
             json["stopped"] = stop_name(l.stopped).into();
         }
         json
@@ -497,11 +505,11 @@ impl Summary<'_> {
             row(
                 "  estimated by the learner",
                 format!(
-                    "{:.5}   (against the exact kernel on these elements; {} rounds, {} rays, \
+                    "{:.5}   (against the exact kernel on these elements; {} rounds, {} probes, \
                      stopped: {})",
                     l.estimated_error,
                     l.rounds,
-                    l.rays,
+                    l.probes,
                     stop_name(l.stopped)
                 ),
             );
@@ -531,7 +539,7 @@ fn stop_name(stop: LightStop) -> &'static str {
     match stop {
         LightStop::Tolerance => "tolerance",
         LightStop::Exact => "exact",
-        LightStop::Rays => "cells",
+        LightStop::Cells => "cells",
         LightStop::Time => "time",
     }
 }

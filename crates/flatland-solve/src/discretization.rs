@@ -53,6 +53,40 @@ impl ErrorEstimate {
     }
 }
 
+/// An exact solve with the finer one its error was estimated from: what a command needs to
+/// say how good its mesh is and, reusing the finer solve, to measure other solutions on it.
+#[derive(Clone, Debug)]
+pub struct Discretization {
+    /// The solve on the chosen elements.
+    pub coarse: ExactReference,
+    /// The solve on twice as many.
+    pub finer: ExactReference,
+    /// `finer`'s B at `coarse`'s collocation points ([`ExactReference::radiosity_on`]).
+    pub finer_on_coarse: Vec<f64>,
+    /// The estimated error of `coarse`.
+    pub estimate: ErrorEstimate,
+}
+
+impl Discretization {
+    /// `coarse` with a solve of `kernel` (the same scene) on twice its elements, and the
+    /// estimate they give.
+    pub fn of(
+        coarse: ExactReference,
+        kernel: &Kernel,
+        params: &SolveParams,
+        stop: &Stop,
+    ) -> Result<Discretization, SolveError> {
+        let finer = ExactReference::new(kernel, 2 * coarse.mesh().len(), params, stop)?;
+        let (finer_on_coarse, estimate) = compare(&coarse, &finer, stop)?;
+        Ok(Discretization {
+            coarse,
+            finer,
+            finer_on_coarse,
+            estimate,
+        })
+    }
+}
+
 impl ExactReference {
     /// The discretization error of this solve, estimated from a solve of `kernel` (the same
     /// scene) on twice its elements.
@@ -83,8 +117,8 @@ fn compare(
 
 /// The first element count of the doubling sequence that starts at `kernel`'s scene's minimum
 /// ([`Mesh::min_elements`], raised to [`DEFAULT_ELEMENTS`]: below it a solve costs nothing)
-/// whose estimated error of `B − E` ([`ErrorEstimate`]) is at most `bound`, with the exact
-/// solve there and its estimate. When the doubling reaches a size the exact operator cannot
+/// whose estimated error of `B − E` ([`ErrorEstimate`]) is at most `bound`: the exact solve
+/// there, the finer one and the estimate they give. When the doubling reaches a size the exact operator cannot
 /// have ([`ExactMethod::check`], [`MAX_MESH_ELEMENTS`]) before meeting the bound, the last solve
 /// that could be estimated is returned: its estimate says by how much it misses. Each step
 /// costs one more solve (the finer one of a step is the coarser of the next).
@@ -93,7 +127,7 @@ pub fn elements_for_error(
     bound: f64,
     params: &SolveParams,
     stop: &Stop,
-) -> Result<(ExactReference, ErrorEstimate), SolveError> {
+) -> Result<Discretization, SolveError> {
     if !(bound > 0.0 && bound.is_finite()) {
         return Err(SolveError::InvalidParameter {
             name: "error bound",
@@ -107,9 +141,14 @@ pub fn elements_for_error(
     let mut coarse = ExactReference::new(kernel, n, params, stop)?;
     loop {
         let finer = ExactReference::new(kernel, 2 * n, params, stop)?;
-        let (_, estimate) = compare(&coarse, &finer, stop)?;
+        let (finer_on_coarse, estimate) = compare(&coarse, &finer, stop)?;
         if estimate.estimate <= bound || !fits(4 * n) {
-            return Ok((coarse, estimate));
+            return Ok(Discretization {
+                coarse,
+                finer,
+                finer_on_coarse,
+                estimate,
+            });
         }
         (coarse, n) = (finer, 2 * n);
     }
@@ -157,13 +196,15 @@ mod tests {
         let kernel = Kernel::new(bundled("fig3"));
         let params = SolveParams::default();
         // The bundled scenes are within 1 % at their default 512 elements.
-        let (reference, estimate) =
-            elements_for_error(&kernel, DEFAULT_ERROR_BOUND, &params, &never).unwrap();
-        assert_eq!(reference.mesh().len(), DEFAULT_ELEMENTS);
+        let found = elements_for_error(&kernel, DEFAULT_ERROR_BOUND, &params, &never).unwrap();
+        assert_eq!(found.coarse.mesh().len(), DEFAULT_ELEMENTS);
+        assert_eq!(found.finer.mesh().len(), 2 * DEFAULT_ELEMENTS);
+        assert_eq!(found.finer_on_coarse.len(), DEFAULT_ELEMENTS);
+        let estimate = found.estimate;
         assert!(estimate.estimate <= DEFAULT_ERROR_BOUND, "{estimate:?}");
         // A tighter bound takes more doublings; each count is the start times a power of two.
-        let (reference, tight) = elements_for_error(&kernel, 5e-5, &params, &never).unwrap();
-        let n = reference.mesh().len();
+        let found = elements_for_error(&kernel, 5e-5, &params, &never).unwrap();
+        let (n, tight) = (found.coarse.mesh().len(), found.estimate);
         assert!(
             n > DEFAULT_ELEMENTS && (n / DEFAULT_ELEMENTS).is_power_of_two(),
             "{n}"

@@ -95,7 +95,9 @@ mod independent;
 #[cfg(test)]
 mod test_support;
 
-pub use discretization::{DEFAULT_ERROR_BOUND, ErrorEstimate, SAFETY_FACTOR, elements_for_error};
+pub use discretization::{
+    DEFAULT_ERROR_BOUND, Discretization, ErrorEstimate, SAFETY_FACTOR, elements_for_error,
+};
 pub use error::SolveError;
 pub use exact::{
     ExactMethod, SWEEP_FROM_EDGES, check_scene, exact_block_means, exact_operator, receiver, sender,
@@ -118,5 +120,5 @@ pub use solve::{
     solve_against, solve_errors, solve_linear, solve_operator,
 };
 pub use sparse::{MAX_NONZEROS, SparseOperator};
-pub use sweep::sweep_operator;
+pub use sweep::{ProbeBuffers, SeenSpan, Sweep, sweep_operator};
 pub use transfer::{Receiver, Sender, point_to_segment, point_to_segment_visible};

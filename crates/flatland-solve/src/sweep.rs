@@ -15,6 +15,7 @@
 //! one is `O(n²)` pair classifications and `N²` numbers.
 
 mod envelope;
+mod probe;
 mod row;
 mod view;
 
@@ -27,6 +28,7 @@ use crate::bvh::{Aabb, Bvh, Contents};
 use crate::exact::check_scene;
 use crate::{Mesh, SolveError, SparseOperator, Stop};
 
+pub use probe::{ProbeBuffers, SeenSpan, Sweep};
 pub(crate) use row::transfers;
 
 use envelope::Envelope;

@@ -12,9 +12,9 @@
 //!   `(s, t)` of the samples they won (paper Fig. 3c), sized by `δ_c`, cyan when critical,
 //!   ringed when new, the network's edges between cells of one face (the others join cells that
 //!   never answer the same ray), and optionally every training sample coloured by its set. The
-//!   light-driven learner's cells are one per face learned, at the `(s, t)` of the face's ray,
-//!   light blue where it found the face clear, magenta where blocked, ringed when the newest round
-//!   learned them. A legend under the plot says what each mark means.
+//!   light-driven learner's cells are its probes: a light blue disc at the probed point's `t`
+//!   with the column of `s` it sees (`V = 1`) drawn faintly, ringed when the newest round
+//!   placed them. A legend under the plot says what each mark means.
 //! - **ζ̃ and |ζ̃ − ζ|** beside it, on the same colour scale (paper Fig. 3d). Hovering any of the
 //!   three shows `G`, `V`, `k`, `ζ` and the learned value at the pointer; for the default
 //!   learner also its `Ṽ` and whether the geometry or the cells of that face decide it.

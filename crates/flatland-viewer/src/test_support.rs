@@ -69,7 +69,7 @@ pub fn moment(world: &Arc<World>, i: u64, cells: usize) -> Moment {
                 st: Some([0.5, 0.5]),
                 width: 0.1,
                 critical: false,
-                visible: None,
+                seen: Default::default(),
             };
             cells
         ],

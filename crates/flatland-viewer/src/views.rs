@@ -28,10 +28,10 @@ pub const TITLE_H: f32 = 18.0;
 const CELL: Color32 = Color32::from_rgb(245, 245, 245);
 const CRITICAL: Color32 = Color32::from_rgb(40, 230, 255);
 const NEW_CELL: Color32 = Color32::from_rgb(150, 255, 40);
-/// A light-driven cell whose face is clear (`V = 1`).
+/// A probe of the light-driven learner.
 const FACE_VISIBLE: Color32 = Color32::from_rgb(90, 210, 255);
-/// A light-driven cell whose face is blocked (`V = 0`).
-const FACE_BLOCKED: Color32 = Color32::from_rgb(235, 60, 200);
+/// What a probe sees (`V = 1` along its column): faint, so the kernel shows through.
+const SEEN: Color32 = Color32::from_rgba_premultiplied(45, 105, 128, 128);
 /// The network's edges within a face: faint, so the kernel shows through.
 const NET_EDGE: Color32 = Color32::from_rgba_premultiplied(110, 110, 110, 110);
 /// The surface edges' boundaries over the plots.

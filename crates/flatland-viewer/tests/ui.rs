@@ -553,13 +553,8 @@ fn the_default_learner_publishes_rounds_its_cells_grow_and_the_timeline_scrubs_t
     assert!(shown.cells() < app.cells(), "an earlier state");
     assert_eq!(shown.lit.as_ref().map(|l| l.steps), Some(1));
     assert!(
-        shown
-            .status
-            .growth
-            .cells
-            .iter()
-            .all(|c| c.visible.is_some()),
-        "one cell per face, clear or blocked"
+        shown.status.growth.cells.iter().all(|c| !c.seen.is_empty()),
+        "one cell per probe, each with what it sees"
     );
     h.get_by_label("Live").click();
     h.run_steps(1);

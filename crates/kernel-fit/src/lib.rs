@@ -79,7 +79,7 @@ pub use error::FitError;
 pub use fit::{
     CellSnapshot, Fit, FitSummary, HistoryPoint, INPUT_DIM, LearnedKernel, Snapshot, StopReason,
 };
-pub use light::{FaceCell, LightFit, LightParams, LightStop, Round};
+pub use light::{LightFit, LightParams, LightStop, ProbeCell, Round};
 pub use limits::REFERENCE_SEED;
 pub use model::{MODEL_FORMAT, MODEL_VERSION, ModelFile, fingerprint_hex};
 pub use params::{

@@ -45,19 +45,6 @@ impl FaceKey {
         })
     }
 
-    /// The face of pair `(a, b)` that a [`flatland_geom::SenderFace`] names (its rays meet no
-    /// event point).
-    pub(crate) fn of_stretch(a: usize, b: usize, face: flatland_geom::SenderFace) -> FaceKey {
-        FaceKey {
-            pair: (a as u32, b as u32),
-            face: RayFace {
-                sub: face.sub,
-                sides: face.sides,
-                on_ray: Box::default(),
-            },
-        }
-    }
-
     /// The face of the ray at `(s, t)`.
     pub(crate) fn at(kernel: &Kernel, u: &Unoccluded) -> Option<FaceKey> {
         FaceKey::of(kernel, u.sender, u.receiver, u.x, u.y)

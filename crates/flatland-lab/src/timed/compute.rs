@@ -75,13 +75,14 @@ impl Context<'_> {
             seed: 1,
             rep: &fit,
             build_s,
-            rays: fit.rays(),
+            // Probes sweep a view each, as the exact operator's rows do: no ray is cast.
+            rays: 0,
         })?;
         row.estimated_error = fit.estimated_error();
         match stopped {
             LightStop::Tolerance => {}
-            LightStop::Exact => row.add_note("every block resolved: the exact operator"),
-            LightStop::Rays => row.add_note("stopped by its ray budget before the tolerance"),
+            LightStop::Exact => row.add_note("no doubt left: the exact operator"),
+            LightStop::Cells => row.add_note("stopped by its cell budget before the tolerance"),
             LightStop::Time => row.add_note("stopped by --max-seconds before the tolerance"),
         }
         Ok((row, fit))

@@ -53,7 +53,13 @@ pub(crate) fn transfers<'b>(
 /// Appends the transfer of `piece` of surface `m` to each element of `m` it overlaps, when
 /// `m`'s front faces the receiving point (a surface seen from behind sends nothing, but still
 /// hides what lies beyond it).
-fn seen_part(view: &View, mesh: &Mesh, m: usize, piece: &Piece, out: &mut Vec<(u32, f64)>) {
+pub(super) fn seen_part(
+    view: &View,
+    mesh: &Mesh,
+    m: usize,
+    piece: &Piece,
+    out: &mut Vec<(u32, f64)>,
+) {
     let edge = &mesh.edges()[m];
     let elements = edge.elements.clone();
     let (first, last) = (

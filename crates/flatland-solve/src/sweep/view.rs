@@ -60,7 +60,7 @@ impl View {
     /// σ of the horizon on the side of `p`: where a segment leaving the front half-plane
     /// through `p` is last seen.
     #[inline]
-    fn horizon(&self, p: DVec2) -> f64 {
+    pub fn horizon(&self, p: DVec2) -> f64 {
         if self.t.dot(p - self.y) >= 0.0 {
             1.0
         } else {

@@ -188,8 +188,8 @@ impl ViewerApp {
                 .selectable_label(light, "light-driven (default)")
                 .on_hover_text(
                     "rounds of solving and learning: each round solves the scene with what is \
-                     learned, then casts one ray per face of the blocks the most light flows \
-                     through (ALGORITHM.md §4a; what `flatland solve` runs). The network's \
+                     learned, then probes the exact view of the points between whose \
+                     neighbours' views the most uncertain light flows (ALGORITHM.md §4a; what `flatland solve` runs). The network's \
                      parameters below do not apply to it",
                 )
                 .clicked()

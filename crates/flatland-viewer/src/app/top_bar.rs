@@ -158,8 +158,8 @@ fn light_stats(light: &LightRounds, rays: u64, cells: usize, lit: Option<&Lit>) 
 pub fn light_stop_text(reason: LightStop) -> &'static str {
     match reason {
         LightStop::Tolerance => "the estimated error of B − E is within the tolerance (1 %)",
-        LightStop::Exact => "every block is resolved: the operator is exact on this mesh",
-        LightStop::Rays => "ray budget spent",
+        LightStop::Exact => "no doubt is left: the operator is exact on this mesh",
+        LightStop::Cells => "cell budget spent",
         LightStop::Time => "time budget spent",
     }
 }

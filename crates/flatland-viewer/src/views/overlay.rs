@@ -11,7 +11,7 @@ use std::time::Duration;
 use egui::{Color32, ColorImage};
 use flatland_geom::Scene;
 
-use super::{BOUNDARY, CELL, CRITICAL, FACE_BLOCKED, FACE_VISIBLE, NET_EDGE, NEW_CELL};
+use super::{BOUNDARY, CELL, CRITICAL, FACE_VISIBLE, NET_EDGE, NEW_CELL, SEEN};
 use crate::worker::CellMark;
 
 /// A cell inserted less than this much training time before the moment shown is "new".
@@ -43,9 +43,9 @@ fn cell_radius(width: f32, side_pt: f32, cells: usize) -> f32 {
     (width * side_pt * 0.05).clamp(1.5, 4.5).min(room.max(1.0))
 }
 
-/// The network's edges within faces, then its cells: discs sized by δ_c, white, cyan when
-/// critical (a light-driven learner's face cells: light blue when clear, magenta when blocked),
-/// with a black rim, or a lime ring when new; drawn into a transparent
+/// The network's edges within faces (a light-driven learner's probes: the column of `s` each
+/// sees, at its `t`), then its cells: discs sized by δ_c, white, cyan when critical (probes
+/// light blue), with a black rim, or a lime ring when new; drawn into a transparent
 /// `side × side` image (`t` to the right, `s` upwards). `px_per_point` scales the marks with
 /// the display's pixel density.
 #[must_use]
@@ -58,6 +58,12 @@ pub fn overlay_image(side: usize, px_per_point: f32, marks: &Marks<'_>) -> Color
         .map(|c| c.st.map(|[s, t]| [t * n, (1.0 - s) * n]))
         .collect();
     if marks.show_edges {
+        for (c, p) in marks.cells.iter().zip(&pos) {
+            let Some([x, _]) = p else { continue };
+            for &[s0, s1] in c.seen.iter() {
+                draw_line(&mut img, [*x, (1.0 - s0) * n], [*x, (1.0 - s1) * n], SEEN);
+            }
+        }
         for &[a, b] in marks.edges {
             if let (Some(Some(pa)), Some(Some(pb))) = (pos.get(a as usize), pos.get(b as usize)) {
                 draw_line(&mut img, *pa, *pb, NET_EDGE);
@@ -72,11 +78,12 @@ pub fn overlay_image(side: usize, px_per_point: f32, marks: &Marks<'_>) -> Color
             let Some(p) = p else { continue };
             let fresh = id >= marks.new_from;
             let r = cell_radius(c.width, side_pt, shown) * px_per_point;
-            let fill = match c.visible {
-                Some(true) => FACE_VISIBLE,
-                Some(false) => FACE_BLOCKED,
-                None if c.critical => CRITICAL,
-                None => CELL,
+            let fill = if !c.seen.is_empty() {
+                FACE_VISIBLE
+            } else if c.critical {
+                CRITICAL
+            } else {
+                CELL
             };
             let (rim, rim_w) = if fresh {
                 (NEW_CELL, 1.5 * px_per_point)
@@ -192,7 +199,7 @@ mod tests {
             st: Some(st),
             width: 0.1,
             critical,
-            visible: None,
+            seen: Default::default(),
         }
     }
 

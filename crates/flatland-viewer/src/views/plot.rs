@@ -11,7 +11,7 @@ use flatland_geom::Scene;
 use flatland_lab::colormap::Scale;
 
 use super::widgets::{gradient, short, uv};
-use super::{CELL, CRITICAL, FACE_BLOCKED, FACE_VISIBLE, NET_EDGE, NEW_CELL, SCENE_MARK, TITLE_H};
+use super::{CELL, CRITICAL, FACE_VISIBLE, NET_EDGE, NEW_CELL, SCENE_MARK, SEEN, TITLE_H};
 
 /// Width of the colour bar beside the big kernel plot, labels included.
 const HEAT_BAR_W: f32 = 56.0;
@@ -283,12 +283,17 @@ fn marks_legend(painter: &Painter, frame: &PlotFrame, color: Color32, face_cells
         entry(
             &mut x,
             &disc(FACE_VISIBLE, Color32::BLACK),
-            "face clear (V = 1)",
+            "probe (exact view)",
         );
         entry(
             &mut x,
-            &disc(FACE_BLOCKED, Color32::BLACK),
-            "face blocked (V = 0)",
+            &|p: Pos2| {
+                painter.line_segment(
+                    [p - egui::vec2(0.0, 5.0), p + egui::vec2(0.0, 5.0)],
+                    Stroke::new(2.0, SEEN),
+                );
+            },
+            "what it sees (V = 1)",
         );
         entry(&mut x, &disc(FACE_VISIBLE, NEW_CELL), "newest round");
         return;

@@ -38,7 +38,7 @@ pub struct World {
 pub type SamplePoint = ([f32; 2], u32);
 
 /// One cell as the overlay draws it.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct CellMark {
     /// Mean `(s, t)` of the samples it won (paper Fig. 3c); before it has won one, the `(s, t)`
     /// of the sample nearest to it in the input space; `None` without samples.
@@ -47,9 +47,10 @@ pub struct CellMark {
     pub width: f32,
     /// Whether it is critical (`τ_c > ω · mean τ`).
     pub critical: bool,
-    /// For a cell of the light-driven learner (one face, one ray): whether its ray found the
-    /// face clear; `None` for a network cell.
-    pub visible: Option<bool>,
+    /// For a probe of the light-driven learner: the stretches of `s` its point sees (its
+    /// column of the kernel where `V = 1`), shared by every status that shows it; empty for
+    /// a network cell.
+    pub seen: std::sync::Arc<[[f32; 2]]>,
 }
 
 /// The network at one moment: what the overlay and the counts show.

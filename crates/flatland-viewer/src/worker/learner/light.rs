@@ -2,7 +2,7 @@
 //! thread: rounds on the lit view's mesh, each published with its lit `B`, its estimated and
 //! measured error, and its new cells revealed over time.
 //!
-//! Why the cells of a round are revealed over time: a round is a solve and a batch of rays,
+//! Why the cells of a round are revealed over time: a round is a solve and a batch of probes,
 //! and on the default floor plan the loop meets its tolerance in 7 rounds and under 0.2 s —
 //! over before the window has drawn its first frame. So a round's new cells appear in the
 //! order they were learned, at the pace of growth asked for but never slower than the whole
@@ -14,7 +14,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use flatland_solve::{Representation, solve_errors};
-use kernel_fit::{FaceCell, FitParams, LightFit, LightParams, LightStop};
+use kernel_fit::{FitParams, LightFit, LightParams, LightStop};
 use rayon::prelude::*;
 
 use super::Learner;
@@ -85,12 +85,23 @@ impl LightRun {
     }
 }
 
-fn mark(cell: &FaceCell) -> CellMark {
+/// Probe `id` of `fit` as the overlay draws it: its column of what it sees, and a disc in the
+/// middle of the longest stretch seen.
+fn mark(fit: &LightFit, id: usize, t: f64) -> CellMark {
+    let seen: Vec<[f32; 2]> = fit
+        .seen(id)
+        .iter()
+        .map(|&[s0, s1]| [s0 as f32, s1 as f32])
+        .collect();
+    let s = seen
+        .iter()
+        .max_by(|a, b| (a[1] - a[0]).total_cmp(&(b[1] - b[0])))
+        .map_or(0.5, |[s0, s1]| 0.5 * (s0 + s1));
     CellMark {
-        st: Some([cell.s as f32, cell.t as f32]),
+        st: Some([s, t as f32]),
         width: 0.0,
         critical: false,
-        visible: Some(cell.visible),
+        seen: seen.into(),
     }
 }
 
@@ -121,9 +132,9 @@ impl Learner {
             let (since, rate) = run.reveal;
             let due = run.newest_from + (since.elapsed().as_secs_f64() * rate) as usize;
             run.shown = if stepping { learned } else { due.min(learned) };
-            let new: Vec<CellMark> = fit.cells()[run.marks.len()..run.shown]
-                .iter()
-                .map(mark)
+            let cells = fit.cells();
+            let new: Vec<CellMark> = (run.marks.len()..run.shown)
+                .map(|id| mark(fit, id, cells[id].t))
                 .collect();
             run.marks.extend(new);
             if run.shown < learned {
@@ -160,8 +171,11 @@ impl Learner {
         run.reveal = (Instant::now(), rate);
         if rate.is_infinite() {
             run.shown = now_learned;
-            run.marks
-                .extend(fit.cells()[run.marks.len()..].iter().map(mark));
+            let cells = fit.cells();
+            let new: Vec<CellMark> = (run.marks.len()..cells.len())
+                .map(|id| mark(fit, id, cells[id].t))
+                .collect();
+            run.marks.extend(new);
         }
         self.steps_left = self.steps_left.saturating_sub(1);
         self.publish_round(started.elapsed());
@@ -244,7 +258,7 @@ impl Learner {
         let rounds = fit.history().len();
         run.history.push(LitPoint {
             steps: rounds as u64,
-            rays: fit.history().last().map_or(0, |r| r.rays),
+            rays: 0,
             cells: run.shown,
             rel_l2_reflected: errors.rel_l2_reflected,
             estimated: fit.estimated_error(),
@@ -277,8 +291,8 @@ impl Learner {
         let (rounds, estimated_error, stopped) = run.fit.as_ref().map_or((0, None, None), |f| {
             (f.history().len(), f.estimated_error(), f.stopped())
         });
-        // One ray per face learned: the rays of the cells shown so far.
-        let rays = run.shown as u64;
+        // Probes sweep whole views, as the exact operator's rows do: no ray is cast.
+        let rays = 0;
         let stopped = stopped.filter(|_| run.stopped().is_some());
         let growth = Growth {
             steps: rounds as u64,

@@ -150,7 +150,7 @@ fn growth(fit: &Fit, snap: &Snapshot, run_time: Duration) -> Growth {
                     .or_else(|| nearest_sample(fit, c, &snap.samples)),
                 width: cell.width as f32,
                 critical: cell.critical,
-                visible: None,
+                seen: Default::default(),
             })
             .collect(),
         face_edges: face_edges(&fit.network().edges(), &groups),
