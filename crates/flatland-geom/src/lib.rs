@@ -56,4 +56,4 @@ pub use glam::DVec2;
 pub use io::write_atomic;
 pub use kernel::{Hit, Kernel, KernelParams, KernelSample, PairClass, PairVisibility, Unoccluded};
 pub use scene::{Edge, Role, Scene, SurfacePoint};
-pub use visibility::{PairEvents, SenderFace};
+pub use visibility::{OnRay, PairEvents, RayFace, SenderFace};

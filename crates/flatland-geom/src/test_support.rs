@@ -90,6 +90,109 @@ pub fn random_scene(seed: u64, snap: bool) -> Scene {
     Scene::new(edges).unwrap()
 }
 
+/// The walls of the box `[x0, x1] × [y0, y1]`, clockwise so they face outwards.
+pub fn outward_box(x0: f64, y0: f64, x1: f64, y1: f64, rho: f64) -> Vec<Edge> {
+    let p = [
+        DVec2::new(x0, y0),
+        DVec2::new(x0, y1),
+        DVec2::new(x1, y1),
+        DVec2::new(x1, y0),
+    ];
+    Edge::polygon(&p, rho)
+}
+
+/// Scenes where solid boxes touch other surfaces: standing on a floor (their feet on it, their
+/// bottoms along it), against each other, against walls, in a room's corners (sharing its end
+/// points), and the maze with its partitions as thin boxes on floor and ceiling. The events of
+/// a pair here include occluder end points on the pair's own edges and occluders along them.
+pub fn touching_scenes() -> Vec<(&'static str, Scene)> {
+    let v = DVec2::new;
+    // A 4 × 3 room with a lamp in the ceiling.
+    let room = || {
+        let mut edges = room(
+            &[
+                v(0.0, 0.0),
+                v(4.0, 0.0),
+                v(4.0, 3.0),
+                v(2.5, 3.0),
+                v(1.5, 3.0),
+                v(0.0, 3.0),
+            ],
+            0.5,
+        );
+        edges[0].reflectance = 0.7;
+        edges[3].emission = 1.0;
+        edges
+    };
+    let scene = |mut edges: Vec<Edge>, boxes: &[[f64; 4]]| {
+        for &[x0, y0, x1, y1] in boxes {
+            edges.extend(outward_box(x0, y0, x1, y1, 0.6));
+        }
+        Scene::new(edges).unwrap()
+    };
+    let floor = scene(
+        room(),
+        &[
+            [0.5, 0.0, 1.0, 0.8],
+            [1.5, 0.0, 1.7, 1.5],
+            [1.7, 0.0, 2.0, 0.6],
+            [2.5, 0.0, 3.25, 0.4],
+        ],
+    );
+    let corners = scene(
+        room(),
+        &[
+            [0.0, 0.0, 0.5, 0.5],
+            [3.5, 2.5, 4.0, 3.0],
+            [0.0, 1.5, 0.25, 1.75],
+            [3.75, 0.0, 4.0, 1.0],
+            [1.0, 0.0, 1.25, 0.25],
+        ],
+    );
+    // The maze's room and blockers; its partitions become boxes 0.1 thick.
+    let mut maze = room_of_maze();
+    for (a, b) in [
+        (v(2.2, 1.0), v(3.0, 1.4)),
+        (v(4.0, 0.8), v(4.6, 0.5)),
+        (v(0.5, 2.8), v(1.0, 3.2)),
+        (v(2.6, 2.6), v(3.2, 2.9)),
+        (v(0.4, 1.2), v(0.9, 1.0)),
+        (v(5.5, 0.6), v(5.8, 1.1)),
+        (v(2.0, 3.3), v(2.0, 3.7)),
+        (v(3.9, 1.5), v(3.9, 1.2)),
+    ] {
+        maze.push(Edge::blocker(a, b));
+    }
+    let maze = scene(maze, &[[1.45, 0.0, 1.55, 2.2], [5.15, 1.2, 5.25, 4.0]]);
+    vec![("floor", floor), ("corners", corners), ("maze", maze)]
+}
+
+/// The walls of the bundled maze's concave room (the notch hangs from the ceiling).
+fn room_of_maze() -> Vec<Edge> {
+    let v = DVec2::new;
+    let mut edges = room(
+        &[
+            v(0.0, 0.0),
+            v(6.0, 0.0),
+            v(6.0, 4.0),
+            v(4.5, 4.0),
+            v(4.5, 2.0),
+            v(3.5, 2.0),
+            v(3.5, 4.0),
+            v(2.5, 4.0),
+            v(1.5, 4.0),
+            v(0.0, 4.0),
+        ],
+        0.5,
+    );
+    edges[0].reflectance = 0.6;
+    for e in &mut edges[3..6] {
+        e.reflectance = 0.4;
+    }
+    edges[7].emission = 1.0;
+    edges
+}
+
 /// Nodes and weights of 16-point Gauss–Legendre on `[-1, 1]`.
 pub const GAUSS16: [(f64, f64); 8] = [
     (0.095_012_509_837_637_44, 0.189_450_610_455_068_47),

@@ -33,10 +33,10 @@ mod ray;
 mod shaft;
 
 pub(crate) use bvh::{Bvh, Segment};
-pub use events::{PairEvents, SenderFace};
+pub use events::{OnRay, PairEvents, RayFace, SenderFace};
 pub(crate) use predicates::open_segment_hits;
 #[cfg(test)]
-pub(crate) use predicates::orient;
+pub(crate) use predicates::{on_closed_segment, orient};
 pub(crate) use ray::{Contact, Ray};
 #[cfg(test)]
 pub(crate) use shaft::Candidates;

@@ -30,6 +30,14 @@ use super::shaft::Side;
 /// line is first cut there into pieces that do not, giving up to four **sub-pairs**, each with
 /// its own event points. So two rays with the same [`PairEvents::sub_pair`] and the same side
 /// of each of that sub-pair's [`PairEvents::points`] have the same visibility.
+///
+/// **Rays that meet an event point.** A ray through an event point lies on the border of two
+/// faces, and the grazing rule gives it a visibility of its own: every event point lies on an
+/// occluder, so a ray with one strictly inside is blocked, while a ray that starts on one (an
+/// occluder standing on `P`, or crossing it there) ignores the occluders touching its end and
+/// may see past them, where the rays on either side do not. [`PairEvents::face`] therefore
+/// puts such rays in faces of their own ([`RayFace::on_ray`]); they are a set of measure zero
+/// in `(s, t)`, met only by rays aimed exactly at a corner, a junction or a foot.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PairEvents {
     /// The lines of `P` and `Q` (end points).
@@ -62,18 +70,42 @@ impl PairEvents {
         &self.sub[sub]
     }
 
-    /// Whether two rays from `P` to `Q` lie in the same face: the same sub-pair and the same
-    /// [`PairEvents::side`] of each of its event points. Then their visibility is the same.
+    /// Whether two rays from `P` to `Q` lie in the same face ([`PairEvents::face`]). Then
+    /// their visibility is the same.
     #[must_use]
     pub fn same_face(&self, (x1, y1): (DVec2, DVec2), (x2, y2): (DVec2, DVec2)) -> bool {
-        let sub = self.sub_pair(x1, y1);
-        sub == self.sub_pair(x2, y2)
-            && self.sub[sub]
-                .iter()
-                .all(|&v| PairEvents::side(x1, y1, v) == PairEvents::side(x2, y2, v))
+        self.face(x1, y1) == self.face(x2, y2)
+    }
+
+    /// The face of the ray from `x` on `P` to `y` on `Q`: its sub-pair, the
+    /// [`PairEvents::side`] of each of that sub-pair's event points, and the event points it
+    /// meets (see the type's docs). Exact.
+    #[must_use]
+    pub fn face(&self, x: DVec2, y: DVec2) -> RayFace {
+        let sub = self.sub_pair(x, y);
+        let points = &self.sub[sub];
+        let mut sides = vec![0u64; points.len().div_ceil(64)];
+        let mut on_ray = Vec::new();
+        for (k, &v) in points.iter().enumerate() {
+            let o = orient(x, y, v);
+            if o > 0.0 {
+                sides[k / 64] |= 1 << (k % 64);
+            } else if o == 0.0
+                && let Some(at) = OnRay::of(x, y, v)
+            {
+                on_ray.push((k as u32, at));
+            }
+        }
+        RayFace {
+            sub,
+            sides: sides.into(),
+            on_ray: on_ray.into(),
+        }
     }
 
     /// The side of the ray `x → y` an event point `v` is on: `true` if strictly left (exact).
+    /// A point on the ray's line counts as right; [`PairEvents::face`] tells apart the ones
+    /// on the ray itself.
     #[must_use]
     #[inline]
     pub fn side(x: DVec2, y: DVec2, v: DVec2) -> bool {
@@ -199,8 +231,52 @@ impl PairEvents {
     }
 }
 
+/// Where an event point lies on a ray that meets it (exactly on its line, not beyond its ends).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum OnRay {
+    /// It is the ray's start `x`: the occluders touching it do not block the ray.
+    Sender,
+    /// It lies strictly between `x` and `y`: the ray grazes its occluder and is blocked.
+    Inside,
+    /// It is the ray's end `y`.
+    Receiver,
+}
+
+impl OnRay {
+    /// Where `v`, exactly on the line of `x → y`, lies on the closed segment `[x, y]`; `None`
+    /// beyond its ends (then the ray does not meet it: it counts as right of the ray, as its
+    /// neighbours on one side do, and the visibility is theirs).
+    fn of(x: DVec2, y: DVec2, v: DVec2) -> Option<OnRay> {
+        if v == x {
+            return Some(OnRay::Sender);
+        }
+        if v == y {
+            return Some(OnRay::Receiver);
+        }
+        // On one line the order along it is the order of either coordinate that varies.
+        let key = |p: DVec2| if x.x != y.x { p.x } else { p.y };
+        let (lo, hi) = (key(x).min(key(y)), key(x).max(key(y)));
+        (lo < key(v) && key(v) < hi).then_some(OnRay::Inside)
+    }
+}
+
+/// The face of one ray ([`PairEvents::face`]): two rays of one pair with the same face have
+/// the same visibility.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct RayFace {
+    /// The sub-pair ([`PairEvents::sub_pair`]).
+    pub sub: usize,
+    /// The side of each of the sub-pair's event points ([`PairEvents::side`]), as bits (point
+    /// `k` is bit `k % 64` of word `k / 64`).
+    pub sides: Box<[u64]>,
+    /// The event points (index, where) on the closed ray, by index: empty for every ray but
+    /// those through an event point.
+    pub on_ray: Box<[(u32, OnRay)]>,
+}
+
 /// One stretch of `P` seen from a point of `Q` ([`PairEvents::sender_faces`]): every ray from
-/// it to that point lies in one face.
+/// its interior to that point lies in one face, which meets no event point (its
+/// [`RayFace::on_ray`] is empty).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SenderFace {
     /// The stretch: parameters along `P`, from its start.

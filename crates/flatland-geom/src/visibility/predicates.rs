@@ -54,7 +54,7 @@ pub(super) fn strictly_opposite(u: f64, v: f64) -> bool {
 }
 
 /// Whether `e` lies on the closed segment `[a, b]` (exactly).
-pub(super) fn on_closed_segment(e: DVec2, a: DVec2, b: DVec2) -> bool {
+pub(crate) fn on_closed_segment(e: DVec2, a: DVec2, b: DVec2) -> bool {
     orient(a, b, e) == 0.0
         && e.x >= a.x.min(b.x)
         && e.x <= a.x.max(b.x)
