@@ -1354,7 +1354,7 @@ fn bench_scaling_writes_its_tables_with_the_heap_peak_of_every_method() {
     assert!(!dir.join("scaling.partial.csv").exists());
     let csv = std::fs::read_to_string(dir.join("scaling.csv")).unwrap();
     let rows: Vec<&str> = csv.lines().skip(1).collect();
-    assert_eq!(rows.len(), 2 * 4, "{csv}");
+    assert_eq!(rows.len(), 2 * 5, "{csv}");
     for row in &rows {
         let fields: Vec<&str> = row.split(',').collect();
         // The binary counts its heap: every method that ran has a peak.

@@ -116,7 +116,9 @@ fn computed(
             spare.insert((other.method, b, seed), other);
             Ok(mine)
         }
-        (Contender::Hr | Contender::Uniform, Setting::Budget(b)) => cx.baseline(method, b, seed),
+        (Contender::Hr | Contender::Clustered | Contender::Uniform, Setting::Budget(b)) => {
+            cx.baseline(method, b, seed)
+        }
         (Contender::Exact, Setting::Elements(n)) => cx.exact(n),
         (Contender::Tracer, Setting::Photons(p)) => cx.tracer(p, seed),
         _ => anyhow::bail!("{} has no {} setting", method.name(), setting.kind()),
