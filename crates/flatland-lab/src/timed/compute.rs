@@ -156,7 +156,8 @@ impl Context<'_> {
         }
     }
 
-    /// HR or the uniform grid at `budget` (or the nearest count it can build, noted).
+    /// HR, clustered HR or the uniform grid at `budget` (or the nearest count it can build,
+    /// noted).
     pub fn baseline(&self, method: Contender, budget: usize, seed: u64) -> Result<TimedRow> {
         let kernel = self.kernel.as_ref();
         match method {

@@ -111,7 +111,7 @@ mod tests {
         }
         let msg = Contender::parse("nope").unwrap_err().to_string();
         assert!(
-            msg.contains("first-shot") && msg.contains("tracer"),
+            msg.contains("first-shot") && msg.contains("clustered") && msg.contains("tracer"),
             "{msg}"
         );
     }

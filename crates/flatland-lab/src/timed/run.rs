@@ -190,6 +190,25 @@ mod tests {
     }
 
     #[test]
+    fn clustered_rows_land_on_their_budgets_and_light_the_scene() {
+        let mut plan = TimedPlan::new(vec![Contender::Clustered]);
+        plan.budgets = vec![16, 256, 4096];
+        plan.extend_budgets = false;
+        let (rows, _) = run(&plan);
+        assert_eq!(rows.len(), 3, "{rows:?}");
+        for r in &rows {
+            let Setting::Budget(b) = r.setting else {
+                panic!("{r:?}")
+            };
+            assert!(!r.failed && r.note.is_empty(), "{r:?}");
+            assert!(r.basis_functions.unwrap().abs_diff(b) <= 3, "{r:?}");
+            assert!(r.rays > 0 && r.bytes > 0, "{r:?}");
+        }
+        let error = |k: usize| rows[k].reflected_error().unwrap();
+        assert!(error(2) < error(0), "{rows:?}");
+    }
+
+    #[test]
     fn default_rows_have_their_estimated_and_measured_errors() {
         let mut plan = TimedPlan::new(vec![Contender::Default]);
         plan.tolerances = vec![0.3, 0.05];
