@@ -9,21 +9,21 @@ const INTERACTION_FLOOR: f64 = 1e-9;
 
 /// The surface edges in parameter order, with what refinement needs of each.
 #[derive(Clone, Debug)]
-pub(super) struct Surfaces {
-    pub(super) edge: Vec<usize>,
-    pub(super) s0: Vec<f64>,
-    pub(super) s1: Vec<f64>,
-    pub(super) a: Vec<DVec2>,
-    pub(super) b: Vec<DVec2>,
-    pub(super) normal: Vec<DVec2>,
-    pub(super) two_sided: Vec<bool>,
-    pub(super) reflectance: Vec<f64>,
-    pub(super) source_weight: Vec<f64>,
-    pub(super) total_length: f64,
+pub(crate) struct Surfaces {
+    pub(crate) edge: Vec<usize>,
+    pub(crate) s0: Vec<f64>,
+    pub(crate) s1: Vec<f64>,
+    pub(crate) a: Vec<DVec2>,
+    pub(crate) b: Vec<DVec2>,
+    pub(crate) normal: Vec<DVec2>,
+    pub(crate) two_sided: Vec<bool>,
+    pub(crate) reflectance: Vec<f64>,
+    pub(crate) source_weight: Vec<f64>,
+    pub(crate) total_length: f64,
 }
 
 impl Surfaces {
-    pub(super) fn new(kernel: &Kernel) -> Surfaces {
+    pub(crate) fn new(kernel: &Kernel) -> Surfaces {
         let scene = kernel.scene();
         let n = scene.surface_edges().len();
         let mut out = Surfaces {
@@ -56,12 +56,12 @@ impl Surfaces {
         out
     }
 
-    pub(super) fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.edge.len()
     }
 
     /// Heap bytes of these tables (part of HR's `memory_bytes`).
-    pub(super) fn heap_bytes(&self) -> usize {
+    pub(crate) fn heap_bytes(&self) -> usize {
         use std::mem::size_of;
         self.len()
             * (size_of::<usize>()
@@ -71,12 +71,12 @@ impl Surfaces {
     }
 
     /// The ordinal of the surface edge whose `[s0, s1)` holds `s`.
-    pub(super) fn locate(&self, s: f64) -> Option<usize> {
+    pub(crate) fn locate(&self, s: f64) -> Option<usize> {
         let k = self.s0.partition_point(|&s0| s0 <= s);
         (k > 0 && s < self.s1[k - 1]).then(|| k - 1)
     }
 
-    pub(super) fn whole(&self, i: usize) -> Elem {
+    pub(crate) fn whole(&self, i: usize) -> Elem {
         Elem {
             ord: i,
             s0: self.s0[i],
@@ -87,7 +87,7 @@ impl Surfaces {
     }
 
     /// `∫_p ∫_q G dx dy` without occlusion, G = cos cos / (2r).
-    pub(super) fn transfer(&self, p: &Elem, q: &Elem) -> f64 {
+    pub(crate) fn transfer(&self, p: &Elem, q: &Elem) -> f64 {
         let (np, nq) = (self.normal[p.ord], self.normal[q.ord]);
         let mut total = 0.0;
         for &sp in sides(self.two_sided[p.ord]) {
@@ -109,20 +109,20 @@ impl Surfaces {
 
 /// An element: a parameter interval of a surface edge and its end points.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Elem {
-    pub(super) ord: usize,
-    pub(super) s0: f64,
-    pub(super) s1: f64,
-    pub(super) a: DVec2,
-    pub(super) b: DVec2,
+pub(crate) struct Elem {
+    pub(crate) ord: usize,
+    pub(crate) s0: f64,
+    pub(crate) s1: f64,
+    pub(crate) a: DVec2,
+    pub(crate) b: DVec2,
 }
 
 impl Elem {
-    pub(super) fn length(&self) -> f64 {
+    pub(crate) fn length(&self) -> f64 {
         (self.b - self.a).length()
     }
 
-    pub(super) fn halves(&self) -> [Elem; 2] {
+    pub(crate) fn halves(&self) -> [Elem; 2] {
         let (mid, m) = (0.5 * (self.s0 + self.s1), 0.5 * (self.a + self.b));
         [
             Elem {
@@ -140,7 +140,7 @@ impl Elem {
 }
 
 /// Whether `transfer` between `p` and `q` is real transfer rather than residue.
-pub(super) fn interacts(transfer: f64, p: &Elem, q: &Elem) -> bool {
+pub(crate) fn interacts(transfer: f64, p: &Elem, q: &Elem) -> bool {
     transfer / p.length().min(q.length()) > INTERACTION_FLOOR
 }
 

@@ -6,7 +6,7 @@
 //! A method that cannot meet a setting gives the nearest row it can with a note; one that
 //! fails there gives a failed row with the reason, and the sweep goes on.
 
-mod compute;
+pub(crate) mod compute;
 mod contender;
 pub mod relight;
 
