@@ -1,7 +1,10 @@
 //! `flatland bench`: every method judged at equal time — the light-driven learner by
 //! tolerance, the other learners, hierarchical radiosity and the uniform grid by basis
 //! functions, the exact solve by elements, the light tracer by photons — each row timed to its
-//! lit scene and scored against one independent exact reference.
+//! lit scene and scored against one independent exact reference. `--scaling` (cost against
+//! scene size) is its own module, `scaling`.
+
+mod scaling;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -134,7 +137,7 @@ impl Args {
 /// Runs `flatland bench`.
 pub fn run(args: &Args) -> Result<()> {
     if args.scaling {
-        return super::scaling::run(args);
+        return scaling::run(args);
     }
     let plan = args.plan()?;
     let (kernel, label) = args.scene.kernel()?;
@@ -250,7 +253,7 @@ fn report_row(row: &TimedRow, kept: usize, partial: &Path) {
 }
 
 /// Removes the partial file once the results are written.
-pub(super) fn remove_partial(partial: &Path) -> Result<()> {
+fn remove_partial(partial: &Path) -> Result<()> {
     interrupt::writing(|| match std::fs::remove_file(partial) {
         Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
             Err(e).with_context(|| format!("removing {}", partial.display()))

@@ -16,7 +16,6 @@ pub mod figure;
 pub mod fit;
 pub mod kernel;
 pub mod results;
-pub mod scaling;
 pub mod scene;
 pub mod solve;
 pub mod stress;

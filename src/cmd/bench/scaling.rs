@@ -10,7 +10,7 @@ use flatland_lab::timed::Contender;
 use flatland_lab::{interrupt, output};
 use flatland_solve::Stop;
 
-use super::bench::Args;
+use super::Args;
 
 /// The plan `args` ask for, checked before any work.
 fn plan(args: &Args) -> Result<ScalingPlan> {
@@ -70,7 +70,7 @@ pub fn run(args: &Args) -> Result<()> {
     write_csv(&args.out, CSV, &all)?;
     let md = markdown(&all);
     interrupt::writing(|| flatland_geom::write_atomic(&args.out.join(MARKDOWN), md.as_bytes()))?;
-    super::bench::remove_partial(&partial)?;
+    super::remove_partial(&partial)?;
     write_plots(&args.out, &all)?;
     print!("{md}");
     println!(
