@@ -35,7 +35,7 @@ pub fn run_timed(
         plan,
         stop,
     };
-    let elements = ElementRange::new(kernel, scorer.mesh().len());
+    let elements = ElementRange::new(kernel, scorer.mesh().len(), scorer.reference_elements());
     let mut rows: Vec<TimedRow> = Vec::new();
     let mut spare = Spare::new();
     for &method in &plan.methods {
