@@ -419,7 +419,12 @@ fn solve_draws_the_lit_scene_beside_b_of_s() {
 #[test]
 fn solve_builds_every_baseline_and_reads_a_model() {
     let box_scene = scene("box");
-    for (kernel, basis) in [("uniform", 100), ("uniform-exact", 100), ("hr", 100)] {
+    for (kernel, basis) in [
+        ("uniform", 100),
+        ("uniform-exact", 100),
+        ("hr", 100),
+        ("clustered", 100),
+    ] {
         let json = solve_json(&[
             "--scene",
             as_str(&box_scene),
@@ -436,6 +441,10 @@ fn solve_builds_every_baseline_and_reads_a_model() {
         let b = json["basis_functions"].as_u64().unwrap();
         assert!(b.abs_diff(100) <= 10, "{kernel}: {json}");
         assert!(json["rel_l2_reflected"].as_f64().unwrap().is_finite());
+        assert!(
+            json["kernel_bytes"].as_u64().unwrap() > 0,
+            "{kernel}: {json}"
+        );
     }
     // A model from `flatland fit --out`, solved on its own scene.
     let dir = temp_dir("solve-model");
@@ -1325,4 +1334,53 @@ fn solve_with_the_default_learner_meets_its_tolerance_on_a_floor_plan_and_says_s
         "1.5",
     ]);
     assert_one_line_error(&out, &["tolerance", "1.5", "(0, 1)"]);
+}
+
+#[test]
+fn bench_scaling_writes_its_tables_with_the_heap_peak_of_every_method() {
+    let dir = temp_dir("scaling");
+    let out = flatland(&[
+        "bench",
+        "--scaling",
+        "--sizes",
+        "40,80",
+        "--kinds",
+        "hall",
+        "--lightings",
+        "0",
+        "--out",
+        as_str(&dir),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    for file in [
+        "scaling.csv",
+        "scaling.md",
+        "scaling-time.png",
+        "scaling-memory.png",
+    ] {
+        assert!(dir.join(file).is_file(), "{file}");
+    }
+    assert!(!dir.join("scaling.partial.csv").exists());
+    let csv = std::fs::read_to_string(dir.join("scaling.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(rows.len(), 2 * 5, "{csv}");
+    for row in &rows {
+        let fields: Vec<&str> = row.split(',').collect();
+        // The binary counts its heap: every method that ran has a peak.
+        let peak: u64 = fields[8].parse().unwrap_or_else(|_| panic!("{row}"));
+        assert!(peak > 0, "{row}");
+        let error: f64 = fields[11].parse().unwrap_or_else(|_| panic!("{row}"));
+        assert!(error.is_finite() && error >= 0.0, "{row}");
+    }
+    // --scene means nothing here: refused in one line.
+    let fig3 = scene("fig3");
+    let out = flatland(&[
+        "bench",
+        "--scaling",
+        "--scene",
+        as_str(&fig3),
+        "--out",
+        as_str(&dir),
+    ]);
+    assert_one_line_error(&out, &["--scaling", "--scene"]);
 }

@@ -1,7 +1,10 @@
 //! `flatland bench`: every method judged at equal time — the light-driven learner by
 //! tolerance, the other learners, hierarchical radiosity and the uniform grid by basis
 //! functions, the exact solve by elements, the light tracer by photons — each row timed to its
-//! lit scene and scored against one independent exact reference.
+//! lit scene and scored against one independent exact reference. `--scaling` (cost against
+//! scene size) is its own module, `scaling`.
+
+mod scaling;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -26,19 +29,16 @@ pub struct Args {
     pub scene: SceneArgs,
     /// Methods, comma-separated: default (the light-driven learner), first-shot (the learner
     /// `flatland fit` trains), paper (the paper's network with the refit), paper-norefit, hr,
-    /// uniform, exact, tracer (`sgcs` still names default).
-    #[arg(
-        long,
-        value_delimiter = ',',
-        default_value = "default,first-shot,paper,paper-norefit,hr,uniform,exact,tracer"
-    )]
-    pub methods: Vec<String>,
+    /// clustered (HR with clustering), uniform, exact, tracer (`sgcs` still names default).
+    /// Default: all of them; with --scaling: default, exact, hr, clustered, tracer.
+    #[arg(long, value_delimiter = ',')]
+    pub methods: Option<Vec<String>>,
     /// The light-driven learner's tolerances on its estimated error of B − E, each in (0, 1),
     /// comma-separated; one row each.
     #[arg(long, value_delimiter = ',', default_value = "0.3,0.1,0.03,0.01,0.003")]
     pub tolerances: Vec<f64>,
     /// Budgets (numbers of basis functions, each in [3, 10 000 000]) of first-shot, paper,
-    /// paper-norefit, hr and uniform, comma-separated: exactly these. Default: 50, 100, 200,
+    /// paper-norefit, hr, clustered and uniform, comma-separated: exactly these. Default: 50, 100, 200,
     /// 400, 800, then doubling until a row is over --max-seconds.
     #[arg(long, value_delimiter = ',')]
     pub budgets: Option<Vec<usize>>,
@@ -52,19 +52,46 @@ pub struct Args {
     /// (the fewest, from 512, whose exact solve's estimated error of B − E is below 1 %).
     #[arg(long, value_name = "N")]
     pub solve_elements: Option<usize>,
-    /// A method's sweep stops at its first row whose total time is above this many seconds.
-    #[arg(long, value_name = "S", default_value_t = DEFAULT_MAX_SECONDS)]
-    pub max_seconds: f64,
+    /// A method's sweep stops at its first row whose total time is above this many seconds
+    /// (default 30). With --scaling: a method is skipped at a size where its time,
+    /// extrapolated from the smaller sizes, is above this (default 120).
+    #[arg(long, value_name = "S")]
+    pub max_seconds: Option<f64>,
     /// The tracer's photons double until its rows took this many seconds together.
     #[arg(long, value_name = "S", default_value_t = DEFAULT_TRACER_SECONDS)]
     pub tracer_seconds: f64,
     /// Lightings of the relighting comparison (0: none; at most 1000).
     #[arg(long, default_value_t = flatland_lab::timed::relight::LIGHTINGS)]
     pub lightings: usize,
-    /// Output folder for results.csv, relight.csv and the plots.
+    /// Instead of one scene: cost against scene size, each method with its default arguments
+    /// on generated floor plans and halls of --sizes edges (time, peak memory, rays, error,
+    /// log–log slopes, relighting up to 10⁴ edges); --scene is not used.
+    #[arg(long)]
+    pub scaling: bool,
+    /// With --scaling: the sizes in edges, ascending, comma-separated, each in [24, 1000000].
+    #[arg(long, value_delimiter = ',', default_value = "100,1000,10000")]
+    pub sizes: Vec<usize>,
+    /// With --scaling: the kinds of scene, comma-separated: floorplan, hall.
+    #[arg(long, value_delimiter = ',', default_value = "floorplan,hall")]
+    pub kinds: Vec<String>,
+    /// Output folder for results.csv, relight.csv and the plots (with --scaling:
+    /// scaling.csv, scaling.md and its plots).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
 }
+
+/// The methods a bench runs when none are named.
+const ALL_METHODS: [&str; 9] = [
+    "default",
+    "first-shot",
+    "paper",
+    "paper-norefit",
+    "hr",
+    "clustered",
+    "uniform",
+    "exact",
+    "tracer",
+];
 
 /// Most seeds per method and setting (each is a whole run).
 const MAX_SEEDS: u64 = 1000;
@@ -74,6 +101,8 @@ impl Args {
     fn plan(&self) -> Result<TimedPlan> {
         let methods = self
             .methods
+            .clone()
+            .unwrap_or_else(|| ALL_METHODS.iter().map(|m| (*m).to_owned()).collect())
             .iter()
             .map(|m| Contender::parse(m.trim()))
             .collect::<Result<Vec<_>, _>>()?;
@@ -92,7 +121,7 @@ impl Args {
             self.seeds
         );
         plan.seeds = self.seeds;
-        plan.max_seconds = self.max_seconds;
+        plan.max_seconds = self.max_seconds.unwrap_or(DEFAULT_MAX_SECONDS);
         plan.tracer_seconds = self.tracer_seconds;
         plan.validate()?;
         super::check_res(self.res)?;
@@ -107,6 +136,9 @@ impl Args {
 
 /// Runs `flatland bench`.
 pub fn run(args: &Args) -> Result<()> {
+    if args.scaling {
+        return scaling::run(args);
+    }
     let plan = args.plan()?;
     let (kernel, label) = args.scene.kernel()?;
     output::folder(

@@ -7,7 +7,10 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use flatland_baselines::{BlockValue, HrParams, UniformParams, run_hr_at_budget, run_uniform};
+use flatland_baselines::{
+    BlockValue, ClusteredParams, HrParams, UniformParams, run_clustered, run_hr_at_budget,
+    run_uniform,
+};
 use flatland_geom::{Kernel, Scene, write_atomic};
 use flatland_solve::{
     Comparison, DEFAULT_ERROR_BOUND, Discretization, ErrorEstimate, ExactMethod, ExactReference,
@@ -26,12 +29,13 @@ pub struct Args {
     /// The kernel: `exact`, `default` (the light-driven learner: rounds of solving and
     /// learning on this mesh until --tolerance; `sgcs` is the same), `first-shot` (the
     /// θ-driven learner `flatland fit` trains, weighted by the first shot, with --basis
-    /// cells), `hr`, `uniform` (20 rays per block), `uniform-exact` (exact block means of k),
-    /// or a model file (.json) written by `flatland fit --out`.
+    /// cells), `hr`, `clustered` (HR with clustering: no initial linking, refined from one
+    /// link of the root cluster with itself), `uniform` (20 rays per block), `uniform-exact`
+    /// (exact block means of k), or a model file (.json) written by `flatland fit --out`.
     #[arg(long, value_name = "KERNEL", default_value = "exact")]
     pub kernel: String,
-    /// Basis functions of the representation built: links (hr), blocks (uniform), cells
-    /// (first-shot; default 400 for these). For the default learner, the most cells it may
+    /// Basis functions of the representation built: links (hr, clustered), blocks (uniform),
+    /// cells (first-shot; default 400 for these). For the default learner, the most cells it may
     /// grow (default: as many as the tolerance takes).
     #[arg(long, value_name = "N")]
     pub basis: Option<usize>,
@@ -73,6 +77,8 @@ enum Choice {
     /// The θ-driven learner of `flatland fit`.
     FirstShot,
     Hr,
+    /// Hierarchical radiosity with clustering.
+    Clustered,
     Uniform,
     UniformExact,
     Model(PathBuf),
@@ -86,6 +92,7 @@ impl Choice {
             "default" | "sgcs" => Choice::Default,
             "first-shot" => Choice::FirstShot,
             "hr" => Choice::Hr,
+            "clustered" => Choice::Clustered,
             "uniform" => Choice::Uniform,
             "uniform-exact" => Choice::UniformExact,
             _ if Path::new(text)
@@ -95,8 +102,8 @@ impl Choice {
                 Choice::Model(PathBuf::from(text))
             }
             _ => bail!(
-                "--kernel `{text}` is not known: expected exact, default, hr, uniform, uniform-exact, \
-                 first-shot or a model file (.json) written by `flatland fit --out`"
+                "--kernel `{text}` is not known: expected exact, default, hr, clustered, uniform, \
+                 uniform-exact, first-shot or a model file (.json) written by `flatland fit --out`"
             ),
         })
     }
@@ -107,6 +114,7 @@ impl Choice {
             Choice::Default => "default".into(),
             Choice::FirstShot => "first-shot".into(),
             Choice::Hr => "hr".into(),
+            Choice::Clustered => "clustered".into(),
             Choice::Uniform => "uniform".into(),
             Choice::UniformExact => "uniform-exact".into(),
             Choice::Model(path) => path.display().to_string(),
@@ -230,6 +238,7 @@ pub fn run(args: &Args) -> Result<()> {
         mesh: &mesh,
         reference_elements,
         basis: built.rep.basis_functions(),
+        kernel_bytes: built.rep.memory_bytes(),
         comparison: &comparison,
         build_s: built.build_s,
         note: built.note.as_deref(),
@@ -313,6 +322,11 @@ fn build(choice: &Choice, kernel: &Kernel, mesh: &Mesh, args: &Args, stop: &Stop
         Choice::Model(path) => Box::new(ModelFile::load(path)?.model),
         Choice::Hr => {
             let run = run_hr_at_budget(kernel, basis, args.seed, &HrParams::default())?;
+            note = run.note.map(|n| n.to_string());
+            Box::new(run.approx)
+        }
+        Choice::Clustered => {
+            let run = run_clustered(kernel, basis, args.seed, &ClusteredParams::default())?;
             note = run.note.map(|n| n.to_string());
             Box::new(run.approx)
         }
@@ -424,6 +438,8 @@ struct Summary<'a> {
     mesh: &'a Mesh,
     reference_elements: usize,
     basis: Option<usize>,
+    /// Bytes the representation holds (`Representation::memory_bytes`).
+    kernel_bytes: usize,
     comparison: &'a Comparison,
     build_s: f64,
     /// The baseline's note when it built another count than asked.
@@ -443,6 +459,7 @@ impl Summary<'_> {
             "kernel": self.choice.label(),
             "elements": self.mesh.len(),
             "basis_functions": self.basis,
+            "kernel_bytes": self.kernel_bytes,
             "rel_l2_b": c.errors.rel_l2_b,
             "rel_l2_reflected": c.errors.rel_l2_reflected,
             "iterations": c.solution.iterations,
@@ -532,6 +549,13 @@ impl Summary<'_> {
             ),
         );
         row("building the kernel", format!("{:.3} s", self.build_s));
+        row(
+            "kernel's memory",
+            format!(
+                "{:.1} MB (the representation)",
+                self.kernel_bytes as f64 / 1e6
+            ),
+        );
         if let Some(peak) = flatland_lab::memory::peak_bytes() {
             row(
                 "peak memory",
@@ -569,9 +593,10 @@ mod tests {
         // The default learner, also by the name it had before it was called so.
         assert_eq!(Choice::parse("default").unwrap(), Choice::Default);
         assert_eq!(Choice::parse("sgcs").unwrap(), Choice::Default);
+        assert_eq!(Choice::parse("clustered").unwrap(), Choice::Clustered);
         let err = Choice::parse("sgsc").unwrap_err().to_string();
         assert!(
-            err.contains("`sgsc`") && err.contains("exact, default, hr"),
+            err.contains("`sgsc`") && err.contains("exact, default, hr, clustered"),
             "{err}"
         );
     }

@@ -48,6 +48,9 @@ pub enum BaselineError {
         /// The limit.
         max_links: usize,
     },
+    /// A solve a baseline makes on its way failed (clustered HR's weighting solves).
+    #[error(transparent)]
+    Solve(#[from] flatland_solve::SolveError),
     /// HR was asked for more links than `max_links` allows.
     #[error(
         "a budget of {} links is more than `max_links` = {}: ask for at most {} links or raise \

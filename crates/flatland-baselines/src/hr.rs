@@ -57,7 +57,7 @@
 //! and a build holds about 130 bytes more per link until its rays are cast.
 
 mod budget;
-mod elements;
+pub(crate) mod elements;
 mod estimate;
 mod linking;
 mod operator;

@@ -1,4 +1,5 @@
-//! Baselines the SGCS fit is compared against: a uniform grid and hierarchical radiosity.
+//! Baselines the SGCS fit is compared against: a uniform grid, hierarchical radiosity (with and
+//! without clustering) and a light tracer.
 //!
 //! Both approximate the same target as the network, ζ(s, t) over `[0, 1)²` (s = sender,
 //! t = receiver, docs/ALGORITHM.md §1), and both implement [`Representation`], so
@@ -45,6 +46,7 @@
 
 #![deny(missing_docs)]
 
+mod clustered;
 mod error;
 mod hr;
 mod seeds;
@@ -55,6 +57,9 @@ mod uniform;
 
 pub use error::BaselineError;
 
+pub use clustered::{
+    ClusteredLink, ClusteredParams, ClusteredRadiosity, ClusteredStats, LinkEnd, run_clustered,
+};
 pub use hr::{
     HierarchicalRadiosity, HrLink, HrParams, HrStats, LinkEstimate, Oracle, count_initial_links,
     f_eps_for_budget, hr_params_for_budget, run_hr, run_hr_at_budget,
@@ -137,6 +142,14 @@ pub enum BudgetNote {
         /// Links built.
         built: usize,
     },
+    /// Clustered HR ran out of links to split (every one at the minimum length, or certain)
+    /// below the budget; that was built.
+    ClusteredFinest {
+        /// Links asked for.
+        asked: usize,
+        /// Links built.
+        built: usize,
+    },
     /// The uniform grid is g × g: the nearest square to the budget was built.
     Square {
         /// Blocks asked for.
@@ -174,6 +187,13 @@ impl fmt::Display for BudgetNote {
                     grouped(built)
                 )
             }
+            BudgetNote::ClusteredFinest { asked, built } => write!(
+                f,
+                "clustered HR's finest linking (every link at `min_length` or certain) has {} \
+                 links; built that instead of {} (a smaller `min_length` allows more)",
+                grouped(built),
+                grouped(asked)
+            ),
             BudgetNote::Square { asked, built } => {
                 let g = built.isqrt();
                 write!(

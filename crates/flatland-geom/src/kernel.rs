@@ -1,6 +1,7 @@
 //! The radiosity kernel `k(s, t)` and the learning target `ζ(s, t)` (docs/ALGORITHM.md §2).
 
 mod batch;
+mod cache;
 mod eval;
 mod pairs;
 mod params;
@@ -8,15 +9,14 @@ mod rays;
 mod values;
 mod visible;
 
-use std::sync::OnceLock;
-
 use glam::DVec2;
 
 use crate::GeomError;
 use crate::scene::{Role, Scene};
-use crate::visibility::{Bvh, Segment, Shaft};
-use pairs::MAX_CACHED_SURFACES;
+use crate::visibility::{Bvh, Segment};
+use cache::PairCache;
 
+pub use pairs::PairEventsRef;
 pub use params::KernelParams;
 pub use values::{Hit, KernelSample, PairClass, PairVisibility, Unoccluded};
 
@@ -44,11 +44,15 @@ struct Parent {
 /// near a shared vertex; it is always finite and ≥ 0.
 ///
 /// # Work skipped
-/// No ray for back-facing pairs (`G = 0`). Per pair of parent surface edges a cached
-/// shaft classification (lazy, thread-safe) decides "clear", "blocked by one occluder" or
-/// "test these candidates"; rays that still need testing go through a BVH over the parent
-/// edges. All of it works on parent edges, so `scene.subdivide(1000)` costs about what the
-/// original scene does.
+/// No ray for back-facing pairs (`G = 0`). Per pair of parent surface edges a shaft
+/// classification decides "clear", "blocked by one occluder" or "test these candidates"; rays
+/// that still need testing go through a BVH over the parent edges. All of it works on parent
+/// edges, so `scene.subdivide(1000)` costs about what the original scene does.
+///
+/// Pairs are classified lazily, only those asked about, each in about `log n` BVH steps
+/// plus the occluders near its shaft, and kept in bounded memory: a cell per pair up to 512
+/// surface parents, a sharded cache of at most 64 MB above (see `kernel/cache.rs`). Nothing
+/// is built over all pairs, so building a kernel costs `O(n log n)`.
 pub struct Kernel {
     scene: Scene,
     params: KernelParams,
@@ -57,8 +61,8 @@ pub struct Kernel {
     bvh: Bvh,
     /// Surface parent index by rank.
     surface_parents: Vec<usize>,
-    /// `shafts[rx * n + ry]` for ranks `rx < ry`; empty if not cached.
-    shafts: Vec<OnceLock<Shaft>>,
+    /// The shafts of the pairs asked about, by ranks.
+    shafts: PairCache,
 }
 
 impl std::fmt::Debug for Kernel {
@@ -114,12 +118,7 @@ impl Kernel {
             .filter(|(_, g)| g.edge.role == Role::Surface)
             .map(|(i, _)| i)
             .collect();
-        let n = surface_parents.len();
-        let shafts = if n <= MAX_CACHED_SURFACES {
-            (0..n * n).map(|_| OnceLock::new()).collect()
-        } else {
-            Vec::new()
-        };
+        let shafts = PairCache::new(surface_parents.len());
         Kernel {
             scene,
             params,

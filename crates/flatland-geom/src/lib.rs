@@ -55,6 +55,8 @@ mod test_support;
 pub use error::GeomError;
 pub use glam::DVec2;
 pub use io::write_atomic;
-pub use kernel::{Hit, Kernel, KernelParams, KernelSample, PairClass, PairVisibility, Unoccluded};
+pub use kernel::{
+    Hit, Kernel, KernelParams, KernelSample, PairClass, PairEventsRef, PairVisibility, Unoccluded,
+};
 pub use scene::{Edge, Role, Scene, SurfacePoint};
 pub use visibility::{OnRay, PairEvents, RayFace, SenderFace};

@@ -41,6 +41,10 @@ pub const LOG_DECADES: f64 = 4.0;
 /// The share of positive values at or below the top colour.
 pub const TOP_PERCENTILE: f64 = 0.995;
 
+/// A picture's values span decades ([`Scale::wants_log`]) when the top is more than this many
+/// times their median.
+pub const WIDE_SPAN: f64 = 20.0;
+
 /// How values map to `[0, 1]` before the colour map.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Scale {
@@ -68,6 +72,24 @@ impl Scale {
             *positive.select_nth_unstable_by(k, f64::total_cmp).1
         };
         Scale { top, log }
+    }
+
+    /// Whether the positive values span so many decades that a linear scale would show most of
+    /// them black: the top over the median of the positive values is above [`WIDE_SPAN`] (a
+    /// floor plan's kernel, bright near corners and faint across rooms).
+    #[must_use]
+    pub fn wants_log(values: &[f64]) -> bool {
+        let mut positive: Vec<f64> = values
+            .iter()
+            .copied()
+            .filter(|v| v.is_finite() && *v > 0.0)
+            .collect();
+        if positive.is_empty() {
+            return false;
+        }
+        let k = (positive.len() - 1) / 2;
+        let median = *positive.select_nth_unstable_by(k, f64::total_cmp).1;
+        Scale::fit(values, false).top > WIDE_SPAN * median
     }
 
     /// `v` mapped to `[0, 1]`; zero, negative and NaN values are 0.
@@ -170,5 +192,14 @@ mod tests {
         };
         assert_eq!(linear.unit(1.0), 0.5);
         assert_eq!(linear.value_at(0.5), 1.0);
+    }
+
+    #[test]
+    fn values_spanning_decades_want_a_log_scale() {
+        let narrow: Vec<f64> = (1..=100).map(f64::from).collect();
+        assert!(!Scale::wants_log(&narrow));
+        let wide: Vec<f64> = (0..100).map(|i| 10f64.powi(-(i % 5))).collect();
+        assert!(Scale::wants_log(&wide));
+        assert!(!Scale::wants_log(&[0.0, 0.0]), "nothing to show");
     }
 }

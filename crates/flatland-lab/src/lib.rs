@@ -44,6 +44,7 @@ pub mod plot;
 pub mod report;
 pub mod results;
 pub mod rooms;
+pub mod scaling;
 pub mod stress;
 pub mod timed;
 

@@ -1,20 +1,40 @@
-//! Peak resident memory of this process, as the kernel counts it, and its reset between
-//! experiments run one after another in one process.
+//! Memory: the peak resident memory of this process, as the kernel counts it (what a user's
+//! `time -v` would say of a whole command), and the heap's peak over one piece of work (what one
+//! experiment among several in a process added).
 //!
-//! On Linux the peak is `VmHWM` in `/proc/self/status`, and writing `5` to
-//! `/proc/self/clear_refs` resets it to the memory held now, so each experiment's peak is its
-//! own. Elsewhere both say `None` / do nothing, and the figures read "unknown".
+//! On Linux the resident peak is `VmHWM` in `/proc/self/status`, and writing `5` to
+//! `/proc/self/clear_refs` resets it. Elsewhere both say `None` / do nothing, and the figures
+//! read "unknown". The heap's peak needs the counting allocator installed by the binary
+//! (`#[global_allocator] static A: &PeakMemAlloc<System> = &INSTRUMENTED_SYSTEM;`); without it
+//! [`heap_peak_of`] says `None`.
 
 use std::fs;
+
+use peakmem_alloc::{INSTRUMENTED_SYSTEM, PeakMemAllocTrait};
+
+/// Runs `work` and returns what it gave with the most heap bytes it held at once above what was
+/// held when it started (other threads' allocations meanwhile count too); `None` when the
+/// counting allocator is not installed.
+pub fn heap_peak_of<T>(work: impl FnOnce() -> T) -> (T, Option<u64>) {
+    INSTRUMENTED_SYSTEM.reset_peak_memory();
+    let out = work();
+    let peak = INSTRUMENTED_SYSTEM.get_peak_memory() as u64;
+    // Any real work allocates: a peak of 0 means the counter never saw an allocation.
+    (out, (peak > 0).then_some(peak))
+}
 
 /// The peak resident memory of this process so far (since the last [`reset_peak`]), in bytes;
 /// `None` where the system does not say.
 #[must_use]
 pub fn peak_bytes() -> Option<u64> {
+    status_kib("VmHWM:").map(|kib| kib * 1024)
+}
+
+/// A `kB` figure of `/proc/self/status`.
+fn status_kib(key: &str) -> Option<u64> {
     let status = fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib * 1024)
+    let line = status.lines().find(|l| l.starts_with(key))?;
+    line.split_whitespace().nth(1)?.parse().ok()
 }
 
 /// Starts a new peak at the memory held now; whether the system could.

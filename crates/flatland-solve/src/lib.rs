@@ -84,6 +84,7 @@ mod operator;
 mod quadrature;
 mod reference;
 mod represent;
+mod settings;
 mod solve;
 mod sparse;
 mod sweep;
@@ -116,9 +117,10 @@ pub use reference::{
 pub use represent::{
     Representation, check_fingerprint, inverse_source_weights, quadrature_operator,
 };
+pub use settings::{SolveParams, Stop, never};
 pub use solve::{
-    Comparison, ExactReference, Solution, SolveErrors, SolveParams, Stop, never, solve,
-    solve_against, solve_errors, solve_linear, solve_operator,
+    Comparison, ExactReference, Solution, SolveErrors, solve, solve_against, solve_errors,
+    solve_linear, solve_operator,
 };
 pub use sparse::{MAX_NONZEROS, SparseOperator};
 pub use sweep::{ProbeBuffers, SeenSpan, Sweep, sweep_operator};

@@ -1,4 +1,4 @@
-//! The solve itself: its settings, the solution, `B = E + K B` by GMRES with any
+//! The solve itself: the solution, `B = E + K B` by GMRES with any
 //! representation's operator, a solution's errors, and the exact reference every solved B is
 //! compared with.
 
@@ -11,63 +11,9 @@ use serde::{Deserialize, Serialize};
 use crate::exact::{self, PairTable};
 use crate::sweep::{self, SweepBuffers, SweepScene};
 use crate::{
-    ExactMethod, MAX_ELEMENTS, MAX_MESH_ELEMENTS, Mesh, Representation, SolveError,
-    TransferOperator, check_scene, gmres,
+    ExactMethod, MAX_ELEMENTS, MAX_MESH_ELEMENTS, Mesh, Representation, SolveError, SolveParams,
+    Stop, TransferOperator, check_scene, gmres,
 };
-
-/// The stop flag of every long loop here: polled between rows and iterations; when it returns
-/// `true` the work ends with [`SolveError::Interrupted`].
-pub type Stop = dyn Fn() -> bool + Sync;
-
-/// A [`Stop`] that never stops.
-#[must_use]
-pub fn never() -> bool {
-    false
-}
-
-/// Settings of a solve, checked by [`SolveParams::validate`].
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct SolveParams {
-    /// Relative residual `‖E − (I − K) B‖ / ‖E‖` the linear solve must reach. Valid: (0, 0.1].
-    pub tolerance: f64,
-    /// Most products with K before giving up. Valid: ≥ 1.
-    pub max_iterations: usize,
-    /// Gauss–Legendre points per element for the default (quadrature) operator. Valid: [1, 16].
-    pub quadrature_points: usize,
-}
-
-impl Default for SolveParams {
-    fn default() -> Self {
-        SolveParams {
-            tolerance: 1e-10,
-            max_iterations: 2000,
-            quadrature_points: 2,
-        }
-    }
-}
-
-impl SolveParams {
-    /// Checks every field; the error names it and its valid range.
-    pub fn validate(&self) -> Result<(), SolveError> {
-        let bad =
-            |name, value: String, valid| Err(SolveError::InvalidParameter { name, value, valid });
-        if !(self.tolerance > 0.0 && self.tolerance <= 0.1) {
-            return bad("tolerance", self.tolerance.to_string(), "in (0, 0.1]");
-        }
-        if self.max_iterations == 0 {
-            return bad("max_iterations", "0".into(), "at least 1");
-        }
-        if !(1..=16).contains(&self.quadrature_points) {
-            return bad(
-                "quadrature_points",
-                self.quadrature_points.to_string(),
-                "in [1, 16]",
-            );
-        }
-        Ok(())
-    }
-}
 
 /// A solved radiosity.
 #[derive(Clone, Debug, PartialEq)]
@@ -433,7 +379,7 @@ pub fn solve_against<R: Representation + ?Sized>(
 mod tests {
     use super::*;
     use crate::test_support::{bundled, l_room, room, thin_wall_plan};
-    use crate::{exact_operator, quadrature_operator};
+    use crate::{exact_operator, never, quadrature_operator};
     use flatland_geom::{DVec2, Edge, Scene};
     use rand::{RngExt, SeedableRng};
     use rand_chacha::ChaCha8Rng;

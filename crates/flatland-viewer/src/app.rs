@@ -29,12 +29,25 @@ use flatland_geom::Scene;
 use kernel_fit::FitParams;
 
 use crate::scenes;
-use crate::settings::{SETTINGS_KEY, SceneChoice, Settings};
+use crate::scenes::SceneChoice;
+use crate::settings::{SETTINGS_KEY, Settings};
 use crate::timeline::{Moment, Timeline};
 use crate::views::{Hover, SceneDrag};
 use crate::worker::{Approx, Command, KernelGrid, LitState, Status, WorkerHandle, World};
 
 pub use top_bar::stop_text;
+
+/// What the panels show this frame: a world, and its moment (once one was published).
+struct Shown {
+    world: Arc<World>,
+    moment: Option<Moment>,
+    /// Whether it is the running learner's newest state.
+    live: bool,
+    /// Cells with this id or more were inserted in the last [`NEW_FOR`](crate::views::NEW_FOR) before the moment.
+    new_from: usize,
+    /// The exact ζ at the plot's resolution, once the learner has made it for this world.
+    kernel_grid: Option<Arc<KernelGrid>>,
+}
 
 /// How [`crate::run_with`] starts the viewer. The default starts learning at once.
 #[derive(Clone, Debug, Default)]

@@ -71,6 +71,7 @@
 mod app;
 mod colormap;
 pub mod lit;
+mod prefix;
 pub mod scenes;
 mod settings;
 #[cfg(test)]
@@ -83,8 +84,10 @@ use std::path::PathBuf;
 
 pub use app::{Options, ViewerApp, stop_text};
 pub use colormap::{colour, grid_image, samples_image, set_color};
-pub use settings::{LearnerChoice, SceneChoice, Settings, with_preset};
-pub use timeline::{Moment, Prefix, Timeline};
+pub use prefix::Prefix;
+pub use scenes::SceneChoice;
+pub use settings::{LearnerChoice, Settings, with_preset};
+pub use timeline::{Moment, Timeline};
 pub use worker::{CellMark, Growth, LearnedGrid, LightRounds, Lit, LitState, Status, World};
 
 /// Why the viewer could not run.

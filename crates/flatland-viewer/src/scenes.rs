@@ -7,11 +7,20 @@
 //! worth watching; a floor plan of 220 edges has hundreds of faces where visibility varies,
 //! so cells keep appearing where the light flows for as long as the pace lets them.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use flatland_geom::{Scene, bundled, generate};
 
-use crate::settings::SceneChoice;
+use serde::{Deserialize, Serialize};
+
+/// Which scene to open: a bundled one by name or a file.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum SceneChoice {
+    /// One of `flatland_geom::bundled::SCENES`.
+    Bundled(String),
+    /// A scene file (`.ron` or `.json`).
+    File(PathBuf),
+}
 
 /// The scene of the first launch (and of a remembered scene that no longer loads).
 pub const DEFAULT: &str = "floorplan";

@@ -6,22 +6,13 @@
 //! (the project's default learner changed) replaces the saved learner instead of running an
 //! older learner under the name "Default". Settings that do not decode at all load as defaults.
 
-use std::path::PathBuf;
-
 use kernel_fit::{FitParams, Preset};
 use serde::{Deserialize, Serialize};
 
+use crate::scenes::SceneChoice;
+
 /// Key of the settings in eframe's storage.
 pub const SETTINGS_KEY: &str = "flatland-viewer-settings";
-
-/// Which scene to open: a bundled one by name or a file.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub enum SceneChoice {
-    /// One of `flatland_geom::bundled::SCENES`.
-    Bundled(String),
-    /// A scene file (`.ron` or `.json`).
-    File(PathBuf),
-}
 
 /// Which learner runs: the light-driven loop ([`kernel_fit::LightFit`], what `flatland solve`
 /// runs by default) or a network ([`kernel_fit::Fit`], with [`Settings::preset`]'s parameters).

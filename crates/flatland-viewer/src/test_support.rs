@@ -9,7 +9,8 @@ use flatland_geom::Kernel;
 use flatland_solve::Reference;
 use kernel_fit::{FitParams, HistoryPoint};
 
-use crate::timeline::{Moment, Prefix};
+use crate::prefix::Prefix;
+use crate::timeline::Moment;
 use crate::worker::{CellMark, Growth, Status, World};
 
 /// The text of every source file of the crate (`src/**.rs`).

@@ -7,7 +7,7 @@
 //! [`MAX_BYTES`]; then it keeps every second one, then every fourth, …: moment `i` (counted from
 //! the first publication) stays while `i` is a multiple of the current stride `2^k`. The first
 //! moment and the latest are always kept. Samples and curves only grow during a fit, so the
-//! moments share the newest vectors and each sees its own prefix ([`Prefix::rebase`]).
+//! moments share the newest vectors and each sees its own prefix ([`Prefix::rebase`](crate::Prefix::rebase)).
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -18,66 +18,6 @@ use crate::worker::{LearnedGrid, Lit, Status, World};
 pub const MAX_MOMENTS: usize = 512;
 /// Most bytes the kept moments may take (cells, edges, learned grids; estimated).
 pub const MAX_BYTES: usize = 160 << 20;
-
-/// A vector that only grows, shared by the moments that each see a prefix of it.
-#[derive(Clone, Debug)]
-pub struct Prefix<T> {
-    all: Arc<Vec<T>>,
-    len: usize,
-}
-
-impl<T> Default for Prefix<T> {
-    fn default() -> Self {
-        Prefix {
-            all: Arc::new(Vec::new()),
-            len: 0,
-        }
-    }
-}
-
-impl<T: PartialEq> Prefix<T> {
-    /// All of `all`.
-    #[must_use]
-    pub fn new(all: Arc<Vec<T>>) -> Prefix<T> {
-        let len = all.len();
-        Prefix { all, len }
-    }
-
-    /// The part this moment sees.
-    #[must_use]
-    pub fn as_slice(&self) -> &[T] {
-        &self.all[..self.len]
-    }
-
-    /// Its length.
-    #[must_use]
-    pub fn len(&self) -> usize {
-        self.len
-    }
-
-    /// Whether it is empty.
-    #[must_use]
-    pub fn is_empty(&self) -> bool {
-        self.len == 0
-    }
-
-    /// Whether `self` and `other` share one vector (nothing to rebase).
-    #[must_use]
-    pub fn shares(&self, other: &Prefix<T>) -> bool {
-        Arc::ptr_eq(&self.all, &other.all)
-    }
-
-    /// Sees the same prefix in `newer`'s vector when that vector extends this one (checked on
-    /// the last element seen), so the older vector can be freed.
-    pub fn rebase(&mut self, newer: &Prefix<T>) {
-        if self.shares(newer) || newer.all.len() < self.len {
-            return;
-        }
-        if self.len == 0 || newer.all[self.len - 1] == self.all[self.len - 1] {
-            self.all = Arc::clone(&newer.all);
-        }
-    }
-}
 
 /// What the learner had published at one time.
 #[derive(Clone, Debug)]
@@ -414,15 +354,5 @@ mod tests {
                 .history
                 .shares(&t.latest().unwrap().status.history)
         );
-    }
-
-    #[test]
-    fn a_prefix_is_not_rebased_onto_a_vector_it_does_not_start() {
-        let mut a = Prefix::new(Arc::new(vec![1, 2, 3]));
-        a.rebase(&Prefix::new(Arc::new(vec![1, 2, 9, 4])));
-        assert_eq!(a.as_slice(), &[1, 2, 3]);
-        a.rebase(&Prefix::new(Arc::new(vec![1, 2, 3, 4])));
-        assert_eq!(a.as_slice(), &[1, 2, 3]);
-        assert_eq!(a.all.len(), 4, "rebased");
     }
 }

@@ -16,7 +16,9 @@ use flatland_solve::{
 use rand_chacha::ChaCha8Rng;
 use sgcs::Network;
 
+use crate::model::Sample;
 use crate::model::head::ModelHead;
+use crate::summary::{FitSummary, StopReason};
 use crate::visibility::FaceId;
 use crate::{FitError, FitParams, Head, ValidParams, seeds};
 
@@ -34,13 +36,9 @@ mod step;
 pub(crate) mod test_support;
 
 pub use crate::model::learned::{INPUT_DIM, LearnedKernel};
-pub(crate) use checkpoint::Checkpoint;
-pub use finish::FitSummary;
 pub use snapshot::{CellSnapshot, HistoryPoint, Snapshot};
-pub(crate) use source::Sample;
 use source::{Source, pick_simplex, rays_of};
 use state::{CellStats, FitState};
-pub use step::StopReason;
 
 /// A running fit of one scene's kernel. See the crate docs for the algorithm. A clone shares
 /// the kernel and the reference and continues exactly as the original would.

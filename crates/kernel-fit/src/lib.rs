@@ -72,13 +72,12 @@ pub mod limits;
 mod model;
 mod params;
 pub mod seeds;
+mod summary;
 mod versioned;
 mod visibility;
 
 pub use error::FitError;
-pub use fit::{
-    CellSnapshot, Fit, FitSummary, HistoryPoint, INPUT_DIM, LearnedKernel, Snapshot, StopReason,
-};
+pub use fit::{CellSnapshot, Fit, HistoryPoint, INPUT_DIM, LearnedKernel, Snapshot};
 pub use light::{LightFit, LightParams, LightStop, ProbeCell, Round};
 pub use limits::REFERENCE_SEED;
 pub use model::{MODEL_FORMAT, MODEL_VERSION, ModelFile, fingerprint_hex};
@@ -87,3 +86,4 @@ pub use params::{
     Preset, Refit, Resampling, Target, ValidParams, VisibilityParams, parameter_table,
 };
 pub use sgcs::schema::{self, Schema, Spec};
+pub use summary::{FitSummary, StopReason};

@@ -9,20 +9,20 @@ const INTERACTION_FLOOR: f64 = 1e-9;
 
 /// The surface edges in parameter order, with what refinement needs of each.
 #[derive(Clone, Debug)]
-pub(super) struct Surfaces {
-    pub(super) edge: Vec<usize>,
-    pub(super) s0: Vec<f64>,
-    pub(super) s1: Vec<f64>,
-    pub(super) a: Vec<DVec2>,
-    pub(super) b: Vec<DVec2>,
-    pub(super) normal: Vec<DVec2>,
-    pub(super) reflectance: Vec<f64>,
-    pub(super) source_weight: Vec<f64>,
-    pub(super) total_length: f64,
+pub(crate) struct Surfaces {
+    pub(crate) edge: Vec<usize>,
+    pub(crate) s0: Vec<f64>,
+    pub(crate) s1: Vec<f64>,
+    pub(crate) a: Vec<DVec2>,
+    pub(crate) b: Vec<DVec2>,
+    pub(crate) normal: Vec<DVec2>,
+    pub(crate) reflectance: Vec<f64>,
+    pub(crate) source_weight: Vec<f64>,
+    pub(crate) total_length: f64,
 }
 
 impl Surfaces {
-    pub(super) fn new(kernel: &Kernel) -> Surfaces {
+    pub(crate) fn new(kernel: &Kernel) -> Surfaces {
         let scene = kernel.scene();
         let n = scene.surface_edges().len();
         let mut out = Surfaces {
@@ -53,23 +53,23 @@ impl Surfaces {
         out
     }
 
-    pub(super) fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.edge.len()
     }
 
     /// Heap bytes of these tables (part of HR's `memory_bytes`).
-    pub(super) fn heap_bytes(&self) -> usize {
+    pub(crate) fn heap_bytes(&self) -> usize {
         use std::mem::size_of;
         self.len() * (size_of::<usize>() + 5 * size_of::<f64>() + 3 * size_of::<DVec2>())
     }
 
     /// The ordinal of the surface edge whose `[s0, s1)` holds `s`.
-    pub(super) fn locate(&self, s: f64) -> Option<usize> {
+    pub(crate) fn locate(&self, s: f64) -> Option<usize> {
         let k = self.s0.partition_point(|&s0| s0 <= s);
         (k > 0 && s < self.s1[k - 1]).then(|| k - 1)
     }
 
-    pub(super) fn whole(&self, i: usize) -> Elem {
+    pub(crate) fn whole(&self, i: usize) -> Elem {
         Elem {
             ord: i,
             s0: self.s0[i],
@@ -80,7 +80,7 @@ impl Surfaces {
     }
 
     /// `∫_p ∫_q G dx dy` without occlusion, G = cos cos / (2r).
-    pub(super) fn transfer(&self, p: &Elem, q: &Elem) -> f64 {
+    pub(crate) fn transfer(&self, p: &Elem, q: &Elem) -> f64 {
         let (np, nq) = (self.normal[p.ord], self.normal[q.ord]);
         // cos_x > 0 ⇔ y strictly in front of p's line; cos_y > 0 ⇔ x in front of q's.
         let Some(qc) = clip(q.a, q.b, np, p.a) else {
@@ -95,20 +95,20 @@ impl Surfaces {
 
 /// An element: a parameter interval of a surface edge and its end points.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Elem {
-    pub(super) ord: usize,
-    pub(super) s0: f64,
-    pub(super) s1: f64,
-    pub(super) a: DVec2,
-    pub(super) b: DVec2,
+pub(crate) struct Elem {
+    pub(crate) ord: usize,
+    pub(crate) s0: f64,
+    pub(crate) s1: f64,
+    pub(crate) a: DVec2,
+    pub(crate) b: DVec2,
 }
 
 impl Elem {
-    pub(super) fn length(&self) -> f64 {
+    pub(crate) fn length(&self) -> f64 {
         (self.b - self.a).length()
     }
 
-    pub(super) fn halves(&self) -> [Elem; 2] {
+    pub(crate) fn halves(&self) -> [Elem; 2] {
         let (mid, m) = (0.5 * (self.s0 + self.s1), 0.5 * (self.a + self.b));
         [
             Elem {
@@ -126,7 +126,7 @@ impl Elem {
 }
 
 /// Whether `transfer` between `p` and `q` is real transfer rather than residue.
-pub(super) fn interacts(transfer: f64, p: &Elem, q: &Elem) -> bool {
+pub(crate) fn interacts(transfer: f64, p: &Elem, q: &Elem) -> bool {
     transfer / p.length().min(q.length()) > INTERACTION_FLOOR
 }
 

@@ -1,13 +1,41 @@
-//! The per-pair cache: each pair of parent surface edges' shaft (lazy), class, visibility, events.
+//! Each pair of parent surface edges' shaft (classified on first use), class, visibility, events.
 
-use std::borrow::Cow;
+use std::ops::Deref;
 
+use super::cache::ShaftRef;
 use super::{Kernel, PairClass, PairVisibility};
 use crate::visibility::{PairEvents, Shaft, Side, classify};
 
-/// Above this many surface parents the pair cache (n² entries) is not kept; rays then use the
-/// BVH directly (still about `log n` per ray).
-pub(super) const MAX_CACHED_SURFACES: usize = 512;
+/// The [`PairEvents`] of a pair, as [`Kernel::visibility_events`] lends them: read them
+/// through `Deref`. They stay valid however the kernel's cache changes meanwhile.
+#[derive(Debug)]
+pub struct PairEventsRef<'a> {
+    shaft: ShaftRef<'a>,
+    /// 0: rays from the lower rank to the higher, 1: the other way.
+    which: usize,
+}
+
+impl Deref for PairEventsRef<'_> {
+    type Target = PairEvents;
+
+    fn deref(&self) -> &PairEvents {
+        match &*self.shaft {
+            Shaft::Candidates(c) => match &c.events {
+                Some(events) => &events[self.which],
+                None => unreachable!("made only for a shaft with events"),
+            },
+            _ => unreachable!("made only for a shaft with events"),
+        }
+    }
+}
+
+impl PairEventsRef<'_> {
+    /// A copy of the events.
+    #[must_use]
+    pub fn into_owned(self) -> PairEvents {
+        (*self).clone()
+    }
+}
 
 impl Kernel {
     /// Whether evaluating `k(s, t)` needs a visibility test that geometry cannot decide: the
@@ -22,6 +50,7 @@ impl Kernel {
 
     /// How visibility behaves between the parent surface edges of ranks `a` and `b`, without a
     /// ray (symmetric). Exact for every facing ray between interior points of the two edges.
+    /// Classified when first asked, then kept (see [`Kernel`]'s "Work skipped").
     ///
     /// # Panics
     /// If a rank is `>= surface_parents()`.
@@ -30,8 +59,7 @@ impl Kernel {
         if a == b {
             return PairClass::Zero;
         }
-        let (ga, gb) = (self.surface_parents[a], self.surface_parents[b]);
-        let class = |shaft: &Shaft| match shaft {
+        match &*self.shaft_of_ranks(a, b) {
             Shaft::NoFacing => PairClass::Zero,
             Shaft::Clear => PairClass::Visible,
             Shaft::Blocked(_) => PairClass::Hidden,
@@ -40,10 +68,6 @@ impl Kernel {
                 Some(false) => PairClass::Hidden,
                 None => PairClass::Varies,
             },
-        };
-        match self.shaft(ga, gb) {
-            Some(shaft) => class(shaft),
-            None => class(&self.classify_ranks(a.min(b), a.max(b))),
         }
     }
 
@@ -54,28 +78,24 @@ impl Kernel {
     /// # Panics
     /// If a rank is `>= surface_parents()`.
     #[must_use]
-    pub fn visibility_events(&self, a: usize, b: usize) -> Option<Cow<'_, PairEvents>> {
+    pub fn visibility_events(&self, a: usize, b: usize) -> Option<PairEventsRef<'_>> {
         if a == b {
             return None;
         }
-        let (ga, gb) = (self.surface_parents[a], self.surface_parents[b]);
+        let shaft = self.shaft_of_ranks(a, b);
+        let Shaft::Candidates(c) = &*shaft else {
+            return None;
+        };
+        c.events.as_ref()?;
         // The shaft is stored for the lower rank first.
-        let which = usize::from(a > b);
-        match self.shaft(ga, gb) {
-            Some(Shaft::Candidates(c)) => c.events.as_ref().map(|e| Cow::Borrowed(&e[which])),
-            Some(_) => None,
-            None => match self.classify_ranks(a.min(b), a.max(b)) {
-                Shaft::Candidates(c) => c.events.map(|e| {
-                    let [forward, backward] = *e;
-                    Cow::Owned(if which == 0 { forward } else { backward })
-                }),
-                _ => None,
-            },
-        }
+        Some(PairEventsRef {
+            shaft,
+            which: usize::from(a > b),
+        })
     }
 
     /// How visibility between surface edges `ex` and `ey` is decided: the shaft classification
-    /// the kernel caches per pair of parent edges (for facing rays). `None` if either is a
+    /// the kernel keeps per pair of parent edges (for facing rays). `None` if either is a
     /// blocker or out of range.
     #[must_use]
     pub fn pair_visibility(&self, ex: usize, ey: usize) -> Option<PairVisibility> {
@@ -87,16 +107,8 @@ impl Kernel {
         if gx == gy {
             return Some(PairVisibility::SameEdge);
         }
-        let computed;
-        let shaft = match self.shaft(gx, gy) {
-            Some(shaft) => shaft,
-            None => {
-                computed = self.classify_ranks(px.rank.min(py.rank), px.rank.max(py.rank));
-                &computed
-            }
-        };
         let edge = |g: u32| self.scene.groups()[g as usize].first;
-        Some(match shaft {
+        Some(match &*self.shaft_of_ranks(px.rank, py.rank) {
             Shaft::NoFacing => PairVisibility::NeverFacing,
             Shaft::Clear => PairVisibility::Clear,
             Shaft::Blocked(g) => PairVisibility::Blocked(edge(*g)),
@@ -122,10 +134,17 @@ impl Kernel {
         }
     }
 
-    /// The cached shaft of two distinct surface parents, computed on first use.
+    /// The shaft of two distinct surface ranks, classified on first use.
+    fn shaft_of_ranks(&self, a: usize, b: usize) -> ShaftRef<'_> {
+        let (r0, r1) = (a.min(b), a.max(b));
+        self.shafts.get(r0, r1, || self.classify_ranks(r0, r1))
+    }
+
+    /// The shaft of two distinct surface parents from the dense table, classified on first
+    /// use; `None` for a blocker, the same parent, or a scene too large for the table.
     #[inline(always)]
     pub(super) fn shaft(&self, gx: usize, gy: usize) -> Option<&Shaft> {
-        if self.shafts.is_empty() || gx == gy || gx == usize::MAX || gy == usize::MAX {
+        if gx == gy || gx == usize::MAX || gy == usize::MAX {
             return None;
         }
         let (rx, ry) = (self.parents[gx].rank, self.parents[gy].rank);
@@ -133,8 +152,7 @@ impl Kernel {
             return None;
         }
         let (r0, r1) = if rx < ry { (rx, ry) } else { (ry, rx) };
-        let n = self.surface_parents.len();
-        Some(self.shafts[r0 * n + r1].get_or_init(|| self.classify_ranks(r0, r1)))
+        self.shafts.dense(r0, r1, || self.classify_ranks(r0, r1))
     }
 }
 
@@ -233,7 +251,7 @@ mod tests {
         assert_eq!(kernel.pair_visibility(0, 9), None);
         // Subdivision does not multiply the shaft table: it is per parent edge.
         let fine = Kernel::new(bundled("fig3").subdivide(1000).unwrap());
-        assert_eq!(fine.shafts.len(), 36);
+        assert_eq!(fine.shafts.dense_cells(), 36);
     }
 
     proptest! {

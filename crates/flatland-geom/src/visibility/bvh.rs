@@ -312,14 +312,38 @@ impl Bvh {
     }
 
     /// Indices of the segments whose boxes overlap the closed box `[lo, hi]`, sorted.
+    #[cfg(test)]
     pub(crate) fn overlapping(&self, lo: DVec2, hi: DVec2) -> Vec<u32> {
+        self.overlapping_beyond(lo, hi, &[])
+    }
+
+    /// The segments whose boxes overlap the closed bounding box of `pts`, except some wholly
+    /// outside their convex hull: sorted. A subtree is skipped when its box lies strictly
+    /// beyond a line through two of the points with all four on its other closed side (by
+    /// more than the rounding margin), so every segment left out lies strictly beyond such a
+    /// line. Only the segments near the hull are visited: in a convex room of `n` walls a
+    /// shaft between two of them meets `O(log n)` boxes, where its bounding box holds `O(n)`.
+    pub(crate) fn overlapping_hull(&self, pts: &[DVec2; 4]) -> Vec<u32> {
+        let lo = pts.iter().fold(DVec2::INFINITY, |m, v| m.min(*v));
+        let hi = pts.iter().fold(DVec2::NEG_INFINITY, |m, v| m.max(*v));
+        let cuts: Vec<Beyond> = hull_lines(pts)
+            .map(|(u, outward)| Beyond::new(self.to_frame(u), outward))
+            .collect();
+        self.overlapping_beyond(lo, hi, &cuts)
+    }
+
+    /// The segments whose boxes overlap `[lo, hi]`, but for subtrees wholly beyond a cut.
+    fn overlapping_beyond(&self, lo: DVec2, hi: DVec2, cuts: &[Beyond]) -> Vec<u32> {
         let apart =
             |alo: DVec2, ahi: DVec2| alo.x > hi.x || alo.y > hi.y || ahi.x < lo.x || ahi.y < lo.y;
         // The exact test runs on the segments; the boxes only need to be conservative.
         let query = Boxes::new(self.to_frame(lo), self.to_frame(hi));
         let mut out = Vec::new();
         self.any(
-            |node| query.overlaps(node),
+            |node| {
+                cuts.iter()
+                    .fold(query.overlaps(node), |mask, cut| mask & !cut.holds(node))
+            },
             |k| {
                 let s = self.ordered[k];
                 if !apart(s.a.min(s.b), s.a.max(s.b)) {
@@ -340,6 +364,27 @@ impl Bvh {
 #[inline]
 pub(crate) fn wins_tie(facing: bool, i: usize, b_facing: bool, b: usize) -> bool {
     (facing, std::cmp::Reverse(i)) > (b_facing, std::cmp::Reverse(b))
+}
+
+/// The lines through two of `pts` (distinct) with all four points on one closed side, each as
+/// a point on it and its normal pointing to the other, open side: the edges of the convex hull
+/// (and, for collinear points, their line both ways). Decided by exact orientations.
+fn hull_lines(pts: &[DVec2; 4]) -> impl Iterator<Item = (DVec2, DVec2)> + '_ {
+    (0..4)
+        .flat_map(|i| (i + 1..4).map(move |j| (i, j)))
+        .filter(|&(i, j)| pts[i] != pts[j])
+        .flat_map(move |(i, j)| {
+            let (u, v) = (pts[i], pts[j]);
+            let mut others = (0..4)
+                .filter(|&k| k != i && k != j)
+                .map(|k| orient(u, v, pts[k]));
+            let (o1, o2) = (others.next().unwrap_or(0.0), others.next().unwrap_or(0.0));
+            // `orient(u, v, p) = perp(v − u)·(p − u)`: the hull is on the side of `sign`.
+            [1.0, -1.0]
+                .into_iter()
+                .filter(move |&sign| o1 * sign >= 0.0 && o2 * sign >= 0.0)
+                .map(move |sign: f64| (u, (v - u).perp() * -sign))
+        })
 }
 
 /// Appends the four-wide node for binary node `b` (and, after it, those of its descendants) and
@@ -554,6 +599,45 @@ mod tests {
                     .any(|(i, s)| i != skip_a && i != skip_b && open_segment_hits(x, y, s.a, s.b));
                 prop_assert_eq!(bvh.any_hit(x, y, skip_a, skip_b), linear, "{:?} {:?}", x, y);
             }
+        }
+
+        /// A shaft's query keeps, of the segments whose boxes overlap the bounding box of its
+        /// four points, every one the shaft classification does not rule out by a separating
+        /// line ([`separated`](super::super::shaft::separated)), in index order: so the
+        /// classification finds what it found among all the box's segments. On a coarse grid,
+        /// so segments touch hull lines and corners, and hulls degenerate.
+        #[test]
+        fn shaft_query_keeps_every_segment_a_separating_line_does_not_rule_out(
+            seed in any::<u64>(),
+            n in 1usize..200,
+        ) {
+            let mut r = rng(seed);
+            let scale = [1e-150, 1.0, 3.0, 1e150][r.random_range(0..4)];
+            let snap = |p: DVec2| (p * 4.0).round() / 4.0 * scale;
+            let segments: Vec<Segment> = (0..n)
+                .map(|_| Segment { a: snap(point(&mut r)), b: snap(point(&mut r)) })
+                .collect();
+            let bvh = Bvh::new(&segments);
+            let mut culled = 0;
+            for _ in 0..50 {
+                let pts = [(); 4].map(|()| snap(point(&mut r)));
+                let (lo, hi) = (
+                    pts.iter().fold(DVec2::INFINITY, |m, v| m.min(*v)),
+                    pts.iter().fold(DVec2::NEG_INFINITY, |m, v| m.max(*v)),
+                );
+                let boxed = bvh.overlapping(lo, hi);
+                let found = bvh.overlapping_hull(&pts);
+                prop_assert!(found.windows(2).all(|w| w[0] < w[1]), "sorted, once each");
+                prop_assert!(found.iter().all(|i| boxed.contains(i)), "within the box");
+                for &i in &boxed {
+                    let s = segments[i as usize];
+                    let ruled_out = super::super::shaft::separated(&pts, s);
+                    prop_assert!(ruled_out || found.contains(&i), "lost {} {:?} of {:?}", i, s, pts);
+                }
+                culled += boxed.len() - found.len();
+            }
+            // The query does cull (on all but the tiniest scenes).
+            prop_assert!(n < 50 || culled > 0, "nothing culled");
         }
 
         /// The closest hit on the same grazing rays: the tree's answer is the linear scan's

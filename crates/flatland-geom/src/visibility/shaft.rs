@@ -60,7 +60,19 @@ impl Side {
 
 /// Classifies the shaft between `p` and `q` (see [`Shaft`]). Valid for segments `x–y` with `x`
 /// on `p`, `y` on `q`, `q.faces(x)` and `p.faces(y)`.
+/// Only the segments near the shaft are looked at ([`Bvh::overlapping_hull`]).
 pub(crate) fn classify(segments: &[Segment], bvh: &Bvh, p: Side, q: Side) -> Shaft {
+    classify_among(segments, p, q, |pts| bvh.overlapping_hull(pts))
+}
+
+/// [`classify`], looking at the segments `near` gives for the four end points: a superset,
+/// in index order, of those no separating line rules out (see [`separated`]).
+fn classify_among(
+    segments: &[Segment],
+    p: Side,
+    q: Side,
+    near: impl FnOnce(&[DVec2; 4]) -> Vec<u32>,
+) -> Shaft {
     let pts = [p.a, p.b, q.a, q.b];
     if p.hides(q.a, q.b) || q.hides(p.a, p.b) {
         return Shaft::NoFacing;
@@ -68,10 +80,9 @@ pub(crate) fn classify(segments: &[Segment], bvh: &Bvh, p: Side, q: Side) -> Sha
     if orient(p.a, p.b, q.a) == 0.0 && orient(p.a, p.b, q.b) == 0.0 {
         return Shaft::NoFacing; // all on one line: every cosine is 0
     }
-    let lo = pts.iter().fold(DVec2::INFINITY, |m, v| m.min(*v));
-    let hi = pts.iter().fold(DVec2::NEG_INFINITY, |m, v| m.max(*v));
     let mut candidates = Vec::new();
-    for o in bvh.overlapping(lo, hi) {
+    // In index order, so the first occluder that cuts the whole shaft is the lowest index.
+    for o in near(&pts) {
         let i = o as usize;
         if i == p.index || i == q.index {
             continue;
@@ -113,7 +124,7 @@ pub(crate) fn classify(segments: &[Segment], bvh: &Bvh, p: Side, q: Side) -> Sha
 /// on one closed side and `s` on the other, where `s` may touch the line only at one of those
 /// two end points (an end point of `P` or `Q` lies on the line of its own edge, so a facing
 /// open segment never contains it); or the line of `s` with all four points strictly on one side.
-fn separated(pts: &[DVec2; 4], s: Segment) -> bool {
+pub(super) fn separated(pts: &[DVec2; 4], s: Segment) -> bool {
     for i in 0..4 {
         for j in i + 1..4 {
             let (u, v) = (pts[i], pts[j]);
@@ -186,6 +197,13 @@ mod tests {
             for (i, j) in [(0, 1), (2, 3), (4, 5), (0, 7)] {
                 let (p, q) = (side(i), side(j));
                 let shaft = classify(&segments, &bvh, p, q);
+                // The same as from every segment in the shaft's bounding box.
+                let boxed = classify_among(&segments, p, q, |pts| {
+                    let lo = pts.iter().fold(DVec2::INFINITY, |m, v| m.min(*v));
+                    let hi = pts.iter().fold(DVec2::NEG_INFINITY, |m, v| m.max(*v));
+                    bvh.overlapping(lo, hi)
+                });
+                prop_assert_eq!(&shaft, &boxed);
                 for _ in 0..200 {
                     // Exact dyadic points on the snapped segments.
                     let at = |s: Segment, k: u32| s.a + (s.b - s.a) * (f64::from(k) / 8.0);

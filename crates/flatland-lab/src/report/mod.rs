@@ -4,4 +4,5 @@ pub mod bench;
 pub mod figure;
 pub mod grid;
 pub mod lit;
+pub mod scaling;
 pub mod timed;

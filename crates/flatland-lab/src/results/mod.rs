@@ -11,6 +11,7 @@ use std::time::Instant;
 
 use anyhow::Result;
 use flatland_geom::{Kernel, Scene};
+use flatland_solve::Reference;
 use kernel_fit::Preset;
 
 use crate::report::bench::{OUTPUTS, write_outputs};
@@ -72,15 +73,61 @@ impl Progress {
     }
 }
 
+/// How much `flatland results` measures: seeds per experiment, the bench's budgets, random rooms.
+struct Sizes {
+    seeds: u64,
+    budgets: Vec<usize>,
+    rooms: u64,
+}
+
+impl Sizes {
+    fn of(quick: bool) -> Self {
+        if quick {
+            Self {
+                seeds: 1,
+                budgets: vec![50, 100, 200, 400],
+                rooms: 2,
+            }
+        } else {
+            Self {
+                seeds: 3,
+                budgets: vec![50, 100, 200, 400, 800],
+                rooms: 6,
+            }
+        }
+    }
+}
+
+/// The scenes' kernels and references, and the plots' folder, all outputs checked.
+struct Inputs {
+    kernels: Vec<Arc<Kernel>>,
+    references: Vec<Arc<Reference>>,
+    plots: PathBuf,
+}
+
 /// Runs `flatland results`.
 pub fn run(args: &Options) -> Result<()> {
-    let seeds: u64 = if args.quick { 1 } else { 3 };
-    let budgets: Vec<usize> = if args.quick {
-        vec![50, 100, 200, 400]
-    } else {
-        vec![50, 100, 200, 400, 800]
+    let sizes = Sizes::of(args.quick);
+    let mut progress = Progress {
+        started: Instant::now(),
+        stage: 0,
+        stages: 4 + 2 * SCENES.len() + 2,
     };
-    let rooms: u64 = if args.quick { 2 } else { 6 };
+    let inputs = prepare(args)?;
+    let findings = measure(&inputs, &sizes, args.quick, &mut progress)?;
+    let doc = render::document(&findings)?;
+    interrupt::check()?;
+    interrupt::writing(|| flatland_geom::write_atomic(&args.out, doc.as_bytes()))?;
+    println!(
+        "wrote {} and {}",
+        args.out.display(),
+        inputs.plots.display()
+    );
+    Ok(())
+}
+
+/// Loads the scenes, checks every output path before any work, and says what Ctrl-C keeps.
+fn prepare(args: &Options) -> Result<Inputs> {
     let root = args.out.parent().map(Path::to_path_buf).unwrap_or_default();
     let plots = root.join("docs").join("results");
     let scene_files: Vec<PathBuf> = SCENES
@@ -104,26 +151,31 @@ pub fn run(args: &Options) -> Result<()> {
         args.out.display(),
         plots.display()
     ));
-    let mut progress = Progress {
-        started: Instant::now(),
-        stage: 0,
-        stages: 4 + 2 * SCENES.len() + 2,
-    };
-    let references: Vec<_> = kernels.iter().map(|k| Arc::new(reference_of(k))).collect();
+    let references = kernels.iter().map(|k| Arc::new(reference_of(k))).collect();
+    Ok(Inputs {
+        kernels,
+        references,
+        plots,
+    })
+}
+
+/// Every experiment, in the document's order, one progress stage each.
+fn measure(
+    inputs: &Inputs,
+    sizes: &Sizes,
+    quick: bool,
+    progress: &mut Progress,
+) -> Result<Findings> {
+    let Inputs {
+        kernels,
+        references,
+        plots,
+    } = inputs;
+    let seeds = sizes.seeds;
     let (fig3, fig3_reference) = (&kernels[0], &references[0]);
 
     progress.next("the default fit of fig3 for each preset, and its Fig. 3 panels")?;
-    let mut headline = Vec::new();
-    for (preset, dir) in Preset::ALL.into_iter().zip(figure_dirs(&plots)) {
-        let fitted = fit(fig3, fig3_reference, preset_params(preset, 1))?;
-        let label = format!("fig3, {} learner", preset.name());
-        for (name, png) in
-            crate::report::figure::panels(&fitted.fit, fig3_reference, &label, false)?
-        {
-            interrupt::writing(|| flatland_geom::write_atomic(&dir.join(name), &png))?;
-        }
-        headline.push((preset, fitted.summary));
-    }
+    let headline = headline(fig3, fig3_reference, plots)?;
     progress.next("R1: cells near the jumps, θ against uniform resampling")?;
     let density = experiments::density(fig3, fig3_reference)?;
     progress.next("R2, R3: fig3 with every edge split in 1000")?;
@@ -148,28 +200,18 @@ pub fn run(args: &Options) -> Result<()> {
             seeds,
         )?);
     }
-    let plan = experiments::plan(budgets, seeds);
-    let mut benches = Vec::new();
-    for (i, name) in SCENES.iter().enumerate() {
-        progress.next(&format!("flatland bench on {name}"))?;
-        let dir = plots.join(name);
-        let defined = crate::Defined::of(&references[i]);
-        benches.push(experiments::bench(
-            name,
-            &kernels[i],
-            &references[i],
-            &plan,
-            |rows| write_outputs(&dir, name, rows, defined),
-        )?);
-    }
-    progress.next(&format!("{rooms} random rooms at 400 basis functions"))?;
-    let rooms = (1..=rooms)
+    let benches = benches(inputs, sizes, progress)?;
+    progress.next(&format!(
+        "{} random rooms at 400 basis functions",
+        sizes.rooms
+    ))?;
+    let rooms = (1..=sizes.rooms)
         .map(experiments::room)
         .collect::<Result<Vec<_>>>()?;
     progress.next("the stability suite (flatland stress)")?;
-    let stress = experiments::stress(args.quick)?;
-    let findings = Findings {
-        quick: args.quick,
+    let stress = experiments::stress(quick)?;
+    Ok(Findings {
+        quick,
         seeds,
         cores: std::thread::available_parallelism().map_or(1, |n| n.get()),
         headline,
@@ -181,12 +223,44 @@ pub fn run(args: &Options) -> Result<()> {
         rooms,
         stress,
         elapsed_s: progress.started.elapsed().as_secs_f64(),
-    };
-    let doc = render::document(&findings)?;
-    interrupt::check()?;
-    interrupt::writing(|| flatland_geom::write_atomic(&args.out, doc.as_bytes()))?;
-    println!("wrote {} and {}", args.out.display(), plots.display());
-    Ok(())
+    })
+}
+
+/// The default fit of fig3 for each preset; writes its Fig. 3 panels.
+fn headline(
+    fig3: &Arc<Kernel>,
+    reference: &Arc<Reference>,
+    plots: &Path,
+) -> Result<Vec<(Preset, kernel_fit::FitSummary)>> {
+    let mut headline = Vec::new();
+    for (preset, dir) in Preset::ALL.into_iter().zip(figure_dirs(plots)) {
+        let fitted = fit(fig3, reference, preset_params(preset, 1))?;
+        let label = format!("fig3, {} learner", preset.name());
+        for (name, png) in crate::report::figure::panels(&fitted.fit, reference, &label, false)? {
+            interrupt::writing(|| flatland_geom::write_atomic(&dir.join(name), &png))?;
+        }
+        headline.push((preset, fitted.summary));
+    }
+    Ok(headline)
+}
+
+/// `flatland bench` on every scene; writes its CSV and plots.
+fn benches(inputs: &Inputs, sizes: &Sizes, progress: &mut Progress) -> Result<Vec<SceneBench>> {
+    let plan = experiments::plan(sizes.budgets.clone(), sizes.seeds);
+    let mut benches = Vec::new();
+    for (i, name) in SCENES.iter().enumerate() {
+        progress.next(&format!("flatland bench on {name}"))?;
+        let dir = inputs.plots.join(name);
+        let defined = crate::Defined::of(&inputs.references[i]);
+        benches.push(experiments::bench(
+            name,
+            &inputs.kernels[i],
+            &inputs.references[i],
+            &plan,
+            |rows| write_outputs(&dir, name, rows, defined),
+        )?);
+    }
+    Ok(benches)
 }
 
 /// The Fig. 3 panel folders, one per preset in [`Preset::ALL`] order.

@@ -3,9 +3,10 @@
 use std::sync::Arc;
 use std::time::Instant;
 
-use anyhow::Result;
+use anyhow::{Context as _, Result};
 use flatland_baselines::{
-    BaselineRun, TraceBudget, TraceParams, budget_tolerance, run_hr_at_budget, run_uniform, trace,
+    BaselineRun, TraceBudget, TraceParams, budget_tolerance, run_clustered, run_hr_at_budget,
+    run_uniform, trace,
 };
 use flatland_geom::Kernel;
 use flatland_solve::{
@@ -91,7 +92,7 @@ impl Context<'_> {
     /// The first-shot learner at `budget` cells.
     pub fn first_shot(&self, budget: usize, seed: u64) -> Result<TimedRow> {
         let solver = self.scorer.solver();
-        let zeta = self.scorer.zeta();
+        let zeta = self.zeta()?;
         let row = learner_row(
             self.kernel,
             zeta,
@@ -113,7 +114,7 @@ impl Context<'_> {
     /// The paper's network at `budget` cells: the rows with and without its refit.
     pub fn paper(&self, budget: usize, seed: u64) -> Result<(TimedRow, TimedRow)> {
         let solver = self.scorer.solver();
-        let zeta = self.scorer.zeta();
+        let zeta = self.zeta()?;
         let (after, before) = paper_rows(
             self.kernel,
             zeta,
@@ -126,6 +127,13 @@ impl Context<'_> {
             self.of_bench(Contender::Paper, after),
             self.of_bench(Contender::PaperNoRefit, before),
         ))
+    }
+
+    /// The ζ reference the network learners train against.
+    fn zeta(&self) -> Result<&Arc<flatland_solve::Reference>> {
+        self.scorer
+            .zeta()
+            .context("this run measures no ζ, which the network learners are trained against")
     }
 
     fn of_bench(&self, method: Contender, r: BenchRow) -> TimedRow {
@@ -148,7 +156,8 @@ impl Context<'_> {
         }
     }
 
-    /// HR or the uniform grid at `budget` (or the nearest count it can build, noted).
+    /// HR, clustered HR or the uniform grid at `budget` (or the nearest count it can build,
+    /// noted).
     pub fn baseline(&self, method: Contender, budget: usize, seed: u64) -> Result<TimedRow> {
         let kernel = self.kernel.as_ref();
         match method {
@@ -157,6 +166,12 @@ impl Context<'_> {
                 budget,
                 seed,
                 run_hr_at_budget(kernel, budget, seed, &self.plan.hr)?,
+            ),
+            Contender::Clustered => self.baseline_row(
+                method,
+                budget,
+                seed,
+                run_clustered(kernel, budget, seed, &self.plan.clustered)?,
             ),
             _ => self.baseline_row(
                 method,
@@ -215,13 +230,25 @@ impl Context<'_> {
 
     /// The light tracer with `photons` photons on the scorer's mesh.
     pub fn tracer(&self, photons: u64, seed: u64) -> Result<TimedRow> {
-        let params = TraceParams {
-            budget: TraceBudget::Photons(photons),
-            seed,
-        };
+        self.traced(TraceBudget::Photons(photons), seed)
+    }
+
+    /// The light tracer for about `seconds` of wall time (equal time with another row).
+    pub fn tracer_for(&self, seconds: f64, seed: u64) -> Result<TimedRow> {
+        self.traced(TraceBudget::Seconds(seconds), seed)
+    }
+
+    fn traced(&self, budget: TraceBudget, seed: u64) -> Result<TimedRow> {
+        let params = TraceParams { budget, seed };
         let mesh = self.scorer.mesh();
         let traced = trace(self.kernel, mesh, &params, self.stop)?;
         let errors = solve_errors(mesh, &traced.radiosity, self.scorer.exact());
+        // A photon budget's row is named by the count asked for; a time budget's by the count
+        // it traced.
+        let photons = match budget {
+            TraceBudget::Photons(asked) => asked,
+            TraceBudget::Seconds(_) => traced.photons,
+        };
         let mut row = TimedRow::new(Contender::Tracer, Setting::Photons(photons), seed);
         row.solve_s = traced.wall_s();
         row.total_s = row.solve_s;

@@ -6,7 +6,7 @@
 //! A method that cannot meet a setting gives the nearest row it can with a note; one that
 //! fails there gives a failed row with the reason, and the sweep goes on.
 
-mod compute;
+pub(crate) mod compute;
 mod contender;
 pub mod relight;
 
@@ -15,7 +15,7 @@ mod run;
 mod scorer;
 mod settings;
 
-use flatland_baselines::{HrParams, UniformParams};
+use flatland_baselines::{ClusteredParams, HrParams, UniformParams};
 use kernel_fit::FitParams;
 
 pub use contender::Contender;
@@ -69,6 +69,8 @@ pub struct TimedPlan {
     pub paper: FitParams,
     /// HR parameters.
     pub hr: HrParams,
+    /// Clustered-HR parameters.
+    pub clustered: ClusteredParams,
     /// Uniform-grid parameters.
     pub uniform: UniformParams,
 }
@@ -88,6 +90,7 @@ impl TimedPlan {
             fit: FitParams::default(),
             paper: FitParams::paper(),
             hr: HrParams::default(),
+            clustered: ClusteredParams::default(),
             uniform: UniformParams::default(),
         }
     }

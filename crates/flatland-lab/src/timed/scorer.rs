@@ -7,8 +7,8 @@ use std::time::Instant;
 use anyhow::Result;
 use flatland_geom::Kernel;
 use flatland_solve::{
-    ExactReference, Mesh, Reference, Representation, SolveErrors, SolveParams, Stop, solve_against,
-    solve_errors,
+    Discretization, ExactReference, Mesh, Reference, Representation, SolveErrors, SolveParams,
+    Stop, solve_against, solve_errors,
 };
 
 use crate::Defined;
@@ -19,7 +19,9 @@ pub struct Scorer {
     mesh: Mesh,
     exact: Vec<f64>,
     fine: ExactReference,
-    zeta: Arc<Reference>,
+    /// `None` where no ζ is measured (the scaling runs: a ζ grid of a huge scene costs more
+    /// than the methods it would judge).
+    zeta: Option<Arc<Reference>>,
     defined: Defined,
 }
 
@@ -41,9 +43,25 @@ impl Scorer {
             mesh,
             exact,
             fine,
-            zeta,
+            zeta: Some(zeta),
             defined,
         })
+    }
+
+    /// Scores on the chosen mesh of `found` against its solve on twice the elements (what
+    /// `flatland solve` measures against), with no ζ reference: rows have no ζ error, and the
+    /// learners that need one (first-shot, paper) fail with a note.
+    pub fn of_discretization(found: Discretization) -> Scorer {
+        Scorer {
+            mesh: found.coarse.mesh().clone(),
+            exact: found.finer_on_coarse,
+            fine: found.finer,
+            zeta: None,
+            defined: Defined {
+                grid: false,
+                heldout: false,
+            },
+        }
     }
 
     /// The mesh every representation is solved on.
@@ -61,9 +79,9 @@ impl Scorer {
         self.fine.mesh().len()
     }
 
-    /// The ζ reference learned kernels are measured on.
-    pub fn zeta(&self) -> &Arc<Reference> {
-        &self.zeta
+    /// The ζ reference learned kernels are measured on, if there is one.
+    pub fn zeta(&self) -> Option<&Arc<Reference>> {
+        self.zeta.as_ref()
     }
 
     /// Which ζ errors mean something.
@@ -73,7 +91,8 @@ impl Scorer {
 
     /// The held-out relative L2 error of `rep`'s ζ̃, where it is defined.
     pub fn zeta_error(&self, rep: &dyn Representation) -> Option<f64> {
-        self.defined.heldout.then(|| self.zeta.errors(rep).heldout)
+        let zeta = self.zeta.as_ref().filter(|_| self.defined.heldout)?;
+        Some(zeta.errors(rep).heldout)
     }
 
     /// The errors of B solved with `rep` on the mesh, and the seconds the solve took.

@@ -9,7 +9,8 @@ use kernel_fit::Preset;
 
 use super::ViewerApp;
 use crate::scenes;
-use crate::settings::{LearnerChoice, SceneChoice};
+use crate::scenes::SceneChoice;
+use crate::settings::LearnerChoice;
 use crate::views::{self, Hover};
 use crate::worker::Command;
 

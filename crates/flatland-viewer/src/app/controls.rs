@@ -11,7 +11,8 @@ use kernel_fit::{Gating, Preset, Resampling, Target};
 use sgcs::{InsertRule, Insertion, OutputMode, OutputRule, Resource};
 
 use super::ViewerApp;
-use crate::settings::{LearnerChoice, SceneChoice, with_preset};
+use crate::scenes::SceneChoice;
+use crate::settings::{LearnerChoice, with_preset};
 use crate::worker::Command;
 
 impl ViewerApp {

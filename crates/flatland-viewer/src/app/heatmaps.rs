@@ -8,7 +8,7 @@ use std::sync::Arc;
 use egui::{ColorImage, TextureHandle, TextureId, TextureOptions};
 use flatland_lab::colormap::Scale;
 
-use super::panels::Shown;
+use super::Shown;
 use crate::colormap::{grid_image, samples_image};
 use crate::views::{self, Marks};
 use crate::worker::{APPROX_RES, REFERENCE_RES};

@@ -5,30 +5,17 @@ use std::sync::Arc;
 
 use egui::{Rect, UiBuilder};
 
-use super::ViewerApp;
 use super::heatmaps::Request;
 use super::layout::Layout;
 use super::readout::{Learned, readout_text};
 use super::top_bar::error_text;
-use crate::timeline::Moment;
+use super::{Shown, ViewerApp};
 use crate::views::{self, LitPaint, NEW_FOR, PlotFrame};
-use crate::worker::{Command, KernelGrid, Lit, LitState, World};
+use crate::worker::{Command, Lit, LitState};
 
 /// The kernel plot's exact ζ is computed at its width in pixels rounded up to a multiple of
 /// this (so a window resized by a few pixels does not ask again).
 const PLOT_RES_STEP: usize = 32;
-
-/// What the panels show this frame: a world, and its moment (once one was published).
-pub(super) struct Shown {
-    pub(super) world: Arc<World>,
-    pub(super) moment: Option<Moment>,
-    /// Whether it is the running learner's newest state.
-    pub(super) live: bool,
-    /// Cells with this id or more were inserted in the last [`NEW_FOR`] before the moment.
-    pub(super) new_from: usize,
-    /// The exact ζ at the plot's resolution, once the learner has made it for this world.
-    pub(super) kernel_grid: Option<Arc<KernelGrid>>,
-}
 
 impl ViewerApp {
     /// The world and moment to draw: the newest when live (the world may be newer than any

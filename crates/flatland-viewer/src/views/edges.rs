@@ -8,8 +8,7 @@ use egui::{Align2, Color32, FontId, Painter, Rect, Sense, Stroke, pos2, vec2};
 use flatland_geom::{Role, Scene};
 use flatland_solve::Mesh;
 
-use super::scene::View;
-use super::widgets::{gradient, legend, panel_frame, short};
+use super::widgets::{View, gradient, legend, panel_frame, short};
 use super::{BLOCKER, EMITTER, LIT_BLOCKER, SURFACE, TITLE_H};
 use crate::colormap::colour;
 

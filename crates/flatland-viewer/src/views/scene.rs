@@ -5,7 +5,7 @@ use egui::{Align2, Color32, FontId, Painter, Pos2, Rect, Sense, Shape, Stroke, p
 use flatland_geom::{DVec2, GeomError, Scene};
 
 use super::edges::{LEGEND, LIT_LEGEND, LitPaint, colour_bar, draw_edges, scene_area};
-use super::widgets::{legend, panel_frame};
+use super::widgets::{View, legend, panel_frame};
 use super::{CRITICAL, Hover, SCENE_MARK, SceneDrag, TITLE_H};
 use crate::worker::World;
 
@@ -39,34 +39,6 @@ pub fn moved_scene(scene: &Scene, from: DVec2, to: DVec2) -> Result<Scene, GeomE
         }
     }
     Ok(out)
-}
-
-/// Where a scene sits on screen: centred in a rectangle, at the largest scale that fits.
-pub(super) struct View {
-    centre: Pos2,
-    mid: DVec2,
-    scale: f64,
-}
-
-impl View {
-    pub(super) fn of(scene: &Scene, rect: Rect) -> View {
-        let (lo, hi) = scene.bounds();
-        let size = (hi - lo).max(DVec2::splat(1e-9));
-        let scale = (f64::from(rect.width()) / size.x).min(f64::from(rect.height()) / size.y);
-        View {
-            centre: rect.center(),
-            mid: (lo + hi) / 2.0,
-            scale,
-        }
-    }
-    pub(super) fn screen(&self, p: DVec2) -> Pos2 {
-        let d = (p - self.mid) * self.scale;
-        self.centre + vec2(d.x as f32, -d.y as f32)
-    }
-    pub(super) fn at(&self, q: Pos2) -> DVec2 {
-        let d = q - self.centre;
-        self.mid + DVec2::new(f64::from(d.x), -f64::from(d.y)) / self.scale
-    }
 }
 
 /// Where and what the scene view draws besides the scene itself.

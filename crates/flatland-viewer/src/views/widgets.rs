@@ -1,7 +1,9 @@
-//! Small pieces the panels share: a panel's frame and title, legends, the colour gradient,
-//! short numbers, the placeholder of an empty panel, the readout box under the pointer.
+//! Small pieces the panels share: where a scene sits on screen, a panel's frame and title,
+//! legends, the colour gradient, short numbers, the placeholder of an empty panel, the readout
+//! box under the pointer.
 
-use egui::{Align2, Color32, FontId, Painter, Pos2, Rect, Sense, Stroke, pos2};
+use egui::{Align2, Color32, FontId, Painter, Pos2, Rect, Sense, Stroke, pos2, vec2};
+use flatland_geom::{DVec2, Scene};
 
 use crate::colormap::colour;
 
@@ -101,4 +103,32 @@ pub fn readout_box(ctx: &egui::Context, pointer: Pos2, text: &str) {
                 ui.label(egui::RichText::new(text).monospace().size(11.5));
             });
         });
+}
+
+/// Where a scene sits on screen: centred in a rectangle, at the largest scale that fits.
+pub(super) struct View {
+    centre: Pos2,
+    mid: DVec2,
+    scale: f64,
+}
+
+impl View {
+    pub(super) fn of(scene: &Scene, rect: Rect) -> View {
+        let (lo, hi) = scene.bounds();
+        let size = (hi - lo).max(DVec2::splat(1e-9));
+        let scale = (f64::from(rect.width()) / size.x).min(f64::from(rect.height()) / size.y);
+        View {
+            centre: rect.center(),
+            mid: (lo + hi) / 2.0,
+            scale,
+        }
+    }
+    pub(super) fn screen(&self, p: DVec2) -> Pos2 {
+        let d = (p - self.mid) * self.scale;
+        self.centre + vec2(d.x as f32, -d.y as f32)
+    }
+    pub(super) fn at(&self, q: Pos2) -> DVec2 {
+        let d = q - self.centre;
+        self.mid + DVec2::new(f64::from(d.x), -f64::from(d.y)) / self.scale
+    }
 }

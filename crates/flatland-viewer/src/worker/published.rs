@@ -9,7 +9,7 @@ use flatland_solve::Reference;
 use kernel_fit::{FitParams, FitSummary, HistoryPoint, LearnedKernel, LightStop, StopReason};
 
 use crate::lit::{LitPoint, LitSetup, LitSolve};
-use crate::timeline::Prefix;
+use crate::prefix::Prefix;
 
 /// Resolution of the reference grid (the errors' grid, and the colour scale's).
 pub const REFERENCE_RES: usize = 256;

@@ -5,27 +5,10 @@ use std::sync::Arc;
 
 use flatland_geom::Kernel;
 use flatland_solve::Reference;
-use serde::{Deserialize, Serialize};
 
-use super::state::LoadedState;
+use super::state::{CHECKPOINT_FORMAT, CHECKPOINT_VERSION, Checkpoint, LoadedState};
 use super::{Fit, StopReason, checks};
 use crate::FitError;
-
-/// The `format` field of checkpoint files.
-pub const CHECKPOINT_FORMAT: &str = "flatland-checkpoint";
-/// The checkpoint version this build reads and writes.
-pub const CHECKPOINT_VERSION: u32 = 1;
-
-/// A checkpoint file: a header that identifies it, then the state (borrowed when written).
-#[derive(Serialize, Deserialize)]
-pub(crate) struct Checkpoint<S> {
-    pub(crate) format: String,
-    pub(crate) version: u32,
-    pub(crate) scene_fingerprint: String,
-    pub(crate) reference_res: usize,
-    pub(crate) reference_heldout: usize,
-    pub(crate) state: S,
-}
 
 impl Fit {
     /// Saves the whole learning state atomically (temporary file, then rename), so an

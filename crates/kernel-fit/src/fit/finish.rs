@@ -5,49 +5,8 @@
 use std::ops::ControlFlow;
 use std::time::Instant;
 
-use flatland_solve::Errors;
-use serde::{Deserialize, Serialize};
-
-use super::{Fit, StopReason};
+use super::{Fit, FitSummary, StopReason};
 use crate::FitError;
-
-/// The figures a finished fit reports.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct FitSummary {
-    /// Cells in the network.
-    pub cells: usize,
-    /// Training samples (= rays cast for training).
-    pub samples: usize,
-    /// Sample sets.
-    pub sets: usize,
-    /// Rays cast for training.
-    pub rays: u64,
-    /// Training steps.
-    pub steps: u64,
-    /// Errors of the final model.
-    pub errors: Errors,
-    /// Errors before the least-squares refit, when it ran.
-    pub errors_before_refit: Option<Errors>,
-    /// Wall time of the training and the refit (reference construction excluded), seconds.
-    pub wall_s: f64,
-    /// Of `wall_s`: the network's training steps and the driver around them, seconds.
-    #[serde(default)]
-    pub train_s: f64,
-    /// Of `wall_s`: θ-resampling (drawing and scanning candidates, casting the rays), seconds.
-    #[serde(default)]
-    pub resample_s: f64,
-    /// Of `wall_s`: the least-squares refit (0 without one), seconds.
-    #[serde(default)]
-    pub refit_s: f64,
-    /// Building the reference the errors are measured against (not in `wall_s`), seconds.
-    #[serde(default)]
-    pub reference_s: f64,
-    /// Measuring the final errors against the reference (not in `wall_s`), seconds.
-    #[serde(default)]
-    pub errors_s: f64,
-    /// Why it stopped.
-    pub stop: StopReason,
-}
 
 impl Fit {
     /// Ends the fit: the refit its head asks for ([`Head::refit`](crate::Head::refit); a

@@ -6,23 +6,10 @@ use flatland_geom::Kernel;
 use flatland_solve::InputFrame;
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
-use serde::{Deserialize, Serialize};
 
 use crate::Head;
-use crate::model::learned::unit_scale;
+use crate::model::Sample;
 use crate::visibility::Sampler;
-
-/// One training sample: where it is, what the network sees, the target, and its weight.
-#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
-pub(crate) struct Sample {
-    pub(crate) st: [f64; 2],
-    pub(crate) xi: [f64; 4],
-    /// What the network learns for this sample (ζ, k when the emission is factored out, or V).
-    pub(crate) target: f64,
-    /// Importance weight of the sample's error (1 unless [`FitParams::weighted`](crate::FitParams::weighted)).
-    #[serde(default = "unit_scale")]
-    pub(crate) weight: f64,
-}
 
 /// A place a sample may be taken, with its importance weight.
 #[derive(Clone, Copy, Debug)]

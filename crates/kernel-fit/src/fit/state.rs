@@ -1,11 +1,12 @@
-//! What a fit holds between steps, and its saved form: the fields a checkpoint writes, read
-//! back as they were written.
+//! What a fit holds between steps, and its saved form: the checkpoint file, the fields it
+//! writes, read back as they were written.
 
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use super::source::{Sample, Source};
+use super::source::Source;
 use super::{HistoryPoint, StopReason};
+use crate::model::Sample;
 use crate::visibility::Sampler;
 use crate::{FitParams, Head, LearnedKernel};
 
@@ -64,6 +65,22 @@ pub(super) struct SavedState<'a> {
     wall_s: f64,
     resample_s: f64,
     refit_s: f64,
+}
+
+/// The `format` field of checkpoint files.
+pub const CHECKPOINT_FORMAT: &str = "flatland-checkpoint";
+/// The checkpoint version this build reads and writes.
+pub const CHECKPOINT_VERSION: u32 = 1;
+
+/// A checkpoint file: a header that identifies it, then the state (borrowed when written).
+#[derive(Serialize, Deserialize)]
+pub(crate) struct Checkpoint<S> {
+    pub(crate) format: String,
+    pub(crate) version: u32,
+    pub(crate) scene_fingerprint: String,
+    pub(crate) reference_res: usize,
+    pub(crate) reference_heldout: usize,
+    pub(crate) state: S,
 }
 
 /// The state as a checkpoint holds it, before it is checked ([`super::checks::checkpoint`]) and

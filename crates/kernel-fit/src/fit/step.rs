@@ -5,34 +5,10 @@ use std::ops::ControlFlow;
 use std::time::Instant;
 
 use rand::RngExt;
-use serde::{Deserialize, Serialize};
 
-use super::{CellStats, Fit, FitSummary, Sample};
+use super::{CellStats, Fit, FitSummary, Sample, StopReason};
 use crate::FitError;
 use crate::visibility::FaceId;
-
-/// Why a fit stopped.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum StopReason {
-    /// The target cell count was reached and trained for one growth period.
-    TargetCells,
-    /// The held-out error reached the target.
-    TargetError,
-    /// The ray budget is spent.
-    RayBudget,
-    /// The step budget is spent.
-    StepBudget,
-    /// The caller's progress callback asked to stop.
-    Interrupted,
-    /// The visibility learner on a scene where the geometry decides every visibility: the
-    /// model is exact without learning anything.
-    Exact,
-    /// Growth at the worst sample ([`sgcs::Insertion::WorstSample`]) found no error left: every
-    /// sample is predicted exactly and a θ scan found no place worth a ray. More cells would
-    /// change nothing.
-    Converged,
-}
 
 /// Growth periods (λ steps) without an insertion, each with a θ scan, after which a fit that
 /// grows at its worst samples has converged (see [`StopReason::Converged`]).

@@ -9,7 +9,7 @@ use flatland_solve::InputFrame;
 use rayon::prelude::*;
 use sgcs::{CellId, Network};
 
-use crate::fit::Sample;
+use super::Sample;
 use crate::visibility::{FaceGate, FaceId, FaceKey, Faces, Labeller};
 use crate::{Gating, Head, Target};
 
@@ -217,8 +217,8 @@ impl VisibilityHead {
 mod tests {
     use rand::RngExt;
 
-    use crate::fit::Sample;
     use crate::fit::test_support::*;
+    use crate::model::Sample;
     use crate::{FitParams, Preset};
 
     /// A visibility model's cells, moved far by training steps at random rays (gated by the

@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use sgcs::Network;
 
 use super::head::ModelHead;
-use crate::fit::Sample;
+use super::sample::{Sample, unit_scale};
 use crate::visibility::{FaceGate, FaceId, FaceKey};
 use flatland_solve::{
     InputFrame, Mesh, Representation, SolveError, SolveParams, Stop, TransferOperator,
@@ -56,10 +56,6 @@ struct LearnedKernelData {
     /// The parameters of a visibility model's exact kernel.
     #[serde(default)]
     kernel_params: KernelParams,
-}
-
-pub(crate) fn unit_scale() -> f64 {
-    1.0
 }
 
 impl From<LearnedKernel> for LearnedKernelData {
@@ -314,7 +310,10 @@ impl Representation for LearnedKernel {
         check_fingerprint(self.scene_fingerprint(), mesh)?;
         match self.head.visibility_head() {
             Some(v) => Ok(Box::new(super::operator::visibility_operator(
-                self, &v.kernel, mesh, stop,
+                &|s, t| self.learned_visibility(s, t),
+                &v.kernel,
+                mesh,
+                stop,
             )?)),
             None => Ok(Box::new(quadrature_operator(
                 self,

@@ -2,9 +2,11 @@
 //! transfer operator in `operator`), and model files — scene fingerprint, parameters and
 //! network in one versioned JSON, written atomically.
 
+pub(crate) mod checks;
 pub(crate) mod head;
 pub(crate) mod learned;
 mod operator;
+mod sample;
 
 use std::path::Path;
 
@@ -12,6 +14,8 @@ use flatland_geom::{Scene, write_atomic};
 use serde::{Deserialize, Serialize};
 
 use crate::{FitError, FitParams, FitSummary, LearnedKernel};
+
+pub(crate) use sample::Sample;
 
 /// The `format` field every model file carries.
 pub const MODEL_FORMAT: &str = "flatland-model";
@@ -94,7 +98,6 @@ impl ModelFile {
     /// input frame, the output scale and emission factors, predictions that cannot overflow,
     /// finite figures. The error names the field and the valid range.
     fn validate(&self) -> Result<(), String> {
-        use crate::fit::checks;
         checks::params(&self.params)?;
         checks::learned_kernel(&self.model, self.params.target)?;
         if let Some(summary) = &self.summary {

@@ -2,7 +2,8 @@
 
 use std::ops::{Deref, DerefMut};
 
-use super::persist::WorstSamples;
+use serde::{Deserialize, Serialize};
+
 use super::{CellId, MIN_WIDTH};
 use crate::SgcsError;
 use crate::index::dist_sq;
@@ -57,6 +58,15 @@ pub(super) struct Cells {
     pub(super) worst_stamp: PerCell<u64>,
     pub(super) worst_in: PerCell<f64>,
     pub(super) worst_out: PerCell<f64>,
+}
+
+/// The per-cell worst samples of [`Insertion::WorstSample`](crate::Insertion::WorstSample), as saved.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub(super) struct WorstSamples {
+    pub(super) error: Vec<f64>,
+    pub(super) stamp: Vec<u64>,
+    pub(super) inputs: Vec<f64>,
+    pub(super) targets: Vec<f64>,
 }
 
 /// The per-cell state a saved network keeps; everything else in [`Cells`] is derived from it

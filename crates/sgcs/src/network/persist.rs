@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::cells::SavedCells;
+use super::cells::{SavedCells, WorstSamples};
 use super::{CellId, Network, check_values};
 use crate::{Insertion, Params, SgcsError};
 
@@ -59,15 +59,6 @@ pub(super) struct NetworkData {
     /// Only with [`Insertion::WorstSample`] (absent: all zero).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     worst: Option<WorstSamples>,
-}
-
-/// The per-cell worst samples of [`Insertion::WorstSample`], as saved.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub(super) struct WorstSamples {
-    pub(super) error: Vec<f64>,
-    pub(super) stamp: Vec<u64>,
-    pub(super) inputs: Vec<f64>,
-    pub(super) targets: Vec<f64>,
 }
 
 impl From<Network> for NetworkData {

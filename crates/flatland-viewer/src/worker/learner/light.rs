@@ -19,7 +19,7 @@ use rayon::prelude::*;
 
 use super::Learner;
 use crate::lit::{LitPoint, LitSolve};
-use crate::timeline::Prefix;
+use crate::prefix::Prefix;
 use crate::worker::published::{
     APPROX_RES, Approx, CellMark, Growth, LearnedGrid, LightRounds, Lit, LitState, Status,
 };

@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 use kernel_fit::{Fit, HistoryPoint, Snapshot};
 
 use super::Learner;
-use crate::timeline::Prefix;
+use crate::prefix::Prefix;
 use crate::worker::approx_grid;
 use crate::worker::faces::{cell_groups, face_edges};
 use crate::worker::published::{

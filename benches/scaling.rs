@@ -1,0 +1,58 @@
+//! Cost against scene size: the default learner's fit (`LightFit` to its default tolerance)
+//! and solve, and the exact solve, on generated floor plans of 10², 10³ and 10⁴ edges, each
+//! on the mesh `flatland solve` chooses (its exact solve's estimated error below 1 %). Read
+//! the ratios between sizes: 10× the edges should cost about 10× (the log–log slope, which
+//! `flatland bench --scaling` reports with memory and error, is ≤ 1.3).
+//!
+//! Run: `cargo bench --bench scaling`. The 10⁴-edge rows take seconds per sample.
+
+use std::hint::black_box;
+use std::sync::Arc;
+use std::time::Duration;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use flatland_geom::{Kernel, generate};
+use flatland_solve::{
+    DEFAULT_ERROR_BOUND, ExactReference, SolveParams, elements_for_error, never, solve,
+};
+use kernel_fit::{LightFit, LightParams};
+
+fn scaling(c: &mut Criterion) {
+    for edges in [100, 1_000, 10_000] {
+        let mut group = c.benchmark_group(format!("scaling_{edges}_edges"));
+        group.sample_size(10);
+        group.measurement_time(Duration::from_secs(if edges < 10_000 { 10 } else { 60 }));
+        let kernel = Arc::new(Kernel::new(
+            generate::floor_plan(edges, 1).expect("a floor plan"),
+        ));
+        let params = SolveParams::default();
+        let found =
+            elements_for_error(&kernel, DEFAULT_ERROR_BOUND, &params, &never).expect("a mesh");
+        let mesh = found.coarse.mesh().clone();
+        group.bench_function("default_fit_and_solve", |b| {
+            b.iter(|| {
+                let mut fit = LightFit::new(
+                    Arc::clone(&kernel),
+                    mesh.clone(),
+                    LightParams::default(),
+                    &never,
+                )
+                .expect("fit");
+                fit.run(&never, |_| {}).expect("rounds");
+                black_box(solve(&fit, &mesh, &params, &never).expect("solve"))
+            })
+        });
+        group.bench_function("exact_solve", |b| {
+            b.iter(|| {
+                black_box(
+                    ExactReference::new(black_box(&kernel), mesh.len(), &params, &never)
+                        .expect("exact"),
+                )
+            })
+        });
+        group.finish();
+    }
+}
+
+criterion_group!(benches, scaling);
+criterion_main!(benches);
