@@ -81,6 +81,7 @@ mod frame;
 mod gmres;
 mod mesh;
 mod operator;
+mod physical;
 mod quadrature;
 mod reference;
 mod represent;
@@ -109,6 +110,7 @@ pub use mesh::{
     DEFAULT_ELEMENTS, Element, MAX_ELEMENTS, MAX_MESH_ELEMENTS, MIN_PER_EDGE, Mesh, MeshEdge,
 };
 pub use operator::{DenseOperator, KernelRectangle, RectangleOperator, TransferOperator};
+pub use physical::make_physical;
 pub use quadrature::gauss_legendre;
 pub use reference::{
     BOOTSTRAP_RESAMPLES, Errors, Reference, bootstrap_l2, density_ratio, discontinuity_mask,

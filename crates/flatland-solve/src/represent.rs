@@ -4,6 +4,7 @@
 use flatland_geom::Kernel;
 
 use crate::exact::exact_operator;
+use crate::physical::make_physical;
 use crate::quadrature::gauss_legendre;
 use crate::{
     DenseOperator, ExactMethod, Mesh, SolveError, SolveParams, Stop, TransferOperator,
@@ -97,7 +98,9 @@ pub fn inverse_source_weights(mesh: &Mesh) -> Result<Vec<f64>, SolveError> {
 
 /// `K_ij = ∫_{element j} ζ̃(s, t_i) / E'_j · L ds` by `points`-point Gauss–Legendre per element,
 /// `t_i` element i's midpoint: the generic operator of any representation of ζ. Rows in
-/// parallel; `rep.zeta` is called `N² · points` times and no ray is cast.
+/// parallel; `rep.zeta` is called `N² · points` times and no ray is cast. Each row is made
+/// physical ([`make_physical`]: entries ≥ 0, sum at most `ρ_i`), whatever ζ̃ is: a network's
+/// Gaussian sum can overshoot the kernel or go negative.
 pub fn quadrature_operator<R: Representation + ?Sized>(
     rep: &R,
     mesh: &Mesh,
@@ -128,6 +131,7 @@ pub fn quadrature_operator<R: Representation + ?Sized>(
                 // ∫ over the element in arc length: (length / 2) Σ w ζ̃.
                 *out = 0.5 * els[j].length * sum * inverse[e.mesh_edge];
             }
+            make_physical(row, mesh.edge_of(i).reflectance);
         },
         stop,
     )

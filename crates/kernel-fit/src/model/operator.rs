@@ -7,12 +7,14 @@
 //! between two breaks `Ṽ` is one face's value, so `K_ij` is the closed-form transfer of each
 //! piece of element `j` times that value, summed. `Ṽ` is asked once per face and receiver, not
 //! per element; pairs the geometry decides need no `Ṽ` at all. No ray, no quadrature: the
-//! solve sees exactly the kernel the model represents.
+//! solve sees exactly the kernel the model represents, each row bounded to `ρ_i`
+//! ([`make_physical`]): where `Ṽ` passes light a face hides (a face no cell has visited), the
+//! unoccluded transfers of surfaces behind each other would add up past the half-plane.
 
 use flatland_geom::{Kernel, PairClass};
 use flatland_solve::{
-    DenseOperator, Mesh, Receiver, Sender, SolveError, Stop, check_scene, point_to_segment,
-    receiver, sender,
+    DenseOperator, Mesh, Receiver, Sender, SolveError, Stop, check_scene, make_physical,
+    point_to_segment, receiver, sender,
 };
 
 /// `K_ij = ρ_i ∫_{element j} G(x, y_i) Ṽ(x, y_i) dl_x` of a visibility model on `mesh`, with
@@ -73,6 +75,7 @@ pub(crate) fn visibility_operator(
                 }
             }
             row.iter_mut().for_each(|x| *x *= rho);
+            make_physical(row, rho);
         },
         stop,
     )
@@ -166,6 +169,74 @@ mod tests {
         }
         // 16 Gauss points cannot follow a jump of Ṽ or the 1/r of a shared corner exactly.
         assert!(diff < 0.01 * sum, "{diff} of {sum}");
+    }
+
+    /// Whatever the network's weights (negative, huge), a solve with the learned kernel of
+    /// either preset stays physical: every entry of its operator ≥ 0, every row summing to at
+    /// most `ρ_i`, and B finite with B ≥ E ≥ 0 (up to the solve's tolerance). The paper's
+    /// network learns ζ itself, so its wild ζ̃ goes negative and past the kernel; the default
+    /// learner's `Ṽ` (clamped to [0, 1]) passes light through every face it calls visible.
+    #[test]
+    fn wild_weights_still_solve_to_physical_light() {
+        use rand::{RngExt, SeedableRng};
+        let params = SolveParams::default();
+        for (preset, base) in [
+            ("default", FitParams::default()),
+            ("paper", FitParams::paper()),
+        ] {
+            for name in ["maze", "corners"] {
+                let kernel = Arc::new(Kernel::new(bundled(name)));
+                let reference = Arc::new(Reference::new(&kernel, 32, 256, 1));
+                let fit_params = FitParams {
+                    target_cells: 60,
+                    eval_every: 0,
+                    ..base.clone()
+                };
+                let mut fit = Fit::new(Arc::clone(&kernel), reference, fit_params).unwrap();
+                fit.run(u64::MAX, |_| ControlFlow::Continue(())).unwrap();
+                let mut model = fit.model().clone();
+                let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(17);
+                for c in 0..model.network.len() {
+                    let wild = [-1e12, -3.0, 0.5, 40.0, 1e12][rng.random_range(0..5)];
+                    model.network.set_output(c, &[wild]).unwrap();
+                }
+                let mesh = Mesh::new(&kernel, 96).unwrap();
+                let op = model.operator(&mesh, &params, &never).unwrap();
+                let n = mesh.len();
+                let mut column = vec![0.0; n];
+                let mut sums = vec![0.0; n];
+                for j in 0..n {
+                    let mut unit = vec![0.0; n];
+                    unit[j] = 1.0;
+                    op.apply(&unit, &mut column);
+                    for (i, &k) in column.iter().enumerate() {
+                        assert!(
+                            k >= 0.0 && k.is_finite(),
+                            "{preset} {name}: K[{i}][{j}] = {k}"
+                        );
+                        sums[i] += k;
+                    }
+                }
+                for (i, sum) in sums.iter().enumerate() {
+                    let rho = mesh.edge_of(i).reflectance;
+                    assert!(
+                        *sum <= rho * (1.0 + 1e-12),
+                        "{preset} {name}: row {i} {sum} > ρ {rho}"
+                    );
+                }
+                let b = flatland_solve::solve(&model, &mesh, &params, &never)
+                    .unwrap()
+                    .radiosity;
+                let e = mesh.emission();
+                let top = b.iter().fold(0.0_f64, |m, &x| m.max(x));
+                for (i, (b, e)) in b.iter().zip(&e).enumerate() {
+                    assert!(
+                        b.is_finite() && *e >= 0.0 && *b >= e - 1e-9 * top,
+                        "{preset} {name}, element {i}: B = {b}, E = {e}"
+                    );
+                }
+            }
+        }
     }
 
     /// Issue 11's bar: with the default learner at 400 cells the reflected light is at most
