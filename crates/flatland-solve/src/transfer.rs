@@ -172,8 +172,8 @@ mod tests {
     use super::*;
     use crate::quadrature::{gauss_legendre, integrate};
     use flatland_geom::{Edge, Kernel, Scene};
-    use rand::{RngExt, SeedableRng};
-    use rand_chacha::ChaCha8Rng;
+    use flatland_testkit::assert_close;
+    use rand::RngExt;
 
     fn v(x: f64, y: f64) -> DVec2 {
         DVec2::new(x, y)
@@ -261,7 +261,7 @@ mod tests {
             two_sided: false,
         };
         let x = sender(v(1.0, 1.0), v(-1.0, 1.0), false);
-        assert!((point_to_segment(&y, &x) - 0.5f64.sqrt()).abs() < 1e-15);
+        assert_close!(point_to_segment(&y, &x), 0.5f64.sqrt(), 1e-15);
         // Seen from behind a one-sided sender: nothing.
         assert_eq!(
             point_to_segment(&y, &sender(v(-1.0, 1.0), v(1.0, 1.0), false)),
@@ -269,15 +269,15 @@ mod tests {
         );
         // ... unless it is two-sided.
         let two = sender(v(-1.0, 1.0), v(1.0, 1.0), true);
-        assert!((point_to_segment(&y, &two) - 0.5f64.sqrt()).abs() < 1e-15);
+        assert_close!(point_to_segment(&y, &two), 0.5f64.sqrt(), 1e-15);
         // An infinite wall in front fills the half circle: 1.
         let wall = sender(v(1e9, 1.0), v(-1e9, 1.0), false);
-        assert!((point_to_segment(&y, &wall) - 1.0).abs() < 1e-9);
+        assert_close!(point_to_segment(&y, &wall), 1.0, 1e-9);
     }
 
     #[test]
     fn closed_form_and_visible_part_match_quadrature_on_random_configurations() {
-        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let mut rng = flatland_testkit::rng(11);
         let mut p = || v(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
         let mut checked = 0;
         let mut scratch = Vec::new();
