@@ -2,8 +2,8 @@
 # Writes docs/REAL-SCENES.md: every kernel `flatland solve` offers, with default arguments, on
 # generated floor plans and halls no default was ever chosen on (seeds 21-26), as a user would
 # run them. Each row is one `flatland solve --json` run; "total" is the command's wall time
-# (scene load, mesh, build, solve, and the 4x-finer reference solve the error is measured
-# against). Run from the repository root after `cargo build --release`:
+# (scene load, the choice of mesh with its exact solves on N and 2N elements, build, solve; the
+# 2N solve is the reference the error is measured against). Run from the repository root after `cargo build --release`:
 #     scripts/real-scenes.sh [target/release/flatland]
 set -euo pipefail
 bin=${1:-target/release/flatland}
@@ -16,9 +16,9 @@ trap 'rm -rf "$work" "$tmp"' EXIT
 
 scenes=(
   "floorplan 300 21" "floorplan 300 22" "hall 300 23" "hall 300 24"
-  "floorplan 1000 25" "hall 1000 26"
+  "floorplan 1000 25" "hall 1000 26" "floorplan 3000 27" "hall 3000 28"
 )
-kernels=(exact default first-shot hr uniform-exact)
+kernels=(exact default first-shot hr clustered uniform-exact)
 
 {
   echo "# Real scenes: the lit scene with every kernel, default arguments"
@@ -26,8 +26,8 @@ kernels=(exact default first-shot hr uniform-exact)
   echo "Written by \`scripts/real-scenes.sh\` on $(nproc) cores ($(date -u +%Y-%m-%d)); every number is"
   echo "measured by it. Scenes: \`flatland scene KIND --size N --seed S\`, seeds never used to choose a"
   echo "default. Error: relative L2 of the solved reflected radiosity B − E against the exact kernel's"
-  echo "solve on 4× the elements (so it includes the mesh's own discretization error, estimated in"
-  echo "the last column). \"Estimate\" is the default learner's own estimate of its error against the"
+  echo "solve on twice the elements (so it includes the mesh's own discretization error, estimated"
+  echo "in the last column). \"Estimate\" is the default learner's own estimate of its error against the"
   echo "exact kernel on the same elements. Build: building the kernel representation; total: the"
   echo "whole command, reference solve included. Times are wall-clock on a shared machine."
   echo

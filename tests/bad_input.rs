@@ -506,6 +506,81 @@ fn cli_reports_bad_files_in_one_line_without_panicking() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A scene file with a two-sided surface: every command that loads it refuses it in one line
+/// naming the file and the edge and saying how to draw a thin wall; a two-sided blocker and
+/// the same wall as two faces back to back load.
+#[test]
+fn cli_refuses_a_two_sided_surface_saying_how_to_draw_a_thin_wall() {
+    let dir = temp_dir("two-sided");
+    let room = r#"{"a": [0, 0], "b": [4, 0], "reflectance": 0.5},
+        {"a": [4, 0], "b": [4, 3], "reflectance": 0.5},
+        {"a": [4, 3], "b": [0, 3], "reflectance": 0.5, "emission": 1},
+        {"a": [0, 3], "b": [0, 0], "reflectance": 0.5}"#;
+    let wall = r#"{"a": [2, 0], "b": [2, 2], "reflectance": 0.5"#;
+    let files = [
+        (
+            "wall.json",
+            format!(r#"{{"edges": [{room}, {wall}, "two_sided": true}}]}}"#),
+        ),
+        (
+            "wall.ron",
+            "(edges: [(a: (0, 0), b: (4, 0), reflectance: 0.5), (a: (4, 0), b: (4, 3), \
+             reflectance: 0.5, emission: 1), (a: (4, 3), b: (0, 3), reflectance: 0.5), \
+             (a: (0, 3), b: (0, 0), reflectance: 0.5), \
+             (a: (2, 0), b: (2, 2), reflectance: 0.5, two_sided: true)])"
+                .to_owned(),
+        ),
+    ];
+    let csv = dir.join("out.csv");
+    let csv = csv.to_str().unwrap();
+    for (name, text) in files {
+        let path = dir.join(name);
+        std::fs::write(&path, text).unwrap();
+        let subcommands: [&[&str]; 4] = [
+            &["check", "--scene"],
+            &["kernel", "--res", "16", "--out", csv, "--scene"],
+            &["solve", "--scene"],
+            &["fit", "--cells", "3", "--scene"],
+        ];
+        for sub in subcommands {
+            let mut args: Vec<&str> = sub.to_vec();
+            args.push(path.to_str().unwrap());
+            let out = flatland(&args);
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+            assert_eq!(err.lines().count(), 1, "{args:?}: not one line: {err}");
+            let expected = format!(
+                "error: {}: edge 4: a surface cannot be two-sided",
+                path.display()
+            );
+            assert!(err.starts_with(&expected), "{err} vs {expected}");
+            assert!(
+                err.contains("a box") && err.contains("two one-sided edges back to back"),
+                "{err}"
+            );
+        }
+    }
+    // Allowed: the wall as two faces back to back, and a two-sided blocker.
+    let back_to_back = r#"{"a": [2, 2], "b": [2, 0], "reflectance": 0.5}"#;
+    let blocker =
+        r#"{"a": [1, 1], "b": [1, 2], "reflectance": 0, "role": "blocker", "two_sided": true}"#;
+    let path = dir.join("thin.json");
+    std::fs::write(
+        &path,
+        format!(r#"{{"edges": [{room}, {wall}}}, {back_to_back}, {blocker}]}}"#),
+    )
+    .unwrap();
+    let out = flatland(&["check", "--scene", path.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(text.contains("1 two-sided"), "{text}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 // ----- model and checkpoint files, edited -----
 
 /// A model (ζ target), a model (factored emission) and a checkpoint of small fig3 fits, as JSON.

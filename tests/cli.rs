@@ -420,7 +420,12 @@ fn solve_draws_the_lit_scene_beside_b_of_s() {
 #[test]
 fn solve_builds_every_baseline_and_reads_a_model() {
     let box_scene = scene("box");
-    for (kernel, basis) in [("uniform", 100), ("uniform-exact", 100), ("hr", 100)] {
+    for (kernel, basis) in [
+        ("uniform", 100),
+        ("uniform-exact", 100),
+        ("hr", 100),
+        ("clustered", 100),
+    ] {
         let json = solve_json(&[
             "--scene",
             as_str(&box_scene),
@@ -437,6 +442,10 @@ fn solve_builds_every_baseline_and_reads_a_model() {
         let b = json["basis_functions"].as_u64().unwrap();
         assert!(b.abs_diff(100) <= 10, "{kernel}: {json}");
         assert!(json["rel_l2_reflected"].as_f64().unwrap().is_finite());
+        assert!(
+            json["kernel_bytes"].as_u64().unwrap() > 0,
+            "{kernel}: {json}"
+        );
     }
     // A model from `flatland fit --out`, solved on its own scene.
     let dir = temp_dir("solve-model");
@@ -1356,7 +1365,7 @@ fn bench_scaling_writes_its_tables_with_the_heap_peak_of_every_method() {
     assert!(!dir.join("scaling.partial.csv").exists());
     let csv = std::fs::read_to_string(dir.join("scaling.csv")).unwrap();
     let rows: Vec<&str> = csv.lines().skip(1).collect();
-    assert_eq!(rows.len(), 2 * 4, "{csv}");
+    assert_eq!(rows.len(), 2 * 5, "{csv}");
     for row in &rows {
         let fields: Vec<&str> = row.split(',').collect();
         // The binary counts its heap: every method that ran has a peak.

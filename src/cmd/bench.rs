@@ -29,8 +29,8 @@ pub struct Args {
     pub scene: SceneArgs,
     /// Methods, comma-separated: default (the light-driven learner), first-shot (the learner
     /// `flatland fit` trains), paper (the paper's network with the refit), paper-norefit, hr,
-    /// uniform, exact, tracer (`sgcs` still names default). Default: all of them; with
-    /// --scaling: default, exact, hr, tracer.
+    /// clustered (HR with clustering), uniform, exact, tracer (`sgcs` still names default).
+    /// Default: all of them; with --scaling: default, exact, hr, clustered, tracer.
     #[arg(long, value_delimiter = ',')]
     pub methods: Option<Vec<String>>,
     /// The light-driven learner's tolerances on its estimated error of B − E, each in (0, 1),
@@ -38,7 +38,7 @@ pub struct Args {
     #[arg(long, value_delimiter = ',', default_value = "0.3,0.1,0.03,0.01,0.003")]
     pub tolerances: Vec<f64>,
     /// Budgets (numbers of basis functions, each in [3, 10 000 000]) of first-shot, paper,
-    /// paper-norefit, hr and uniform, comma-separated: exactly these. Default: 50, 100, 200,
+    /// paper-norefit, hr, clustered and uniform, comma-separated: exactly these. Default: 50, 100, 200,
     /// 400, 800, then doubling until a row is over --max-seconds.
     #[arg(long, value_delimiter = ',')]
     pub budgets: Option<Vec<usize>>,
@@ -81,12 +81,13 @@ pub struct Args {
 }
 
 /// The methods a bench runs when none are named.
-const ALL_METHODS: [&str; 8] = [
+const ALL_METHODS: [&str; 9] = [
     "default",
     "first-shot",
     "paper",
     "paper-norefit",
     "hr",
+    "clustered",
     "uniform",
     "exact",
     "tracer",

@@ -238,6 +238,7 @@ pub fn run(args: &Args) -> Result<()> {
         mesh: &mesh,
         reference_elements,
         basis: built.rep.basis_functions(),
+        kernel_bytes: built.rep.memory_bytes(),
         comparison: &comparison,
         build_s: built.build_s,
         note: built.note.as_deref(),
@@ -437,6 +438,8 @@ struct Summary<'a> {
     mesh: &'a Mesh,
     reference_elements: usize,
     basis: Option<usize>,
+    /// Bytes the representation holds (`Representation::memory_bytes`).
+    kernel_bytes: usize,
     comparison: &'a Comparison,
     build_s: f64,
     /// The baseline's note when it built another count than asked.
@@ -456,6 +459,7 @@ impl Summary<'_> {
             "kernel": self.choice.label(),
             "elements": self.mesh.len(),
             "basis_functions": self.basis,
+            "kernel_bytes": self.kernel_bytes,
             "rel_l2_b": c.errors.rel_l2_b,
             "rel_l2_reflected": c.errors.rel_l2_reflected,
             "iterations": c.solution.iterations,
@@ -545,6 +549,13 @@ impl Summary<'_> {
             ),
         );
         row("building the kernel", format!("{:.3} s", self.build_s));
+        row(
+            "kernel's memory",
+            format!(
+                "{:.1} MB (the representation)",
+                self.kernel_bytes as f64 / 1e6
+            ),
+        );
         if let Some(peak) = flatland_lab::memory::peak_bytes() {
             row(
                 "peak memory",

@@ -4,8 +4,8 @@
 //! **Hierarchy** (`clusters`). A binary tree of clusters over the surface edges, split at the
 //! median of the longer axis of their centres (a BVH with one whole edge per leaf); below each
 //! edge its elements, halved on demand down to `min_length` (a fraction of the mean edge
-//! length). Each node keeps its box, its surface length, and the largest E', ρ and number of
-//! sides of its edges.
+//! length). Each node keeps its box, its surface length, and the largest E' and ρ of its
+//! edges.
 //!
 //! **Refinement** (`refine`). It starts from one link, the root cluster with itself — there is
 //! no initial linking over pairs of edges. A cluster's link with itself is always split, into
@@ -19,7 +19,7 @@
 //! `E'(P) ρ(Q) / max E' · max(F_pq, F_qp) · u` — HR's weighted oracle, with
 //! - `F` exact for two elements (Hottel's crossed strings on the parts in front of each other,
 //!   as HR), and for a cluster a conservative bound from the boxes: from any point of the
-//!   other end at most one side's light (two for a two-sided edge), at most half the angle
+//!   other end at most its front half-plane (1), at most half the angle
 //!   the cluster's bounding circle subtends, and at most `|Q| / (2d)` (G ≤ 1/(2r));
 //! - `u`, the visibility uncertainty of the link's own rays: 1 while a ray got through or no
 //!   ray faced, `1 / (m + 2)` when all `m` facing rays were blocked (Laplace's rule of

@@ -8,7 +8,7 @@
 //! **Initial linking** (`linking`). Every ordered pair (i, j) of surface edges that can interact
 //! gets one initial link: `i ≠ j`, the sender's source weight E'(i) > 0, the receiver's ρ(j) > 0,
 //! and the unoccluded form factor is not zero — i.e. some part of j lies strictly in front of i
-//! and some part of i strictly in front of j (either side for a two-sided edge). Occlusion is
+//! and some part of i strictly in front of j. Occlusion is
 //! *not* used to cull initial links (Hanrahan links first and asks visibility per link). Pieces of
 //! one straight wall never interact (cos = 0); their floating-point residue is cut by treating a
 //! form factor below 1e-9 as no interaction. On the closed box this rule gives 4 · 3 = 12 links.

@@ -5,21 +5,18 @@
 //! kernel (one fit, any lighting) is measured against.
 //!
 //! # The method
-//! - **Emission.** An emitter sends power `E × length` (twice that for a two-sided one, which
-//!   emits from both sides, as the solver counts it). Photons of equal power are spread over
+//! - **Emission.** An emitter sends power `E × length`. Photons of equal power are spread over
 //!   the emitters in proportion, stratified: photon `k` of a batch of `S` sits at `(k + ξ)/S`
 //!   along all emitters laid end to end, so each emitter gets its share to within one photon
 //!   and its start points are uniform along it.
 //! - **Directions.** Cosine-distributed about the front normal: in Flatland `sin θ` is uniform
-//!   in `[−1, 1]` (the density `cos θ / 2` of the kernel's `1/(2r)`). A two-sided surface sends
-//!   from a side picked at random.
-//! - **Transport.** The closest hit by the BVH ([`Kernel::first_hit`]). On the front of a
-//!   surface (either side of a two-sided one) the photon's power is added to the irradiance
-//!   `H` of the element it lands in (per unit length), and it goes on with probability `ρ`
-//!   (Russian roulette, power unchanged), re-emitted from the hit point. A two-sided surface
-//!   sends its reflected light from both sides, so it goes on with probability `2ρ` (if that
-//!   exceeds 1: always, with its power scaled by `2ρ`). Blockers and the backs of one-sided
-//!   surfaces absorb; a photon that leaves the scene is gone.
+//!   in `[−1, 1]` (the density `cos θ / 2` of the kernel's `1/(2r)`).
+//! - **Transport.** The closest hit by the BVH ([`Kernel::first_hit`]; of a thin wall's two
+//!   faces back to back, the one towards the photon). On the front of a surface the photon's
+//!   power is added to the irradiance `H` of the element it lands in (per unit length), and it
+//!   goes on with probability `ρ` (Russian roulette, power unchanged), re-emitted from the hit
+//!   point. Blockers and the backs of surfaces absorb; a photon that leaves the scene is
+//!   gone.
 //! - **Radiosity.** `B_i = E_i + ρ_i H_i` per element of the [`Mesh`]: the mean over the
 //!   element, where the solver's `B_i` is the value at its midpoint.
 //! - **Noise.** Photons are traced in batches, each a full stratified sample with its own seed

@@ -4,7 +4,7 @@
 use crate::{GeomError, Scene};
 
 /// Every bundled scene: name, what it shows, its RON text.
-pub const SCENES: [(&str, &str, &str); 4] = [
+pub const SCENES: [(&str, &str, &str); 6] = [
     (
         "fig3",
         "the paper's Fig. 3: a room, a light in the ceiling, a floating blocker (the default)",
@@ -24,6 +24,16 @@ pub const SCENES: [(&str, &str, &str); 4] = [
         "corners",
         "sharp corners, slivers and touching edges",
         include_str!("../../../scenes/corners.ron"),
+    ),
+    (
+        "floorplan",
+        "a realistic floor plan: 24 rooms, thick one-sided walls, doors, furniture, two lamps",
+        include_str!("../../../scenes/floorplan.ron"),
+    ),
+    (
+        "hall",
+        "a realistic hall: 70 solid boxes under two skylights",
+        include_str!("../../../scenes/hall.ron"),
     ),
 ];
 

@@ -59,6 +59,14 @@ pub enum GeomError {
         /// The offending value.
         value: f64,
     },
+    /// A surface marked two-sided: it has one radiosity, which cannot stand for both sides.
+    #[error(
+        "edge {edge}: a surface cannot be two-sided (one radiosity cannot stand for both of its sides); model a thin wall as a box, or as two one-sided edges back to back (the same end points, swapped); only a blocker may be two-sided"
+    )]
+    TwoSidedSurface {
+        /// Index of the offending edge.
+        edge: usize,
+    },
     /// The scene has no edge with role `surface`, so there is nothing to parameterize.
     #[error(
         "scene has no surface edge ({edges} edges given): at least one edge must have role `surface`"

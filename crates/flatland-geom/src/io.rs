@@ -321,6 +321,24 @@ mod tests {
         std::fs::write(&path, "(edges: [(a: (0, 0), b: (0, 0), reflectance: 0.5)])").unwrap();
         let err = Scene::load(&path).unwrap_err().to_string();
         assert!(err.contains("invalid.ron: edge 0: zero length"), "{err}");
+        // A two-sided surface: file, edge and how to model a thin wall, on one line.
+        let path = dir.join("thin.json");
+        std::fs::write(
+            &path,
+            r#"{"edges": [{"a": [0, 0], "b": [1, 0], "reflectance": 0.5},
+                {"a": [1, 0], "b": [0, 1], "reflectance": 0.5, "emission": 1},
+                {"a": [0.2, 0.2], "b": [0.4, 0.2], "reflectance": 0.5, "two_sided": true}]}"#,
+        )
+        .unwrap();
+        let err = Scene::load(&path).unwrap_err().to_string();
+        assert!(
+            err.starts_with(&format!(
+                "{}: edge 2: a surface cannot be two-sided",
+                path.display()
+            )),
+            "{err}"
+        );
+        assert!(err.contains("back to back") && !err.contains('\n'), "{err}");
         let err = Scene::load(dir.join("scene.txt")).unwrap_err().to_string();
         assert!(err.contains("unknown scene format"), "{err}");
         let err = Scene::load(dir.join("missing.ron"))

@@ -28,7 +28,6 @@ struct Parent {
     normal: DVec2,
     reflectance: f64,
     weight: f64,
-    two_sided: bool,
     /// Rank among surface parents, `usize::MAX` for a blocker.
     rank: usize,
 }
@@ -40,7 +39,7 @@ struct Parent {
 /// `s` is the sender parameter, `t` the receiver's; `x = point(s)` on `e_x`, `y = point(t)` on
 /// `e_y`, `d = y − x`, `r = |d|`:
 /// `k(s, t) = ρ(e_y) · cos_x · cos_y / (2 r) · V(x, y)`, with `cos_x = max(0, n_x·d/r)`,
-/// `cos_y = max(0, −n_y·d/r)` (`|·|` for a two-sided edge), and `k = 0` when `e_x` and `e_y`
+/// `cos_y = max(0, −n_y·d/r)` (surfaces are one-sided), and `k = 0` when `e_x` and `e_y`
 /// are the same edge or pieces of the same parent edge, or when `x = y`. `k` grows like `1/r`
 /// near a shared vertex; it is always finite and ≥ 0.
 ///
@@ -103,7 +102,6 @@ impl Kernel {
                 } else {
                     floor
                 },
-                two_sided: g.edge.two_sided,
                 rank: g.rank.unwrap_or(usize::MAX),
             })
             .collect();

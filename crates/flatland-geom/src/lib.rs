@@ -4,7 +4,8 @@
 //! # Conventions
 //! - A [`Scene`] is a list of [`Edge`]s (segments, `f64`). The **front** of an edge is the left
 //!   of `a → b`; its normal is `perp(b − a)/|b − a|` with `perp(x, y) = (−y, x)`, so a room
-//!   listed counter-clockwise faces inwards. Two-sided edges face both ways.
+//!   listed counter-clockwise faces inwards. Surfaces are one-sided (a thin wall is two edges
+//!   back to back, or a box); only a blocker may be marked two-sided.
 //! - **Surfaces** are parameterized: laid end to end in file order, total length `L`;
 //!   `s ∈ [0, 1)` walks arc length `s·L` ([`Scene::point`]). **Blockers** only occlude.
 //! - `s` is the **sender** `x = point(s)`, `t` the **receiver** `y = point(t)`. Reflection

@@ -17,7 +17,7 @@ const REL_TOL: f64 = 1e-9;
 
 impl Scene {
     /// Pairs `(i, j)`, `i < j`, of surface edges that share a stretch of positive length (up to
-    /// a relative 1e-9 of the scene's size) and face the same way (or either is two-sided).
+    /// a relative 1e-9 of the scene's size) and face the same way.
     /// Sorted. `O(n log n)` for scenes without overlaps, e.g. every subdivided scene.
     #[must_use]
     pub fn overlapping_surface_edges(&self) -> Vec<(usize, usize)> {
@@ -119,7 +119,7 @@ fn overlap(a: DVec2, b: DVec2, c: DVec2, d: DVec2, tol: f64) -> bool {
 
 fn same_facing(scene: &Scene, i: usize, j: usize) -> bool {
     let (e, f) = (scene.edges()[i], scene.edges()[j]);
-    e.two_sided || f.two_sided || e.normal().dot(f.normal()) > 0.0
+    e.normal().dot(f.normal()) > 0.0
 }
 
 #[cfg(test)]
@@ -152,9 +152,6 @@ mod tests {
         assert!(back.overlapping_surface_edges().is_empty());
         let part = room(vec![wall([1., 0.], [6., 0.])]);
         assert_eq!(part.overlapping_surface_edges(), vec![(0, 4)]);
-        // A two-sided copy carries light on both sides: it overlaps either way.
-        let two = room(vec![wall([3., 0.], [1., 0.]).with_two_sided(true)]);
-        assert_eq!(two.overlapping_surface_edges(), vec![(0, 4)]);
         // An oblique, off-origin line, slightly perturbed by rounding.
         let (a, b) = ([0.1, 0.3], [3.7, 2.9]);
         let c = [0.1 + 3.6 * 0.3, 0.3 + 2.6 * 0.3];

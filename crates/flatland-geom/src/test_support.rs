@@ -31,9 +31,10 @@ pub fn point(rng: &mut ChaCha8Rng) -> DVec2 {
     DVec2::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0))
 }
 
-/// A random valid scene from `seed`: 2–12 edges, random roles, materials and sidedness. With
-/// `snap`, coordinates are multiples of ½ in `[-1, 1]`, so shared end points, collinear,
-/// overlapping and touching edges (the grazing cases) are common.
+/// A random valid scene from `seed`: 2–12 edges, random roles and materials; blockers are
+/// two-sided at random. With `snap`, coordinates are multiples of ½ in `[-1, 1]`, so shared end
+/// points, collinear, overlapping and touching edges (the grazing cases) are common, and some
+/// surfaces get a twin back to back (a thin wall: the same end points, swapped).
 pub fn random_scene(seed: u64, snap: bool) -> Scene {
     let mut r = rng(seed);
     let n = r.random_range(2..=12);
@@ -57,11 +58,19 @@ pub fn random_scene(seed: u64, snap: bool) -> Scene {
         if r.random_bool(0.2) {
             e.emission = r.random_range(0.0..3.0);
         }
-        e.two_sided = r.random_bool(0.25);
+        let twin = r.random_bool(0.25);
         if !edges.is_empty() && r.random_bool(0.3) {
             e.role = crate::Role::Blocker;
+            e.two_sided = twin;
         }
         edges.push(e);
+        if snap && twin && e.role == crate::Role::Surface && edges.len() < n {
+            edges.push(Edge {
+                a: e.b,
+                b: e.a,
+                ..e
+            });
+        }
     }
     Scene::new(edges).unwrap()
 }

@@ -32,11 +32,11 @@ mod predicates;
 mod ray;
 mod shaft;
 
-pub(crate) use bvh::{Bvh, Segment};
+pub(crate) use bvh::{Bvh, Segment, wins_tie};
 pub use events::{OnRay, PairEvents, RayFace, SenderFace};
-pub(crate) use predicates::open_segment_hits;
 #[cfg(test)]
-pub(crate) use predicates::{on_closed_segment, orient};
+pub(crate) use predicates::on_closed_segment;
+pub(crate) use predicates::{open_segment_hits, orient};
 pub(crate) use ray::{Contact, Ray};
 #[cfg(test)]
 pub(crate) use shaft::Candidates;

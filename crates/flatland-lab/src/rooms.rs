@@ -4,8 +4,9 @@
 //! of 5–8 corners, 2–8 units wide and 2–5 high, listed counter-clockwise (facing in), each wall
 //! with its own reflectance in `[0.2, 0.9]`. One or two walls carry a light (a middle piece of
 //! the wall, emission in `[0.5, 2]`). Up to 12 short segments float inside (three in four are
-//! blockers, one in four a two-sided shelf), and half the rectangles get a two-sided partition
-//! standing on the floor. The same seed gives the same room.
+//! blockers, one in four a thin shelf: two surfaces back to back), and half the rectangles get
+//! a thin partition standing on the floor (two surfaces back to back). The same seed gives the
+//! same room.
 
 use flatland_geom::{DVec2, Edge, GeomError, Scene};
 use rand::RngExt;
@@ -83,17 +84,19 @@ pub fn random_room(seed: u64) -> Result<Scene, GeomError> {
         if !(inside(p) && inside(q)) {
             continue;
         }
-        edges.push(if r.random_range(0..4) == 0 {
-            Edge::surface(p, q, r.random_range(0.2..0.9)).with_two_sided(true)
+        if r.random_range(0..4) == 0 {
+            let rho = r.random_range(0.2..0.9);
+            edges.extend([Edge::surface(p, q, rho), Edge::surface(q, p, rho)]);
         } else {
-            Edge::blocker(p, q)
-        });
+            edges.push(Edge::blocker(p, q));
+        }
         placed += 1;
     }
     if kind == 0 && r.random_bool(0.5) {
         let x = r.random_range(0.2..0.8) * w;
         let top = r.random_range(0.3..0.7) * h;
-        edges.push(Edge::surface(v(x, 0.0), v(x, top), 0.5).with_two_sided(true));
+        let (p, q) = (v(x, 0.0), v(x, top));
+        edges.extend([Edge::surface(p, q, 0.5), Edge::surface(q, p, 0.5)]);
     }
     Scene::new(edges)
 }
@@ -112,11 +115,13 @@ mod tests {
                 room.fingerprint(),
                 random_room(seed + 1).unwrap().fingerprint()
             );
-            // Closed: every surface end point is shared with another surface.
+            // Closed: every wall's end point is shared with another wall (the floating shelves
+            // and partitions, faces back to back, are not walls).
+            let thin = |e: &Edge| room.edges().iter().any(|f| f.a == e.b && f.b == e.a);
             let surfaces: Vec<&Edge> = room
                 .edges()
                 .iter()
-                .filter(|e| e.role == flatland_geom::Role::Surface && !e.two_sided)
+                .filter(|e| e.role == flatland_geom::Role::Surface && !thin(e))
                 .collect();
             for e in &surfaces {
                 assert!(

@@ -36,12 +36,17 @@ pub const DEFAULT_MAX_SECONDS: f64 = 120.0;
 const FIRST_SLOPE: f64 = 2.0;
 
 /// The methods a scaling run can measure: each one's default, as `flatland solve` builds it.
-pub const METHODS: [Contender; 4] = [
+pub const METHODS: [Contender; 5] = [
     Contender::Default,
     Contender::Exact,
     Contender::Hr,
+    Contender::Clustered,
     Contender::Tracer,
 ];
+
+/// Clustered HR's links per edge: its resources in proportion to the scene (at 10⁵ links a
+/// 300-edge floor plan is lit to about 7 %; it has no initial linking to set a floor).
+pub const CLUSTERED_LINKS_PER_EDGE: usize = 100;
 
 /// What a scaling run measures.
 #[derive(Clone, Debug, PartialEq)]
@@ -110,7 +115,7 @@ impl ScalingPlan {
             return bad(
                 "methods",
                 m.name().to_owned(),
-                "a comma-separated list of default, exact, hr, tracer",
+                "a comma-separated list of default, exact, hr, clustered, tracer",
             );
         }
         if self.methods.is_empty() {
@@ -280,7 +285,7 @@ fn scene_rows(
     for &method in &plan.methods {
         let row = match predicted(all, method, all.scenes[scene].kind, edges) {
             Some(seconds) if seconds > plan.max_seconds => {
-                let mut row = TimedRow::new(method, setting_of(method, scorer), 1);
+                let mut row = TimedRow::new(method, setting_of(method, scorer, edges), 1);
                 row.add_note(&format!(
                     "skipped: extrapolated to {seconds:.0} s from the smaller scenes, over \
                      --max-seconds {}",
@@ -329,13 +334,18 @@ fn scene_rows(
 /// The row of `method` with its default arguments (the tracer for `equal_time` seconds), or a
 /// failed row saying why.
 fn one(cx: &Context<'_>, method: Contender, equal_time: f64) -> TimedRow {
-    let setting = setting_of(method, cx.scorer);
+    let setting = setting_of(method, cx.scorer, cx.kernel.scene().edges().len());
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match method {
         Contender::Default => cx
             .light(kernel_fit::LightParams::default().tolerance)
             .map(|r| r.0),
         Contender::Exact => cx.exact(cx.scorer.mesh().len()),
         Contender::Hr => cx.baseline(Contender::Hr, HR_BASIS, 1),
+        Contender::Clustered => cx.baseline(
+            Contender::Clustered,
+            CLUSTERED_LINKS_PER_EDGE * cx.kernel.scene().edges().len(),
+            1,
+        ),
         Contender::Tracer => cx.tracer_for(equal_time, 1).map(|mut row| {
             row.add_note("as long as the default learner took");
             row
@@ -357,11 +367,12 @@ fn one(cx: &Context<'_>, method: Contender, equal_time: f64) -> TimedRow {
 const HR_BASIS: usize = 400;
 
 /// What `method` is run at, for its row's setting.
-fn setting_of(method: Contender, scorer: &Scorer) -> Setting {
+fn setting_of(method: Contender, scorer: &Scorer, edges: usize) -> Setting {
     match method {
         Contender::Default => Setting::Tolerance(kernel_fit::LightParams::default().tolerance),
         Contender::Exact => Setting::Elements(scorer.mesh().len()),
         Contender::Tracer => Setting::Photons(0),
+        Contender::Clustered => Setting::Budget(CLUSTERED_LINKS_PER_EDGE * edges),
         _ => Setting::Budget(HR_BASIS),
     }
 }

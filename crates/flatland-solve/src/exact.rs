@@ -165,7 +165,6 @@ pub fn receiver(mesh: &Mesh, edge: usize, y: DVec2) -> Receiver {
     Receiver {
         position: y,
         normal: e.normal,
-        two_sided: e.two_sided,
     }
 }
 
@@ -177,7 +176,6 @@ pub fn sender(mesh: &Mesh, j: usize) -> Sender {
         a,
         b,
         normal: e.normal,
-        two_sided: e.two_sided,
     }
 }
 
@@ -324,7 +322,6 @@ fn block_means_with(
                         a: at(k, part[0]),
                         b: at(k, part[1]),
                         normal: edges[k].normal,
-                        two_sided: edges[k].two_sided,
                     };
                     Some((k, s, weight))
                 })
@@ -406,8 +403,12 @@ mod tests {
                     let rays: f64 = samples.iter().sum::<f64>() * h;
                     let bound = samples.iter().fold(0.0_f64, |m, &k| m.max(k)) * h;
                     let exact = op.get(i, j);
+                    // Plus 1e-14: an entry is a difference of sines of order one, so a shadow
+                    // ending exactly on an element's end (maze: the blocker's end (3, 1.4) lies
+                    // on the line from the floor at 5.625 to the partition's top) leaves a
+                    // sliver of rounding that no ray sees.
                     assert!(
-                        (exact - rays).abs() <= 1e-6 * exact + bound,
+                        (exact - rays).abs() <= 1e-6 * exact + bound + 1e-14,
                         "{name}: K[{i}][{j}] = {exact} vs rays {rays} (bound {bound})"
                     );
                     compared += usize::from(exact > 0.0);
@@ -422,8 +423,8 @@ mod tests {
 
     #[test]
     fn rows_sum_to_rho_in_closed_rooms_without_blockers() {
-        // Every direction from a point of a closed room ends on a wall: Σ_j K_ij = ρ_i (2ρ_i
-        // for a two-sided receiver), exactly, occluded or not (the L room's reflex corner).
+        // Every direction from a point of a closed room ends on a wall: Σ_j K_ij = ρ_i,
+        // exactly, occluded or not (the L room's reflex corner).
         for scene in [bundled("box"), l_room(0.6)] {
             let kernel = Kernel::new(scene);
             let mesh = Mesh::new(&kernel, 200).unwrap();

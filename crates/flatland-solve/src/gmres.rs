@@ -1,8 +1,7 @@
 //! Restarted GMRES for `(I − K) B = E`.
 //!
-//! Why GMRES and not Jacobi or Gauss–Seidel: K's row sums are ρ (≤ 2ρ for a two-sided receiver)
-//! in a closed room, so the Neumann series converges like `(max ρ)^n` at best and not at all for
-//! a two-sided edge with ρ > ½ or a learned kernel that overshoots. GMRES needs only that
+//! Why GMRES and not Jacobi or Gauss–Seidel: K's row sums are ρ in a closed room, so the Neumann
+//! series converges like `(max ρ)^n` at best, slowly for white walls. GMRES needs only that
 //! `I − K` be invertible, and on the bundled scenes reaches 1e-10 in 10–20 products with K.
 
 use crate::{SolveError, Stop, TransferOperator};

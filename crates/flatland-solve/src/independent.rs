@@ -4,8 +4,9 @@
 //! test — only the physics: from a point y, `∫ G V B dl_x = ∫ cos θ / 2 · B(x(θ)) dθ`, the
 //! expectation of `B` at the first surface hit along a direction drawn with density
 //! `cos θ / 2` (in 2D `sin θ = 2ξ − 1`). A path continues from what it hits (Russian roulette on
-//! ρ). A ray that leaves the scene, meets a blocker or the back of a one-sided surface brings
-//! nothing back. The emitted part of B is not collected where a path lands but at every vertex
+//! ρ). A ray that leaves the scene, meets a blocker or the back of a surface brings nothing
+//! back. Where two edges lie back to back (a thin wall's two faces) a ray meets both at once:
+//! the face towards the ray's origin is the one hit. The emitted part of B is not collected where a path lands but at every vertex
 //! by sampling the emitters directly (next-event estimation, stratified points along each
 //! emitter, a shadow ray each): the same expectation, far less noise.
 
@@ -13,11 +14,16 @@ use flatland_geom::{DVec2, Role, Scene};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 
+/// Hits this close (relative) are one point: back-to-back faces, up to rounding.
+const TIE: f64 = 1e-12;
+
 /// The first edge hit by the ray `o + λ d`, `λ > 0`, ignoring edges on the origin's line; the
-/// edge index and the hit point.
+/// edge index and the hit point. Of edges hit at one point (within rounding) one whose front
+/// faces `o` comes first.
 fn first_hit(scene: &Scene, o: DVec2, d: DVec2, own: usize) -> Option<(usize, DVec2)> {
     let own = scene.parent_pieces(own).unwrap_or(own..own + 1);
     let mut best: Option<(f64, usize)> = None;
+    let faces = |i: usize| scene.edges()[i].normal().dot(d) < 0.0;
     for (i, e) in scene.edges().iter().enumerate() {
         if own.contains(&i) {
             continue;
@@ -30,7 +36,17 @@ fn first_hit(scene: &Scene, o: DVec2, d: DVec2, own: usize) -> Option<(usize, DV
         let w = e.a - o;
         let lambda = w.perp_dot(ab) / den;
         let u = w.perp_dot(d) / den;
-        if lambda > 1e-12 && (0.0..=1.0).contains(&u) && best.is_none_or(|(l, _)| lambda < l) {
+        if !(lambda > 1e-12 && (0.0..=1.0).contains(&u)) {
+            continue;
+        }
+        let better = best.is_none_or(|(l, j)| {
+            if (lambda - l).abs() <= TIE * l {
+                faces(i) && !faces(j)
+            } else {
+                lambda < l
+            }
+        });
+        if better {
             best = Some((lambda, i));
         }
     }
@@ -67,18 +83,25 @@ pub fn irradiance(scene: &Scene, edge: usize, y: DVec2, paths: usize, seed: u64)
 /// Points sampled per emitter at every path vertex.
 const EMITTER_SAMPLES: usize = 4;
 
-/// Whether the open segment `y–x` crosses any edge other than those of `skip` (parents).
+/// Whether the open segment `y–x` crosses any edge other than those of `skip` (parents). An
+/// end within rounding of an edge's line does not cross it: that edge lies back to back with
+/// the end's own edge.
 fn blocked(scene: &Scene, y: DVec2, x: DVec2, skip: [&std::ops::Range<usize>; 2]) -> bool {
     let o = |a: DVec2, b: DVec2, p: DVec2| (b - a).perp_dot(p - a);
+    let side = |a: DVec2, b: DVec2, p: DVec2| {
+        let v = o(a, b, p);
+        let tol = TIE * (b - a).length() * ((b - a).length() + (p - a).length());
+        if v.abs() <= tol { 0.0 } else { v }
+    };
     scene.edges().iter().enumerate().any(|(i, e)| {
         !skip.iter().any(|r| r.contains(&i))
-            && o(e.a, e.b, y) * o(e.a, e.b, x) < 0.0
+            && side(e.a, e.b, y) * side(e.a, e.b, x) < 0.0
             && o(y, x, e.a) * o(y, x, e.b) < 0.0
     })
 }
 
-/// `∫ E G V dl_x` over every emitter, seen from `y` on edge `edge` facing `n` (either way for a
-/// two-sided receiver): stratified points along each emitter, one shadow ray each.
+/// `∫ E G V dl_x` over every emitter, seen from `y` on edge `edge`: stratified points along each
+/// emitter, one shadow ray each.
 fn direct(scene: &Scene, edge: usize, y: DVec2, rng: &mut ChaCha8Rng) -> f64 {
     let own = scene.parent_pieces(edge).unwrap_or(edge..edge + 1);
     let receiver = scene.edges()[edge];
@@ -94,14 +117,8 @@ fn direct(scene: &Scene, edge: usize, y: DVec2, rng: &mut ChaCha8Rng) -> f64 {
             let x = e.a + (e.b - e.a) * u;
             let d = x - y;
             let r = d.length();
-            let mut cy = receiver.normal().dot(d) / r;
-            let mut cx = -e.normal().dot(d) / r;
-            if receiver.two_sided {
-                cy = cy.abs();
-            }
-            if e.two_sided {
-                cx = cx.abs();
-            }
+            let cy = receiver.normal().dot(d) / r;
+            let cx = -e.normal().dot(d) / r;
             if cx > 0.0 && cy > 0.0 && !blocked(scene, y, x, [&own, &theirs]) {
                 sum += cx * cy / (2.0 * r);
             }
@@ -118,16 +135,8 @@ fn path(scene: &Scene, mut edge: usize, mut y: DVec2, first: f64, rng: &mut ChaC
     for _ in 0..10_000 {
         total += weight * direct(scene, edge, y, rng);
         let e = scene.edges()[edge];
-        let mut n = e.normal();
-        let mut u = xi.take().unwrap_or_else(|| rng.random::<f64>());
-        if e.two_sided {
-            // Both half circles receive: pick one (by the first half of u), count it twice.
-            weight *= 2.0;
-            if u >= 0.5 {
-                n = -n;
-            }
-            u = (2.0 * u).fract();
-        }
+        let n = e.normal();
+        let u = xi.take().unwrap_or_else(|| rng.random::<f64>());
         let sin = 2.0 * u - 1.0;
         let cos = (1.0 - sin * sin).max(0.0).sqrt();
         let d = n * cos + n.perp() * sin;
@@ -135,8 +144,8 @@ fn path(scene: &Scene, mut edge: usize, mut y: DVec2, first: f64, rng: &mut ChaC
             return total;
         };
         let h = scene.edges()[hit];
-        // The hit surface sends towards y only from its front (or either side if two-sided).
-        if h.role == Role::Blocker || (!h.two_sided && h.normal().dot(d) >= 0.0) {
+        // The hit surface sends towards y only from its front.
+        if h.role == Role::Blocker || h.normal().dot(d) >= 0.0 {
             return total;
         }
         // Russian roulette on ρ: continue with probability min(1, ρ·weight), unbiased.

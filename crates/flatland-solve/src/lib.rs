@@ -37,8 +37,9 @@
 //! **Energy.** In a closed room of one-sided surfaces without blockers every sender's light
 //! lands on a surface (`∫ G V dl_y = 1`), so the power the surfaces absorb, `∫ (1 − ρ) H dl`
 //! with H the irradiance `(B − E) / ρ`, equals the power emitted, `∫ E dl` (tested to 0.2 % at
-//! 512 elements). Blockers absorb too. A two-sided surface sends its one B from both sides,
-//! so its emitted power counts twice.
+//! 512 elements). Blockers absorb too. Surfaces are one-sided (flatland-geom refuses a
+//! two-sided one: its one B would gather from both half-planes, row sums up to 2ρ); a thin
+//! wall is two faces back to back.
 //!
 //! **Linear solve.** Restarted GMRES on `(I − K) B = E` to a relative residual
 //! [`SolveParams::tolerance`] (default 1e-10); it needs only `I − K` invertible, not `‖K‖ < 1`.

@@ -24,8 +24,6 @@ pub struct MeshEdge {
     pub b: DVec2,
     /// Front normal.
     pub normal: DVec2,
-    /// Whether it sends and receives on both sides.
-    pub two_sided: bool,
     /// ρ.
     pub reflectance: f64,
     /// E.
@@ -178,7 +176,6 @@ impl Mesh {
                     a,
                     b,
                     normal: first.normal(),
-                    two_sided: first.two_sided,
                     reflectance: first.reflectance,
                     emission: first.emission,
                     source_weight: kernel.source_weight(run.start),
@@ -525,7 +522,7 @@ mod tests {
         let mesh = Mesh::new(&maze, 300).unwrap();
         assert_eq!(mesh.edges()[0].junctions, vec![0.25]);
         assert_close!(mesh.edges()[2].junctions[0], 0.8 / 1.5, 1e-15);
-        assert_eq!(Mesh::min_elements(maze.scene()), 12 + 2);
+        assert_eq!(Mesh::min_elements(maze.scene()), 14 + 2);
         let corners = Kernel::new(bundled("corners"));
         let mesh = Mesh::new(&corners, 100).unwrap();
         assert_close!(mesh.edges()[1].junctions[0], 0.6, 1e-15);
@@ -542,8 +539,8 @@ mod tests {
                 }
             }
         }
-        assert!(Mesh::new(&maze, 13).is_err());
-        assert_eq!(Mesh::coarsest(&maze).unwrap().len(), 14);
+        assert!(Mesh::new(&maze, 15).is_err());
+        assert_eq!(Mesh::coarsest(&maze).unwrap().len(), 16);
     }
 
     #[test]

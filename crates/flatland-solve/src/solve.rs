@@ -378,7 +378,7 @@ pub fn solve_against<R: Representation + ?Sized>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::test_support::{bundled, l_room, room};
+    use crate::test_support::{bundled, l_room, room, thin_wall_plan};
     use crate::{exact_operator, never, quadrature_operator};
     use flatland_geom::{DVec2, Edge, Scene};
     use flatland_testkit::assert_close;
@@ -433,6 +433,48 @@ mod tests {
                         "room {k}, ρ = {rho}: B = {b} vs {expected}"
                     );
                 }
+            }
+        }
+    }
+
+    /// A floor plan whose walls are thin (two one-sided faces back to back, the way a two-sided
+    /// wall must now be drawn): the exact solve, by the pair table and by the sweep, never
+    /// gives negative radiosity, and B ≥ E everywhere (the light only adds). One radiosity for
+    /// both sides of a two-sided wall gave row sums up to 2ρ and negative B here.
+    #[test]
+    fn a_floor_plan_of_thin_walls_solves_to_b_at_least_e() {
+        for (cols, rows, seed) in [(2, 2, 1), (4, 3, 2), (6, 5, 3)] {
+            let scene = thin_wall_plan(cols, rows, seed);
+            let kernel = Kernel::new(scene);
+            let elements = 4 * Mesh::min_elements(kernel.scene());
+            let mesh = Mesh::new(&kernel, elements).unwrap();
+            for method in [ExactMethod::Dense, ExactMethod::Sweep] {
+                if method == ExactMethod::Dense && elements > 1500 {
+                    continue;
+                }
+                let reference = ExactReference::with_method(
+                    &kernel,
+                    elements,
+                    method,
+                    &SolveParams::default(),
+                    &never,
+                )
+                .unwrap();
+                let b = &reference.solution().radiosity;
+                let e = mesh.emission();
+                let lit = b.iter().zip(&e).filter(|(b, e)| *b > *e).count();
+                for (i, (b, e)) in b.iter().zip(&e).enumerate() {
+                    assert!(
+                        b.is_finite() && *b >= *e && *e >= 0.0,
+                        "{cols} × {rows} rooms, {method:?}, element {i}: B = {b}, E = {e}"
+                    );
+                }
+                // Light reaches most of the plan (through the doors), not just the lamps' rooms.
+                assert!(
+                    lit > b.len() / 2,
+                    "{cols} × {rows}: only {lit} of {} lit",
+                    b.len()
+                );
             }
         }
     }

@@ -22,7 +22,7 @@ mod view;
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
-use flatland_geom::{Kernel, Scene};
+use flatland_geom::{Kernel, Role, Scene};
 
 use crate::bvh::{Aabb, Bvh, Contents};
 use crate::exact::check_scene;
@@ -58,6 +58,7 @@ impl SweepScene {
                 segments.push(Segment {
                     a: mesh.to_local(edges[e].a),
                     b: mesh.to_local(edges[pieces.end - 1].b),
+                    front: edges[e].role == Role::Surface,
                 });
                 first_piece.push(e);
             }
@@ -215,7 +216,7 @@ pub(crate) fn sweep_operator_with(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::test_support::{bundled, floor_plan, hall, l_room, random_room};
+    use crate::test_support::{bundled, floor_plan, hall, l_room, random_room, thin_wall_plan};
     use crate::{
         DenseOperator, SolveParams, TransferOperator, exact_operator, never, solve_operator,
     };
@@ -279,6 +280,9 @@ mod tests {
             let (_, dense, sparse) = both(random_room(12, seed), 160);
             assert_equal_entries(&format!("random room {seed}"), &dense, &sparse);
         }
+        // Thin walls: faces back to back, each seen only from its own side.
+        let (_, dense, sparse) = both(thin_wall_plan(3, 2, 5), 240);
+        assert_equal_entries("thin walls", &dense, &sparse);
     }
 
     #[test]
@@ -290,6 +294,7 @@ mod tests {
             ("L room", l_room(0.6)),
             ("floor plan", floor_plan(1000)),
             ("hall", hall(1000)),
+            ("thin walls", thin_wall_plan(5, 4, 1)),
         ] {
             let kernel = Kernel::new(scene);
             let elements = 3 * Mesh::min_elements(kernel.scene());

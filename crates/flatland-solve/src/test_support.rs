@@ -49,8 +49,76 @@ pub fn hall(edges: usize) -> Scene {
     flatland_geom::generate::hall(edges, 1).expect("a generated hall")
 }
 
-/// A closed 4 × 3 room holding `inside` random segments from `seed`: surfaces one- and
-/// two-sided, and blockers, crossing and touching each other and the walls at random; some
+/// A floor plan of `cols × rows` rooms (3–5 units a side, from `seed`) whose interior walls
+/// are thin: each a pair of one-sided faces back to back (the same end points, swapped), with
+/// a door 0.9 wide in every wall between two rooms, and oblique stretches where a door is cut
+/// (so wall points round off their lines). Lamps are small emitting boxes in two rooms. Closed
+/// and without blockers: every direction from every point ends on a surface facing it.
+pub fn thin_wall_plan(cols: usize, rows: usize, seed: u64) -> Scene {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut cuts = |n: usize| {
+        let mut at = vec![0.0];
+        for _ in 0..n {
+            let next = at.last().copied().unwrap_or(0.0) + rng.random_range(3.0..5.0);
+            at.push(next);
+        }
+        at
+    };
+    let (xs, ys) = (cuts(cols), cuts(rows));
+    let (w, h) = (xs[cols], ys[rows]);
+    let p = DVec2::new;
+    let mut edges = Edge::polygon(&[p(0.0, 0.0), p(w, 0.0), p(w, h), p(0.0, h)], 0.6);
+    // Each wall between two rooms: from `from` to `to`, a door somewhere in its middle; the
+    // two stretches beside it tilt a little towards the door, so the walls are not all
+    // axis-aligned.
+    let mut wall = |from: DVec2, to: DVec2, rng: &mut ChaCha8Rng| {
+        let len = from.distance(to);
+        let d = rng.random_range(0.3..0.7) * len;
+        let (u0, u1) = ((d - 0.45) / len, (d + 0.45) / len);
+        let side = (to - from).perp().normalize() * rng.random_range(-0.2..0.2);
+        let stretches = [
+            (from, from + (to - from) * u0 + side),
+            (from + (to - from) * u1 + side, to),
+        ];
+        for (a, b) in stretches {
+            let rho = rng.random_range(0.3..0.8);
+            edges.push(Edge::surface(a, b, rho));
+            edges.push(Edge::surface(b, a, rho));
+        }
+    };
+    for c in 1..cols {
+        for r in 0..rows {
+            wall(p(xs[c], ys[r]), p(xs[c], ys[r + 1]), &mut rng);
+        }
+    }
+    for r in 1..rows {
+        for c in 0..cols {
+            wall(p(xs[c], ys[r]), p(xs[c + 1], ys[r]), &mut rng);
+        }
+    }
+    for lamp in 0..2 {
+        let (c, r) = if lamp == 0 {
+            (0, 0)
+        } else {
+            (cols - 1, rows - 1)
+        };
+        let centre = p(
+            0.5 * (xs[c] + xs[c + 1]) + 0.3,
+            0.5 * (ys[r] + ys[r + 1]) - 0.2,
+        );
+        let q = [p(-0.1, -0.1), p(-0.1, 0.1), p(0.1, 0.1), p(0.1, -0.1)].map(|o| centre + o);
+        // Clockwise: the box's faces point out.
+        edges.extend(
+            Edge::polygon(&q, 0.3)
+                .into_iter()
+                .map(|e| e.with_emission(5.0)),
+        );
+    }
+    Scene::new(edges).expect("a valid thin-wall plan")
+}
+
+/// A closed 4 × 3 room holding about `inside` random segments from `seed`: surfaces, thin walls
+/// (two surfaces back to back) and blockers, crossing and touching each other and the walls at random; some
 /// end exactly on a wall or on another segment's end (T-junctions and shared corners).
 pub fn random_room(inside: usize, seed: u64) -> Scene {
     let mut rng = flatland_testkit::rng(seed);
@@ -74,12 +142,12 @@ pub fn random_room(inside: usize, seed: u64) -> Scene {
         if a.distance(b) < 0.05 {
             continue;
         }
-        let edge = match rng.random_range(0..3) {
-            0 => Edge::blocker(a, b),
-            1 => Edge::surface(a, b, 0.5).with_two_sided(true),
-            _ => Edge::surface(a, b, 0.7).with_emission(rng.random_range(0.0..1.0)),
-        };
-        edges.push(edge);
+        match rng.random_range(0..3) {
+            0 => edges.push(Edge::blocker(a, b)),
+            // A thin wall: two one-sided faces back to back.
+            1 => edges.extend([Edge::surface(a, b, 0.5), Edge::surface(b, a, 0.5)]),
+            _ => edges.push(Edge::surface(a, b, 0.7).with_emission(rng.random_range(0.0..1.0))),
+        }
         ends.push(b);
     }
     Scene::new(edges).expect("a valid random room")

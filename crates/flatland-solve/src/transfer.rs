@@ -6,8 +6,8 @@
 //! at `y`, so with `φ` measured from `n_y`
 //! `∫ G dl_x = ∫ cos_x cos_y / (2r) dl_x = ∫ cos φ / 2 dφ = (sin φ₂ − sin φ₁) / 2`
 //! over the part of the segment in front of `y` (`cos_y > 0`), and 0 when `y` is behind a
-//! one-sided sender (`cos_x ≤ 0` along the whole segment). A two-sided receiver sums both of its
-//! half-planes. It is exact (no quadrature), bounded by 1 per side, and finite even for a
+//! sender (`cos_x ≤ 0` along the whole segment; surfaces are one-sided). It is exact (no
+//! quadrature), bounded by 1 (the whole half-plane), and finite even for a
 //! sender touching the receiver's edge at a corner, where the kernel itself grows like `1/r`.
 //!
 //! **Visibility.** An occluding segment `c` hides from `y` exactly the points `x` of the sender
@@ -27,8 +27,6 @@ pub struct Receiver {
     pub position: DVec2,
     /// Its edge's front normal (unit).
     pub normal: DVec2,
-    /// Whether its edge receives on both sides (`|cos_y|`).
-    pub two_sided: bool,
 }
 
 /// A sending segment.
@@ -40,14 +38,11 @@ pub struct Sender {
     pub b: DVec2,
     /// Its edge's front normal (unit).
     pub normal: DVec2,
-    /// Whether its edge sends on both sides (`|cos_x|`).
-    pub two_sided: bool,
 }
 
 /// `∫_sender G(x, y) dl_x` with `G = cos_x cos_y / (2r)` and no occlusion: the closed form.
 ///
-/// 0 when `y` lies on the sender's line or behind a one-sided sender. Always finite, in
-/// `[0, 1]` for a one-sided receiver and `[0, 2]` for a two-sided one.
+/// 0 when `y` lies on the sender's line or behind the sender. Always finite, in `[0, 1]`.
 #[must_use]
 pub fn point_to_segment(y: &Receiver, x: &Sender) -> f64 {
     if !faces(y, x) {
@@ -97,18 +92,13 @@ pub fn point_to_segment_visible(
 /// Whether `y` is on the sending side of the sender's line (strictly).
 #[inline]
 fn faces(y: &Receiver, x: &Sender) -> bool {
-    let c = x.normal.dot(y.position - x.a);
-    if x.two_sided { c != 0.0 } else { c > 0.0 }
+    x.normal.dot(y.position - x.a) > 0.0
 }
 
-/// `(sin φ₂ − sin φ₁) / 2` over the part of `q0–q1` in front of the receiver, per side.
+/// `(sin φ₂ − sin φ₁) / 2` over the part of `q0–q1` in front of the receiver.
 #[inline]
 fn subtended(y: &Receiver, q0: DVec2, q1: DVec2) -> f64 {
-    let mut total = half_plane(y.position, y.normal, q0, q1);
-    if y.two_sided {
-        total += half_plane(y.position, -y.normal, q0, q1);
-    }
-    total
+    half_plane(y.position, y.normal, q0, q1)
 }
 
 #[inline]
@@ -179,12 +169,11 @@ mod tests {
         DVec2::new(x, y)
     }
 
-    fn sender(a: DVec2, b: DVec2, two_sided: bool) -> Sender {
+    fn sender(a: DVec2, b: DVec2) -> Sender {
         Sender {
             a,
             b,
             normal: (b - a).perp().normalize(),
-            two_sided,
         }
     }
 
@@ -213,14 +202,8 @@ mod tests {
             let p = x.a + d * u;
             let dd = y.position - p;
             let r = dd.length();
-            let mut cx = x.normal.dot(dd) / r;
-            let mut cy = -y.normal.dot(dd) / r;
-            if x.two_sided {
-                cx = cx.abs();
-            }
-            if y.two_sided {
-                cy = cy.abs();
-            }
+            let cx = x.normal.dot(dd) / r;
+            let cy = -y.normal.dot(dd) / r;
             let hidden = occluders.iter().any(|&[c0, c1]| {
                 let o = |a: DVec2, b: DVec2, q: DVec2| (b - a).perp_dot(q - a);
                 o(c0, c1, y.position) * o(c0, c1, p) < 0.0
@@ -258,20 +241,16 @@ mod tests {
         let y = Receiver {
             position: v(0.0, 0.0),
             normal: v(0.0, 1.0),
-            two_sided: false,
         };
-        let x = sender(v(1.0, 1.0), v(-1.0, 1.0), false);
+        let x = sender(v(1.0, 1.0), v(-1.0, 1.0));
         assert_close!(point_to_segment(&y, &x), 0.5f64.sqrt(), 1e-15);
-        // Seen from behind a one-sided sender: nothing.
+        // Seen from behind the sender: nothing.
         assert_eq!(
-            point_to_segment(&y, &sender(v(-1.0, 1.0), v(1.0, 1.0), false)),
+            point_to_segment(&y, &sender(v(-1.0, 1.0), v(1.0, 1.0))),
             0.0
         );
-        // ... unless it is two-sided.
-        let two = sender(v(-1.0, 1.0), v(1.0, 1.0), true);
-        assert_close!(point_to_segment(&y, &two), 0.5f64.sqrt(), 1e-15);
         // An infinite wall in front fills the half circle: 1.
-        let wall = sender(v(1e9, 1.0), v(-1e9, 1.0), false);
+        let wall = sender(v(1e9, 1.0), v(-1e9, 1.0));
         assert_close!(point_to_segment(&y, &wall), 1.0, 1e-9);
     }
 
@@ -285,9 +264,8 @@ mod tests {
             let y = Receiver {
                 position: p(),
                 normal: (p() - p()).try_normalize().unwrap_or(v(0.0, 1.0)),
-                two_sided: k % 3 == 0,
             };
-            let x = sender(p(), p(), k % 4 == 0);
+            let x = sender(p(), p());
             let occluders: Vec<[DVec2; 2]> = (0..k % 4).map(|_| [p(), p()]).collect();
             let exact = point_to_segment_visible(&y, &x, &occluders, &mut scratch);
             let by_quadrature = quadrature(&y, &x, &occluders);
@@ -315,7 +293,7 @@ mod tests {
         ];
         let kernel = Kernel::new(Scene::new(edges.clone()).unwrap());
         let l = kernel.scene().total_length();
-        let floor = sender(edges[0].a, edges[0].b, false);
+        let floor = sender(edges[0].a, edges[0].b);
         let occluders = [[edges[2].a, edges[2].b]];
         let mut scratch = Vec::new();
         for &yx in &[0.3, 1.7, 2.2, 3.9] {
@@ -323,7 +301,6 @@ mod tests {
             let y = Receiver {
                 position: yp,
                 normal: v(0.0, -1.0),
-                two_sided: false,
             };
             let t = kernel.scene().param_of(1, yp).unwrap();
             let n = 200_000;
@@ -348,9 +325,8 @@ mod tests {
         let y = Receiver {
             position: v(0.0, 0.0),
             normal: v(0.0, 1.0),
-            two_sided: false,
         };
-        let x = sender(v(1.0, 2.0), v(-1.0, 2.0), false);
+        let x = sender(v(1.0, 2.0), v(-1.0, 2.0));
         let mut scratch = Vec::new();
         // A wide wall between them hides everything.
         let wall = [[v(-5.0, 1.0), v(5.0, 1.0)]];

@@ -261,27 +261,18 @@ impl Gate for FaceGate<'_> {
 #[derive(Clone, Debug)]
 pub(crate) struct Labeller {
     frame: InputFrame,
-    /// Each parent surface edge, by rank: its end points and whether it is two-sided.
-    parents: Vec<(DVec2, DVec2, bool)>,
+    /// Each parent surface edge, by rank: its end points.
+    parents: Vec<(DVec2, DVec2)>,
     /// Distances closer than this are a tie (rounding of the frame's unmap).
     tie: f64,
 }
 
 impl Labeller {
     pub(crate) fn new(kernel: &Kernel, frame: InputFrame) -> Labeller {
-        let scene = kernel.scene();
-        let two_sided = |r: usize| {
-            scene
-                .parent_param_range(r)
-                .is_some_and(|(s0, s1)| scene.edges()[scene.point(0.5 * (s0 + s1)).edge].two_sided)
-        };
         Labeller {
             frame,
             parents: (0..kernel.surface_parents())
-                .map(|r| {
-                    let (a, b) = kernel.surface_parent(r);
-                    (a, b, two_sided(r))
-                })
+                .map(|r| kernel.surface_parent(r))
                 .collect(),
             tie: TIE / frame.inv_scale,
         }
@@ -306,7 +297,7 @@ impl Labeller {
     /// stands on a floor or against a wall, its bottom lies on the floor, back to back, and a
     /// ray from the room to a point there ends on the floor, not on the box.
     fn nearest_parent(&self, p: DVec2, other: DVec2) -> usize {
-        let distance = |&(a, b, _): &(DVec2, DVec2, bool)| distance_to_segment(p, a, b);
+        let distance = |&(a, b): &(DVec2, DVec2)| distance_to_segment(p, a, b);
         let nearest = self
             .parents
             .iter()
@@ -314,9 +305,8 @@ impl Labeller {
             .fold(f64::INFINITY, f64::min);
         let near = |r: &usize| distance(&self.parents[*r]) <= nearest + self.tie;
         let faces = |r: &usize| {
-            let (a, b, two_sided) = self.parents[*r];
-            let side = (b - a).perp_dot(other - a);
-            if two_sided { side != 0.0 } else { side > 0.0 }
+            let (a, b) = self.parents[*r];
+            (b - a).perp_dot(other - a) > 0.0
         };
         let ranks = 0..self.parents.len();
         ranks

@@ -35,8 +35,6 @@ pub(super) struct Node {
     pub(super) max_weight: f64,
     /// The largest reflectance ρ of its edges.
     pub(super) max_rho: f64,
-    /// 2 if one of its edges is two-sided (it sends and receives on both sides), else 1.
-    pub(super) sides: f64,
 }
 
 impl Node {
@@ -144,7 +142,6 @@ impl Hierarchy {
             },
             max_weight: a.max_weight.max(b.max_weight),
             max_rho: a.max_rho.max(b.max_rho),
-            sides: a.sides.max(b.sides),
         };
     }
 
@@ -164,7 +161,6 @@ impl Hierarchy {
             kind: Kind::Element(e),
             max_weight: s.source_weight[e.ord],
             max_rho: s.reflectance[e.ord],
-            sides: if s.two_sided[e.ord] { 2.0 } else { 1.0 },
         }
     }
 

@@ -95,15 +95,12 @@ fn exact_transfer(h: &Hierarchy, p: u32, q: u32) -> f64 {
     total
 }
 
-/// Whether `from` is a one-sided element and all of `other`'s box lies behind its line (or on
-/// it): nothing there faces it.
+/// Whether `from` is an element and all of `other`'s box lies behind its line (or on it):
+/// nothing there faces it.
 fn behind(h: &Hierarchy, from: &Node, other: &Node) -> bool {
     let Some(e) = from.element() else {
         return false;
     };
-    if h.surfaces.two_sided[e.ord] {
-        return false;
-    }
     let n = h.surfaces.normal[e.ord];
     let corners = [
         other.lo,
@@ -115,7 +112,7 @@ fn behind(h: &Hierarchy, from: &Node, other: &Node) -> bool {
 }
 
 /// A bound of `F_pq`, the share of `P`'s light that reaches `Q`, from their boxes alone. From
-/// any point x of P: at most what one side sends (1, or 2 for a two-sided edge); at most
+/// any point x of P: at most what its front half-plane takes (1); at most
 /// `Δ/2` where Δ is the angle Q's bounding circle subtends (`(1/2)∫ cos θ dθ ≤ Δ/2`); and at
 /// most `|Q| / (2 d)` with d the distance between the boxes (`G ≤ 1 / (2r)`).
 fn form_factor_bound(p: &Node, q: &Node) -> f64 {
@@ -133,7 +130,7 @@ fn form_factor_bound(p: &Node, q: &Node) -> f64 {
     } else {
         f64::INFINITY
     };
-    p.sides.min(angle).min(length)
+    angle.min(length).min(1.0)
 }
 
 fn box_distance(p: &Node, q: &Node) -> f64 {
@@ -244,10 +241,7 @@ fn sample(kernel: &Kernel, h: &Hierarchy, (p, q): (u32, u32), n: usize, seed: u6
         if h.parent_edge[ox] == h.parent_edge[oy] {
             continue;
         }
-        let g = geometry(
-            (x, s.normal[ox], s.two_sided[ox]),
-            (y, s.normal[oy], s.two_sided[oy]),
-        );
+        let g = geometry((x, s.normal[ox]), (y, s.normal[oy]));
         if g <= 0.0 {
             continue;
         }
@@ -261,17 +255,16 @@ fn sample(kernel: &Kernel, h: &Hierarchy, (p, q): (u32, u32), n: usize, seed: u6
     sums
 }
 
-/// `G(x, y) = cos_x cos_y / (2r)`, each cosine clamped at 0 behind a one-sided edge (its
-/// absolute value on a two-sided one), as the kernel defines it.
-fn geometry((x, nx, x2): (DVec2, DVec2, bool), (y, ny, y2): (DVec2, DVec2, bool)) -> f64 {
+/// `G(x, y) = cos_x cos_y / (2r)`, each cosine clamped at 0 behind its edge, as the kernel
+/// defines it.
+fn geometry((x, nx): (DVec2, DVec2), (y, ny): (DVec2, DVec2)) -> f64 {
     let d = y - x;
     let r2 = d.length_squared();
     if r2 <= 0.0 {
         return 0.0;
     }
-    let facing = |c: f64, two: bool| if two { c.abs() } else { c.max(0.0) };
     let r = r2.sqrt();
-    let (cx, cy) = (facing(nx.dot(d) / r, x2), facing(-ny.dot(d) / r, y2));
+    let (cx, cy) = ((nx.dot(d) / r).max(0.0), (-ny.dot(d) / r).max(0.0));
     cx * cy / (2.0 * r)
 }
 
@@ -298,8 +291,8 @@ mod tests {
             );
             let sample = kernel.eval(sx, sy);
             let g = geometry(
-                (sample.x.position, s.normal[i], s.two_sided[i]),
-                (sample.y.position, s.normal[j], s.two_sided[j]),
+                (sample.x.position, s.normal[i]),
+                (sample.y.position, s.normal[j]),
             );
             assert!(
                 (g - sample.geometry).abs() <= 1e-9 * (1.0 + g),

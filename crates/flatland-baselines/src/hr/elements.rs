@@ -16,7 +16,6 @@ pub(crate) struct Surfaces {
     pub(crate) a: Vec<DVec2>,
     pub(crate) b: Vec<DVec2>,
     pub(crate) normal: Vec<DVec2>,
-    pub(crate) two_sided: Vec<bool>,
     pub(crate) reflectance: Vec<f64>,
     pub(crate) source_weight: Vec<f64>,
     pub(crate) total_length: f64,
@@ -33,7 +32,6 @@ impl Surfaces {
             a: Vec::with_capacity(n),
             b: Vec::with_capacity(n),
             normal: Vec::with_capacity(n),
-            two_sided: Vec::with_capacity(n),
             reflectance: Vec::with_capacity(n),
             source_weight: Vec::with_capacity(n),
             total_length: scene.total_length(),
@@ -49,7 +47,6 @@ impl Surfaces {
             out.a.push(edge.a);
             out.b.push(edge.b);
             out.normal.push(edge.normal());
-            out.two_sided.push(edge.two_sided);
             out.reflectance.push(edge.reflectance);
             out.source_weight.push(kernel.source_weight(e));
         }
@@ -63,11 +60,7 @@ impl Surfaces {
     /// Heap bytes of these tables (part of HR's `memory_bytes`).
     pub(crate) fn heap_bytes(&self) -> usize {
         use std::mem::size_of;
-        self.len()
-            * (size_of::<usize>()
-                + 5 * size_of::<f64>()
-                + 3 * size_of::<DVec2>()
-                + size_of::<bool>())
+        self.len() * (size_of::<usize>() + 5 * size_of::<f64>() + 3 * size_of::<DVec2>())
     }
 
     /// The ordinal of the surface edge whose `[s0, s1)` holds `s`.
@@ -89,21 +82,14 @@ impl Surfaces {
     /// `∫_p ∫_q G dx dy` without occlusion, G = cos cos / (2r).
     pub(crate) fn transfer(&self, p: &Elem, q: &Elem) -> f64 {
         let (np, nq) = (self.normal[p.ord], self.normal[q.ord]);
-        let mut total = 0.0;
-        for &sp in sides(self.two_sided[p.ord]) {
-            // cos_x > 0 ⇔ y strictly in front of p's line.
-            let Some(qc) = clip(q.a, q.b, sp * np, p.a) else {
-                continue;
-            };
-            for &sq in sides(self.two_sided[q.ord]) {
-                // cos_y > 0 ⇔ x strictly in front of q's line.
-                let Some(pc) = clip(p.a, p.b, sq * nq, q.a) else {
-                    continue;
-                };
-                total += crossed_strings(pc, qc);
-            }
-        }
-        total
+        // cos_x > 0 ⇔ y strictly in front of p's line; cos_y > 0 ⇔ x in front of q's.
+        let Some(qc) = clip(q.a, q.b, np, p.a) else {
+            return 0.0;
+        };
+        let Some(pc) = clip(p.a, p.b, nq, q.a) else {
+            return 0.0;
+        };
+        crossed_strings(pc, qc)
     }
 }
 
@@ -142,10 +128,6 @@ impl Elem {
 /// Whether `transfer` between `p` and `q` is real transfer rather than residue.
 pub(crate) fn interacts(transfer: f64, p: &Elem, q: &Elem) -> bool {
     transfer / p.length().min(q.length()) > INTERACTION_FLOOR
-}
-
-fn sides(two_sided: bool) -> &'static [f64] {
-    if two_sided { &[1.0, -1.0] } else { &[1.0] }
 }
 
 /// The part of segment a–b strictly on the side `n · (z − o) > 0`.
@@ -202,15 +184,18 @@ mod tests {
         };
         check(&box_kernel(), &[(0, 2), (0, 1), (3, 1)]);
         // Clipping: a one-sided post crossing the floor's line (only its upper half is seen,
-        // and it sees only the floor right of it), and a two-sided post seen from both sides.
+        // and it sees only the floor right of it), and a thin post (two faces back to back),
+        // each face seen from its side.
         let one_sided = kernel(vec![
             surface([0.0, 0.0], [1.0, 0.0], 0.5, 1.0),
             surface([0.5, 0.6], [0.5, -0.4], 0.8, 0.0),
         ]);
         check(&one_sided, &[(0, 1), (1, 0)]);
-        let mut post = surface([0.5, 0.2], [0.5, 1.0], 0.8, 0.5);
-        post.two_sided = true;
-        let two_sided = kernel(vec![surface([0.0, 0.0], [1.0, 0.0], 0.5, 1.0), post]);
-        check(&two_sided, &[(0, 1), (1, 0)]);
+        let thin = kernel(vec![
+            surface([0.0, 0.0], [1.0, 0.0], 0.5, 1.0),
+            surface([0.5, 0.2], [0.5, 1.0], 0.8, 0.5),
+            surface([0.5, 1.0], [0.5, 0.2], 0.8, 0.5),
+        ]);
+        check(&thin, &[(0, 1), (1, 0), (0, 2), (2, 0)]);
     }
 }

@@ -12,7 +12,6 @@ struct Emitter {
     a: DVec2,
     b: DVec2,
     normal: DVec2,
-    two_sided: bool,
     /// Its first piece: the edge a photon leaving it skips.
     edge: usize,
     /// Where its share of the total power starts, and its power.
@@ -20,14 +19,13 @@ struct Emitter {
     power: f64,
 }
 
-/// Where a photon starts: a point on an emitter, the normal it leaves about, the edge it
-/// leaves from, and whether that edge sends from both sides (the caller picks one).
+/// Where a photon starts: a point on an emitter, the normal it leaves about, and the edge it
+/// leaves from.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct Start {
     pub point: DVec2,
     pub normal: DVec2,
     pub edge: usize,
-    pub two_sided: bool,
 }
 
 /// The emission of every mesh edge under a lighting, and the emitters laid end to end by power.
@@ -70,13 +68,11 @@ impl Emitters {
         let mut total = 0.0;
         for (edge, &e) in mesh.edges().iter().zip(&emission) {
             if e > 0.0 {
-                let sides = if edge.two_sided { 2.0 } else { 1.0 };
-                let power = sides * e * (edge.b - edge.a).length();
+                let power = e * (edge.b - edge.a).length();
                 list.push(Emitter {
                     a: edge.a,
                     b: edge.b,
                     normal: edge.normal,
-                    two_sided: edge.two_sided,
                     edge: edge.pieces.start,
                     start: total,
                     power,
@@ -112,7 +108,6 @@ impl Emitters {
             point: e.a + (e.b - e.a) * v,
             normal: e.normal,
             edge: e.edge,
-            two_sided: e.two_sided,
         }
     }
 
@@ -130,21 +125,20 @@ mod tests {
     #[test]
     fn stratified_starts_give_each_emitter_its_share_uniformly_along_it() {
         // A floor of E = 1 and length 1 (power 1), a wall of E = 2 and length 3 (power 6), a
-        // two-sided shelf of E = 1 and length 1 (power 2, both sides).
-        let mut shelf = surface([0.2, 1.0], [0.2, 2.0], 0.5, 1.0);
-        shelf.two_sided = true;
+        // thin shelf of E = 1 and length 1 (two faces back to back, power 1 each).
         let kernel = kernel(vec![
             surface([0.0, 0.0], [1.0, 0.0], 0.5, 1.0),
             surface([1.0, 0.0], [1.0, 3.0], 0.5, 2.0),
             surface([1.0, 3.0], [0.0, 0.0], 0.5, 0.0),
-            shelf,
+            surface([0.2, 1.0], [0.2, 2.0], 0.5, 1.0),
+            surface([0.2, 2.0], [0.2, 1.0], 0.5, 1.0),
         ]);
         let mesh = Mesh::new(&kernel, 16).unwrap();
-        let surface_of: Vec<Option<u32>> = (0..4).map(Some).collect();
+        let surface_of: Vec<Option<u32>> = (0..5).map(Some).collect();
         let emitters = Emitters::new(&mesh, &surface_of, &Lighting::default()).unwrap();
         assert_eq!(emitters.power(), 9.0);
         let n = 900;
-        let mut counts = [0usize; 4];
+        let mut counts = [0usize; 5];
         let mut along_wall = 0.0;
         for k in 0..n {
             let start = emitters.start((k as f64 + 0.5) / n as f64);
@@ -153,12 +147,16 @@ mod tests {
                 along_wall += start.point.y / 3.0;
             }
         }
-        assert_eq!(counts, [100, 600, 0, 200]);
+        assert_eq!(counts, [100, 600, 0, 100, 100]);
         assert!(
             (along_wall / 600.0 - 0.5).abs() < 1e-12,
             "uniform along the wall"
         );
-        assert!(!emitters.start(0.05).two_sided && emitters.start(0.99).two_sided);
+        let (left, right) = (emitters.start(0.85).normal, emitters.start(0.95).normal);
+        assert!(
+            left.x < 0.0 && right.x > 0.0,
+            "each face leaves from its own side"
+        );
     }
 
     #[test]

@@ -30,15 +30,14 @@ impl Batch<'_> {
         for k in 0..self.size {
             let u = (k as f64 + self.rng.random::<f64>()) / self.size as f64;
             let start = self.emitters.start(u.min(below_one));
-            let normal = self.side(start.normal, start.two_sided);
-            self.photon(start, normal, &mut tally);
+            self.photon(start, start.normal, &mut tally);
         }
         tally
     }
 
     /// One photon from `start`, leaving about `normal`, until it is absorbed or leaves.
     fn photon(&mut self, start: Start, mut normal: DVec2, tally: &mut BatchTally) {
-        let (mut x, mut skip, mut power) = (start.point, start.edge, 1.0);
+        let (mut x, mut skip, power) = (start.point, start.edge, 1.0);
         for _ in 0..MAX_BOUNCES {
             let d = cosine_direction(normal, self.rng.random::<f64>());
             tally.rays += 1;
@@ -51,9 +50,8 @@ impl Batch<'_> {
                 return;
             };
             let edge = &self.mesh.edges()[m as usize];
-            let facing = d.dot(edge.normal);
-            if !(facing < 0.0 || (edge.two_sided && facing > 0.0)) {
-                tally.absorbed += power; // the back of a one-sided surface (or edge-on)
+            if d.dot(edge.normal) >= 0.0 {
+                tally.absorbed += power; // the back of a surface (or edge-on)
                 return;
             }
             let s = self
@@ -62,29 +60,16 @@ impl Batch<'_> {
                 .param_of(hit.edge, hit.point)
                 .expect("a surface edge has a parameter");
             tally.deposits[self.mesh.element_at(s)] += power;
-            let sides = if edge.two_sided { 2.0 } else { 1.0 };
-            let survival = sides * edge.reflectance;
-            if survival < 1.0 {
-                if self.rng.random::<f64>() >= survival {
-                    tally.absorbed += power;
-                    return;
-                }
-            } else {
-                power *= survival;
+            // Russian roulette on ρ: the power goes on unchanged or not at all (no draw for
+            // ρ = 1, which always goes on).
+            if edge.reflectance < 1.0 && self.rng.random::<f64>() >= edge.reflectance {
+                tally.absorbed += power;
+                return;
             }
             (x, skip) = (hit.point, hit.edge);
-            normal = self.side(edge.normal, edge.two_sided);
+            normal = edge.normal;
         }
         tally.absorbed += power;
-    }
-
-    /// `normal`, or for an edge that sends from both sides either side at random.
-    fn side(&mut self, normal: DVec2, two_sided: bool) -> DVec2 {
-        if two_sided && self.rng.random_bool(0.5) {
-            -normal
-        } else {
-            normal
-        }
     }
 }
 

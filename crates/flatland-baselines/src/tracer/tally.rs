@@ -8,7 +8,7 @@ use super::emitters::Emitters;
 /// What one batch's photons left behind, in units of one photon's power.
 #[derive(Clone, Debug, PartialEq)]
 pub(super) struct BatchTally {
-    /// Power landed on each element (on its front, or either side of a two-sided one).
+    /// Power landed on each element (on its front).
     pub deposits: Vec<f64>,
     /// Power absorbed at the end of a path (reflectance, blocker, back side, bounce limit).
     pub absorbed: f64,

@@ -131,7 +131,6 @@ impl Kernel {
             index: g,
             a: p.a,
             b: self.segments[g].b,
-            two_sided: p.two_sided,
         }
     }
 

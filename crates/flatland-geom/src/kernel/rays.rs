@@ -5,7 +5,7 @@ use std::cmp::Ordering;
 use glam::DVec2;
 
 use super::{Hit, Kernel};
-use crate::visibility::{Contact, Ray};
+use crate::visibility::{Contact, Ray, orient, wins_tie};
 
 impl Kernel {
     /// The first edge the ray `origin + λ·direction`, `λ > 0`, meets, or `None` if it leaves
@@ -16,17 +16,44 @@ impl Kernel {
     /// The rule is visibility's ([crate docs](crate#visibility)): edges are closed, so a ray
     /// that touches an end point or runs along an edge meets it (at the first point of the
     /// overlap), and the origin itself never counts. Which edge comes first is decided exactly,
-    /// and of several met at one point (a corner, a junction) the one listed first in the scene
-    /// is returned, so the answer is [`Kernel::first_hit_brute_force`]'s. The ray is the open
+    /// and of several met at one point (a corner, a junction, a thin wall's two faces back to
+    /// back) a surface whose front faces `origin` comes first, then the one listed first in
+    /// the scene, so the answer is [`Kernel::first_hit_brute_force`]'s. The ray is the open
     /// segment from `origin` to a point beyond the scene along `direction` (as rounded).
+    ///
+    /// A ray that leaves `skip` (from a point on it, up to rounding) into its front meets
+    /// nothing wholly on or behind `skip`'s line: it could only do so at `origin`, which never
+    /// counts. So a photon leaving a thin wall's face never stops on the other face behind it,
+    /// wherever rounding put `origin`.
     ///
     /// Every edge occludes, blockers too; what a hit means (front or back, reflect or absorb)
     /// is the caller's: `direction · normal < 0` is a hit on the front.
     #[must_use]
     pub fn first_hit(&self, origin: DVec2, direction: DVec2, skip: Option<usize>) -> Option<Hit> {
         let (ray, skip) = self.ray(origin, direction, skip)?;
-        let (group, contact) = self.bvh.first_hit(&ray, skip)?;
+        let (group, contact) = self.bvh.first_hit(&ray, skip, self.judge(&ray, skip))?;
         Some(self.hit(&ray, group, &contact))
+    }
+
+    /// For a parent the ray meets: `None` if the meeting does not count (wholly on or behind
+    /// the line of `skip`, which the ray leaves into its front), else whether it is a surface
+    /// whose front faces the origin (which wins a tie at one point).
+    fn judge(&self, ray: &Ray, skip: usize) -> impl Fn(usize) -> Option<bool> + '_ {
+        let leaving = self
+            .segments
+            .get(skip)
+            .filter(|s| orient(s.a, s.b, ray.f) > 0.0);
+        let (o, leaving) = (ray.o, leaving.copied());
+        move |group: usize| {
+            let s = self.segments[group];
+            if let Some(own) = leaving
+                && orient(own.a, own.b, s.a) <= 0.0
+                && orient(own.a, own.b, s.b) <= 0.0
+            {
+                return None;
+            }
+            Some(self.parents[group].rank != usize::MAX && orient(s.a, s.b, o) > 0.0)
+        }
     }
 
     /// The same answer as [`Kernel::first_hit`] by testing every parent edge: the reference
@@ -39,6 +66,7 @@ impl Kernel {
         skip: Option<usize>,
     ) -> Option<Hit> {
         let (ray, skip) = self.ray(origin, direction, skip)?;
+        let judge = self.judge(&ray, skip);
         let mut best: Option<(usize, Contact)> = None;
         for (group, s) in self.segments.iter().enumerate() {
             if group == skip {
@@ -47,8 +75,15 @@ impl Kernel {
             let Some(contact) = ray.contact(s.a, s.b) else {
                 continue;
             };
-            // In index order, so of equal contacts the first listed stays.
-            if best.is_none_or(|(_, first)| ray.order(&contact, &first) == Ordering::Less) {
+            let Some(facing) = judge(group) else {
+                continue;
+            };
+            let first = best.is_none_or(|(b, first)| match ray.order(&contact, &first) {
+                Ordering::Less => true,
+                Ordering::Equal => wins_tie(facing, group, judge(b) == Some(true), b),
+                Ordering::Greater => false,
+            });
+            if first {
                 best = Some((group, contact));
             }
         }
@@ -152,6 +187,36 @@ mod tests {
             (4, v(1.0, 0.0)),
             "the right wall's corner"
         );
+    }
+
+    /// A thin oblique wall, its faces back to back in both listing orders: a ray from either
+    /// face into its front never stops on the other face (wherever rounding put its origin),
+    /// and a ray from the room meets the face towards it.
+    #[test]
+    fn a_thin_walls_faces_are_met_from_their_own_side() {
+        for swap in [false, true] {
+            let mut edges =
+                crate::Edge::polygon(&[v(0.0, 0.0), v(4.0, 0.0), v(4.0, 2.0), v(0.0, 2.0)], 0.5);
+            let (p, q) = (v(1.7, 0.3), v(2.3, 1.7));
+            let (left, right) = (Edge::surface(p, q, 0.5), Edge::surface(q, p, 0.5));
+            edges.extend(if swap { [right, left] } else { [left, right] });
+            let (l, r) = if swap { (5, 4) } else { (4, 5) };
+            let kernel = Kernel::new(Scene::new(edges.clone()).unwrap());
+            let mut rng = rng(5);
+            for _ in 0..500 {
+                let u: f64 = rng.random_range(0.01..0.99);
+                let angle: f64 = rng.random_range(-1.5..1.5);
+                for face in [l, r] {
+                    let n = edges[face].normal();
+                    let d = n * angle.cos() + n.perp() * angle.sin();
+                    let h = hit(&kernel, edges[face].point_at(u), d, Some(face)).unwrap();
+                    assert!(h.edge < 4, "from face {face}: stopped on edge {}", h.edge);
+                    // Back along the same line from the wall it reached: the face it left.
+                    let back = hit(&kernel, h.point, -d, Some(h.edge)).unwrap();
+                    assert_eq!(back.edge, face, "from {:?} towards the wall", h.point);
+                }
+            }
+        }
     }
 
     proptest! {

@@ -33,7 +33,9 @@ pub struct Edge {
     pub emission: f64,
     /// Surface (parameterized) or blocker (occludes only).
     pub role: Role,
-    /// Whether both sides face the scene (`|cos|` instead of `max(0, cos)`).
+    /// Whether both sides face the scene. Only a blocker may be two-sided (where it changes
+    /// nothing: a blocker occludes from both sides anyway); a two-sided surface is refused,
+    /// since its one radiosity cannot stand for both sides (docs/ALGORITHM.md §1).
     pub two_sided: bool,
 }
 
@@ -79,7 +81,8 @@ impl Edge {
         Edge { emission, ..self }
     }
 
-    /// The same edge, two-sided or not.
+    /// The same edge, two-sided or not (a two-sided surface is refused by
+    /// [`Scene::new`](crate::Scene::new); only a blocker may be two-sided).
     #[must_use]
     pub const fn with_two_sided(self, two_sided: bool) -> Edge {
         Edge { two_sided, ..self }
@@ -151,6 +154,12 @@ impl Edge {
                 edge: index,
                 value: self.emission,
             });
+        }
+        // One radiosity for both sides would let the surface gather from both half-planes
+        // (row sums up to 2ρ) and send that into both: the exact solve then gains energy and
+        // can return negative radiosity. A thin wall is two one-sided faces.
+        if self.two_sided && self.role == Role::Surface {
+            return Err(GeomError::TwoSidedSurface { edge: index });
         }
         Ok(())
     }
@@ -225,6 +234,26 @@ mod tests {
             let e = Edge::surface(v(0.0, 0.0), v(1.0, 0.0), 0.5).with_emission(bad);
             assert_rejected(e, "emission must be finite and >= 0");
         }
+    }
+
+    #[test]
+    fn a_two_sided_surface_is_refused_saying_how_to_model_a_thin_wall() {
+        let wall = Edge::surface(v(0.0, 0.0), v(1.0, 0.0), 0.5).with_two_sided(true);
+        assert_rejected(wall, "a surface cannot be two-sided");
+        let mut edges = triangle();
+        edges[1] = wall;
+        let err = Scene::new(edges).unwrap_err().to_string();
+        assert!(
+            err.contains("box") && err.contains("two one-sided edges back to back"),
+            "{err}"
+        );
+        assert!(!err.contains('\n'), "one line: {err}");
+        // A two-sided blocker stays, and so does the thin wall as two one-sided faces.
+        let mut edges = triangle();
+        edges.push(Edge::blocker(v(0.2, 0.2), v(0.3, 0.3)).with_two_sided(true));
+        edges.push(Edge::surface(v(0.1, 0.1), v(0.2, 0.1), 0.5));
+        edges.push(Edge::surface(v(0.2, 0.1), v(0.1, 0.1), 0.5));
+        assert!(Scene::new(edges).is_ok());
     }
 
     #[test]

@@ -100,11 +100,11 @@ mod tests {
     #[test]
     fn json_and_ron_round_trip_and_defaults() {
         let text = r#"{"edges":[{"a":[0,0],"b":[1,0],"reflectance":0.5},
-            {"a":[1,0],"b":[0,1],"reflectance":0.5,"emission":2,"two_sided":true},
-            {"a":[0,1],"b":[0,0],"reflectance":0.5,"role":"blocker"}]}"#;
+            {"a":[1,0],"b":[0,1],"reflectance":0.5,"emission":2},
+            {"a":[0,1],"b":[0,0],"reflectance":0.5,"role":"blocker","two_sided":true}]}"#;
         let scene = Scene::from_json_str(text).unwrap();
         assert_eq!(scene.edges()[0].role, Role::Surface);
-        assert!(scene.edges()[1].two_sided);
+        assert!(!scene.edges()[1].two_sided && scene.edges()[2].two_sided);
         assert_eq!(scene.edges()[2].role, Role::Blocker);
         let dir = std::env::temp_dir().join(format!("flatland-geom-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();

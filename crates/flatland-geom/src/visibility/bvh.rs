@@ -156,11 +156,39 @@ impl Bvh {
         )
     }
 
+    /// [`Bvh::any_hit`], but a segment the open segment meets does not count when `ignore`
+    /// accepts it (asked only then, so a costly rule costs little).
+    pub(crate) fn any_hit_unless(
+        &self,
+        x: DVec2,
+        y: DVec2,
+        skip_a: usize,
+        skip_b: usize,
+        ignore: impl Fn(Segment) -> bool,
+    ) -> bool {
+        let ray = RayBox::new(self.to_frame(x), self.to_frame(y));
+        self.any(
+            |node| ray.may_meet(node) & !node.skipped(skip_a, skip_b),
+            |k| {
+                let i = self.items[k] as usize;
+                let s = self.ordered[k];
+                i != skip_a && i != skip_b && open_segment_hits(x, y, s.a, s.b) && !ignore(s)
+            },
+        )
+    }
+
     /// The first segment except `skip` the ray meets, and where ([`Ray::contact`]): the
-    /// contact first along the ray, of several at one point the lowest segment index, so the
-    /// answer is the linear scan's whatever the tree. Nearer children are visited first; once
-    /// a contact is known, boxes wholly beyond it are skipped.
-    pub(crate) fn first_hit(&self, ray: &Ray, skip: usize) -> Option<(usize, Contact)> {
+    /// contact first along the ray, of several at one point one that `judge` says faces the
+    /// origin, then the lowest segment index, so the answer is the linear scan's whatever the
+    /// tree. `judge(i)` is asked only of a segment the ray meets: `None` if that meeting does
+    /// not count, else whether the segment faces the origin. Nearer children are visited
+    /// first; once a contact is known, boxes wholly beyond it are skipped.
+    pub(crate) fn first_hit(
+        &self,
+        ray: &Ray,
+        skip: usize,
+        judge: impl Fn(usize) -> Option<bool>,
+    ) -> Option<(usize, Contact)> {
         if self.nodes.is_empty() {
             return None;
         }
@@ -198,7 +226,7 @@ impl Bvh {
                     continue;
                 }
                 for item in child..child + count {
-                    if let Some(found) = self.improves(ray, item, skip, best.as_ref()) {
+                    if let Some(found) = self.improves(ray, item, skip, best.as_ref(), &judge) {
                         beyond = Some(self.beyond(ray, &found.1, &along));
                         best = Some(found);
                     }
@@ -212,8 +240,8 @@ impl Bvh {
         best
     }
 
-    /// Item `item`'s segment and contact if it comes before `best` (or ties it with a lower
-    /// index).
+    /// Item `item`'s segment and contact if it comes before `best` (or ties it and wins the
+    /// tie: facing the origin where `best` does not, or as facing with a lower index).
     #[inline]
     fn improves(
         &self,
@@ -221,6 +249,7 @@ impl Bvh {
         item: usize,
         skip: usize,
         best: Option<&(usize, Contact)>,
+        judge: &impl Fn(usize) -> Option<bool>,
     ) -> Option<(usize, Contact)> {
         let i = self.items[item] as usize;
         if i == skip || best.is_some_and(|&(b, _)| b == i) {
@@ -228,9 +257,10 @@ impl Bvh {
         }
         let s = self.ordered[item];
         let contact = ray.contact(s.a, s.b)?;
+        let facing = judge(i)?;
         let better = best.is_none_or(|(b, first)| match ray.order(&contact, first) {
             Ordering::Less => true,
-            Ordering::Equal => i < *b,
+            Ordering::Equal => wins_tie(facing, i, judge(*b) == Some(true), *b),
             Ordering::Greater => false,
         });
         better.then_some((i, contact))
@@ -327,6 +357,13 @@ impl Bvh {
         out.dedup();
         out
     }
+}
+
+/// Of two segments met at one point, whether `i` (facing the origin or not) comes before `b`:
+/// the one facing the origin, then the lower index.
+#[inline]
+pub(crate) fn wins_tie(facing: bool, i: usize, b_facing: bool, b: usize) -> bool {
+    (facing, std::cmp::Reverse(i)) > (b_facing, std::cmp::Reverse(b))
 }
 
 /// The lines through two of `pts` (distinct) with all four points on one closed side, each as
@@ -604,8 +641,9 @@ mod tests {
         }
 
         /// The closest hit on the same grazing rays: the tree's answer is the linear scan's
-        /// (the contact first along the ray, ties to the lowest index), though its boxes cull
-        /// in single precision and its half-planes skip what lies beyond.
+        /// (the contact first along the ray, of ties one facing the origin, then the lowest
+        /// index; some meetings do not count), though its boxes cull in single precision and
+        /// its half-planes skip what lies beyond.
         #[test]
         fn bvh_first_hit_matches_the_linear_scan_on_grazing_rays(
             seed in any::<u64>(),
@@ -621,18 +659,27 @@ mod tests {
             for _ in 0..300 {
                 let ray = Ray { o: snap(point(&mut r)), f: snap(point(&mut r) * 2.0) };
                 let skip = r.random_range(0..n + 1);
+                let judge = |i: usize| {
+                    let s = segments[i];
+                    (i % 7 != 3).then(|| orient(s.a, s.b, ray.o) > 0.0)
+                };
                 let mut linear: Option<(usize, Contact)> = None;
                 for (i, s) in segments.iter().enumerate() {
                     if i == skip {
                         continue;
                     }
-                    if let Some(c) = ray.contact(s.a, s.b)
-                        && linear.is_none_or(|(_, b)| ray.order(&c, &b) == Ordering::Less)
-                    {
+                    let Some(c) = ray.contact(s.a, s.b) else { continue };
+                    let Some(facing) = judge(i) else { continue };
+                    let first = linear.is_none_or(|(b, first)| match ray.order(&c, &first) {
+                        Ordering::Less => true,
+                        Ordering::Equal => wins_tie(facing, i, judge(b) == Some(true), b),
+                        Ordering::Greater => false,
+                    });
+                    if first {
                         linear = Some((i, c));
                     }
                 }
-                prop_assert_eq!(bvh.first_hit(&ray, skip), linear, "{:?}", ray);
+                prop_assert_eq!(bvh.first_hit(&ray, skip, judge), linear, "{:?}", ray);
             }
         }
     }

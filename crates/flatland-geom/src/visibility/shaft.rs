@@ -35,28 +35,26 @@ pub(crate) struct Candidates {
     pub interior: Option<bool>,
 }
 
-/// One side of a shaft: a parent edge and whether it is two-sided.
+/// One side of a shaft: a parent surface edge (one-sided: its front is the left of `a → b`).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Side {
     pub index: usize,
     pub a: DVec2,
     pub b: DVec2,
-    pub two_sided: bool,
 }
 
 impl Side {
-    /// Whether `p` is strictly in front (strictly off the line for a two-sided edge): the
-    /// facing condition the classification assumes for the *other* end of a segment.
+    /// Whether `p` is strictly in front: the facing condition the classification assumes for
+    /// the *other* end of a segment.
     #[inline]
     pub(crate) fn faces(&self, p: DVec2) -> bool {
-        let o = orient(self.a, self.b, p);
-        if self.two_sided { o != 0.0 } else { o > 0.0 }
+        orient(self.a, self.b, p) > 0.0
     }
 
-    /// Whether the closed segment `[p, q]` is entirely on or behind this one-sided edge's line,
-    /// where no facing segment can reach it.
+    /// Whether the closed segment `[p, q]` is entirely on or behind this edge's line, where no
+    /// facing segment can reach it.
     fn hides(&self, p: DVec2, q: DVec2) -> bool {
-        !self.two_sided && orient(self.a, self.b, p) <= 0.0 && orient(self.a, self.b, q) <= 0.0
+        orient(self.a, self.b, p) <= 0.0 && orient(self.a, self.b, q) <= 0.0
     }
 }
 
@@ -195,9 +193,9 @@ mod tests {
                 }
             }
             let bvh = Bvh::new(&segments);
-            let side = |i: usize, two_sided: bool| Side { index: i, a: segments[i].a, b: segments[i].b, two_sided };
+            let side = |i: usize| Side { index: i, a: segments[i].a, b: segments[i].b };
             for (i, j) in [(0, 1), (2, 3), (4, 5), (0, 7)] {
-                let (p, q) = (side(i, r.random_bool(0.3)), side(j, r.random_bool(0.3)));
+                let (p, q) = (side(i), side(j));
                 let shaft = classify(&segments, &bvh, p, q);
                 // The same as from every segment in the shaft's bounding box.
                 let boxed = classify_among(&segments, p, q, |pts| {

@@ -90,8 +90,7 @@ fn draw_scene(area: &Area<'_>, p: &Picture<'_>) -> DrawResult {
     // Emitters: a sun on the front side of each, with its emission.
     for edge in p.mesh.edges().iter().filter(|e| e.emission > 0.0) {
         let mid = (edge.a + edge.b) * 0.5;
-        let sign = if edge.two_sided { 0.0 } else { 1.0 };
-        let at = mid + edge.normal * (0.045 * span * sign);
+        let at = mid + edge.normal * (0.045 * span);
         let at = (at.x, at.y);
         chart.draw_series([Circle::new(at, 9, RGBColor(255, 200, 0).filled())])?;
         chart.draw_series([Circle::new(at, 9, BLACK.stroke_width(1))])?;

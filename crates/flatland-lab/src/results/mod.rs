@@ -3,6 +3,7 @@
 //! `render` writes the document from it. Nothing in it is typed by hand.
 
 mod experiments;
+mod real;
 mod render;
 
 use std::path::{Path, PathBuf};
@@ -49,6 +50,8 @@ pub(crate) struct Findings {
     pub benches: Vec<SceneBench>,
     pub rooms: Vec<SceneBench>,
     pub stress: (String, Option<i32>),
+    /// The lit real scenes at equal time, and cost against scene size.
+    pub real: real::Real,
     pub elapsed_s: f64,
 }
 
@@ -103,6 +106,8 @@ struct Inputs {
     kernels: Vec<Arc<Kernel>>,
     references: Vec<Arc<Reference>>,
     plots: PathBuf,
+    /// The folder of the bundled scenes.
+    scenes: PathBuf,
 }
 
 /// Runs `flatland results`.
@@ -111,7 +116,7 @@ pub fn run(args: &Options) -> Result<()> {
     let mut progress = Progress {
         started: Instant::now(),
         stage: 0,
-        stages: 4 + 2 * SCENES.len() + 2,
+        stages: 4 + 2 * SCENES.len() + 2 + real::stages(args.quick),
     };
     let inputs = prepare(args)?;
     let findings = measure(&inputs, &sizes, args.quick, &mut progress)?;
@@ -156,6 +161,7 @@ fn prepare(args: &Options) -> Result<Inputs> {
         kernels,
         references,
         plots,
+        scenes: args.scenes.clone(),
     })
 }
 
@@ -170,6 +176,7 @@ fn measure(
         kernels,
         references,
         plots,
+        ..
     } = inputs;
     let seeds = sizes.seeds;
     let (fig3, fig3_reference) = (&kernels[0], &references[0]);
@@ -210,6 +217,7 @@ fn measure(
         .collect::<Result<Vec<_>>>()?;
     progress.next("the stability suite (flatland stress)")?;
     let stress = experiments::stress(quick)?;
+    let real = real::measure(&inputs.scenes, plots, quick, |what| progress.next(what))?;
     Ok(Findings {
         quick,
         seeds,
@@ -222,6 +230,7 @@ fn measure(
         benches,
         rooms,
         stress,
+        real,
         elapsed_s: progress.started.elapsed().as_secs_f64(),
     })
 }

@@ -19,6 +19,7 @@ const GOAL_RATIO: f64 = 0.5;
 pub fn document(f: &Findings) -> Result<String> {
     let mut doc = String::new();
     intro(&mut doc, f)?;
+    super::real::summary(&mut doc, &f.real)?;
     verdict(&mut doc, f)?;
     headline(&mut doc, f)?;
     r1(&mut doc, f)?;
@@ -55,6 +56,7 @@ pub fn document(f: &Findings) -> Result<String> {
         scene_bench(&mut doc, b)?;
     }
     rooms(&mut doc, f)?;
+    super::real::sections(&mut doc, &f.real)?;
     writeln!(
         doc,
         "## Stability (`flatland stress{}`)\n\n```\n{}```\n\nExit code: {}.\n",
@@ -127,8 +129,8 @@ fn compare(b: &SceneBench) -> Option<Compared> {
 fn verdict(doc: &mut String, f: &Findings) -> Result<()> {
     writeln!(
         doc,
-        "## Summary: the default learner against hierarchical radiosity at {HEADLINE_BUDGET} \
-         basis functions\n"
+        "## Small scenes: the network learner against hierarchical radiosity at \
+         {HEADLINE_BUDGET} basis functions\n"
     )?;
     writeln!(
         doc,
@@ -591,6 +593,7 @@ mod tests {
             benches: vec![bench("wins", 0.05), bench("loses", 0.3)],
             rooms: Vec::new(),
             stress: (String::new(), Some(0)),
+            real: super::super::real::Real::default(),
             elapsed_s: 0.0,
         };
         let mut doc = String::new();

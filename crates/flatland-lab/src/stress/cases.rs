@@ -269,7 +269,7 @@ pub fn geometry_cases(suite: &mut Suite) {
 }
 
 /// A 1000 × 1000 room whose floor has a 10⁻⁹ step, with a 10⁻⁹ blocker floating in it and a
-/// 10⁻⁹ two-sided surface.
+/// 10⁻⁹ thin surface (two faces back to back).
 pub fn tiny_edges_scene() -> Result<Scene> {
     let h = 1e-9;
     let mut edges = room(
@@ -287,12 +287,13 @@ pub fn tiny_edges_scene() -> Result<Scene> {
     );
     edges[5].emission = 1.0; // the ceiling light
     edges.push(Edge::blocker(v(300.0, 300.0), v(300.0 + h, 300.0)));
-    edges.push(Edge::surface(v(700.0, 200.0), v(700.0, 200.0 + h), 0.5).with_two_sided(true));
+    let (p, q) = (v(700.0, 200.0), v(700.0, 200.0 + h));
+    edges.extend([Edge::surface(p, q, 0.5), Edge::surface(q, p, 0.5)]);
     Ok(Scene::new(edges)?)
 }
 
-/// A box with a floor in two collinear pieces, a two-sided partition standing on the floor (a
-/// T-junction), a surface lying on the floor (overlapping it), a blocker overlapping the
+/// A box with a floor in two collinear pieces, a thin partition standing on the floor (a
+/// T-junction; two faces back to back), a surface lying on the floor (overlapping it), a blocker overlapping the
 /// partition, and two blockers touching at an end point.
 pub fn junctions_scene() -> Result<Scene> {
     let mut edges = vec![
@@ -303,7 +304,8 @@ pub fn junctions_scene() -> Result<Scene> {
         Edge::surface(v(2.5, 3.0), v(0.0, 3.0), 0.5),
         Edge::surface(v(0.0, 3.0), v(0.0, 0.0), 0.5),
     ];
-    edges.push(Edge::surface(v(1.0, 0.0), v(1.0, 1.5), 0.7).with_two_sided(true)); // T
+    let (p, q) = (v(1.0, 0.0), v(1.0, 1.5));
+    edges.extend([Edge::surface(p, q, 0.7), Edge::surface(q, p, 0.7)]); // T
     edges.push(Edge::surface(v(2.5, 0.0), v(3.5, 0.0), 0.8)); // lies on the floor
     edges.push(Edge::blocker(v(1.0, 1.0), v(1.0, 2.0))); // overlaps the partition
     edges.push(Edge::blocker(v(2.5, 1.5), v(3.0, 2.0))); // touching …
@@ -312,8 +314,8 @@ pub fn junctions_scene() -> Result<Scene> {
     Ok(Scene::new(edges)?)
 }
 
-/// A regular `n`-gon room (radius 1) with `n` two-sided spokes from the centre to its corners:
-/// `n` edges share the centre, and 3 edges share every corner.
+/// A regular `n`-gon room (radius 1) with `n` thin spokes (two faces back to back) from the
+/// centre to its corners: `2n` edges share the centre, and 4 edges share every corner.
 pub fn fan_scene(n: usize) -> Result<Scene> {
     let corner = |i: usize| {
         let a = std::f64::consts::TAU * i as f64 / n as f64;
@@ -323,7 +325,8 @@ pub fn fan_scene(n: usize) -> Result<Scene> {
     let mut edges = room(&rim, 0.5);
     edges[0].emission = 1.0;
     for i in 0..n {
-        edges.push(Edge::surface(DVec2::ZERO, corner(i), 0.5).with_two_sided(true));
+        let (p, q) = (DVec2::ZERO, corner(i));
+        edges.extend([Edge::surface(p, q, 0.5), Edge::surface(q, p, 0.5)]);
     }
     Ok(Scene::new(edges)?)
 }

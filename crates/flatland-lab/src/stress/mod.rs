@@ -298,7 +298,7 @@ mod tests {
         ] {
             assert!(scene.max_emission() > 0.0, "{name} has no light");
         }
-        assert_eq!(fan_scene(12).unwrap().edges().len(), 24);
+        assert_eq!(fan_scene(12).unwrap().edges().len(), 36);
         let tiny = tiny_edges_scene().unwrap();
         let shortest = tiny
             .edges()

@@ -192,8 +192,7 @@ pub fn check_kernel(row: &mut Row, kernel: &Kernel, pairs: &[[f64; 2]]) {
 
 /// `∫ k(s, t)/ρ(e_t) dl(t)` over every receiver, by a midpoint rule in the angle seen from the
 /// sender (`dl = r dθ / cos_y`, so the integrand is `cos_x / 2 · V`: smooth even when the
-/// receiver is 10⁻⁹ away). In a closed room with no blocker it is 1 (energy conservation), 2 for
-/// a two-sided sender.
+/// receiver is 10⁻⁹ away). In a closed room with no blocker it is 1 (energy conservation).
 pub fn row_integral(kernel: &Kernel, s: f64, per_edge: usize) -> f64 {
     let scene = kernel.scene();
     let x = scene.point(s);
@@ -242,14 +241,12 @@ pub fn check_energy(row: &mut Row, kernel: &Kernel, per_edge: usize, max: usize)
     let mut worst_at = 0.0;
     for &e in surfaces.iter().step_by(stride) {
         let (s0, s1) = scene.edge_param_range(e).expect("a surface edge");
-        // A two-sided sender sends into both half planes: 1 each.
-        let expected = if scene.edges()[e].two_sided { 2.0 } else { 1.0 };
         for f in [0.5, 1e-3, 1.0 - 1e-3] {
             let s = s0 + f * (s1 - s0);
             let integral = row_integral(kernel, s, per_edge);
             row.finite(integral);
-            if (integral / expected - 1.0).abs() > worst {
-                worst = (integral / expected - 1.0).abs();
+            if (integral - 1.0).abs() > worst {
+                worst = (integral - 1.0).abs();
                 worst_at = s;
             }
         }

@@ -5,7 +5,8 @@ use std::time::Instant;
 
 use anyhow::{Context as _, Result};
 use flatland_baselines::{
-    BaselineRun, TraceBudget, TraceParams, budget_tolerance, run_hr_at_budget, run_uniform, trace,
+    BaselineRun, TraceBudget, TraceParams, budget_tolerance, run_clustered, run_hr_at_budget,
+    run_uniform, trace,
 };
 use flatland_geom::Kernel;
 use flatland_solve::{
@@ -155,7 +156,8 @@ impl Context<'_> {
         }
     }
 
-    /// HR or the uniform grid at `budget` (or the nearest count it can build, noted).
+    /// HR, clustered HR or the uniform grid at `budget` (or the nearest count it can build,
+    /// noted).
     pub fn baseline(&self, method: Contender, budget: usize, seed: u64) -> Result<TimedRow> {
         let kernel = self.kernel.as_ref();
         match method {
@@ -164,6 +166,12 @@ impl Context<'_> {
                 budget,
                 seed,
                 run_hr_at_budget(kernel, budget, seed, &self.plan.hr)?,
+            ),
+            Contender::Clustered => self.baseline_row(
+                method,
+                budget,
+                seed,
+                run_clustered(kernel, budget, seed, &self.plan.clustered)?,
             ),
             _ => self.baseline_row(
                 method,

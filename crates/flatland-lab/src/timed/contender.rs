@@ -15,6 +15,8 @@ pub enum Contender {
     PaperNoRefit,
     /// Hierarchical radiosity, from its initial linking upwards.
     Hr,
+    /// Hierarchical radiosity with clustering: refined from one link, no initial linking.
+    Clustered,
     /// Piecewise constant on a g × g grid.
     Uniform,
     /// The exact kernel solved on growing element counts.
@@ -32,16 +34,17 @@ const ALIASES: [(&str, Contender); 4] = [
 ];
 
 /// What an unknown name is told.
-const VALID: &str = "a comma-separated list of default, first-shot, paper, paper-norefit, hr, uniform, exact, tracer";
+const VALID: &str = "a comma-separated list of default, first-shot, paper, paper-norefit, hr, clustered, uniform, exact, tracer";
 
 impl Contender {
     /// Every method, in the order the bench runs and lists them.
-    pub const ALL: [Contender; 8] = [
+    pub const ALL: [Contender; 9] = [
         Contender::Default,
         Contender::FirstShot,
         Contender::Paper,
         Contender::PaperNoRefit,
         Contender::Hr,
+        Contender::Clustered,
         Contender::Uniform,
         Contender::Exact,
         Contender::Tracer,
@@ -55,6 +58,7 @@ impl Contender {
             Contender::Paper => "paper",
             Contender::PaperNoRefit => "paper-norefit",
             Contender::Hr => "hr",
+            Contender::Clustered => "clustered",
             Contender::Uniform => "uniform",
             Contender::Exact => "exact",
             Contender::Tracer => "tracer",
@@ -87,6 +91,7 @@ impl Contender {
                 | Contender::Paper
                 | Contender::PaperNoRefit
                 | Contender::Hr
+                | Contender::Clustered
                 | Contender::Uniform
         )
     }
@@ -106,7 +111,7 @@ mod tests {
         }
         let msg = Contender::parse("nope").unwrap_err().to_string();
         assert!(
-            msg.contains("first-shot") && msg.contains("tracer"),
+            msg.contains("first-shot") && msg.contains("clustered") && msg.contains("tracer"),
             "{msg}"
         );
     }

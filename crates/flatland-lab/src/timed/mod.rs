@@ -15,7 +15,7 @@ mod run;
 mod scorer;
 mod settings;
 
-use flatland_baselines::{HrParams, UniformParams};
+use flatland_baselines::{ClusteredParams, HrParams, UniformParams};
 use kernel_fit::FitParams;
 
 pub use contender::Contender;
@@ -69,6 +69,8 @@ pub struct TimedPlan {
     pub paper: FitParams,
     /// HR parameters.
     pub hr: HrParams,
+    /// Clustered-HR parameters.
+    pub clustered: ClusteredParams,
     /// Uniform-grid parameters.
     pub uniform: UniformParams,
 }
@@ -88,6 +90,7 @@ impl TimedPlan {
             fit: FitParams::default(),
             paper: FitParams::paper(),
             hr: HrParams::default(),
+            clustered: ClusteredParams::default(),
             uniform: UniformParams::default(),
         }
     }

@@ -7,7 +7,9 @@ use std::collections::HashMap;
 use std::time::Instant;
 
 use anyhow::{Context as _, Result};
-use flatland_baselines::{LightTracer, Lighting, TraceBudget, TraceParams, run_hr_at_budget};
+use flatland_baselines::{
+    LightTracer, Lighting, TraceBudget, TraceParams, run_clustered, run_hr_at_budget,
+};
 use flatland_geom::{Kernel, Scene};
 use flatland_solve::{
     ExactReference, Mesh, Representation, SolveErrors, SolveParams, TransferOperator, solve_errors,
@@ -279,21 +281,26 @@ fn matching(rows: &[TimedRow], method: Contender, target: f64) -> Option<(Settin
     Some((best.setting, note))
 }
 
-/// HR built once at the budget that matched the learner's error, solved for every lighting.
-fn hr_relit(
+/// HR or clustered HR built once at the budget that matched the learner's error, solved for every lighting.
+fn links_relit(
     cx: &Context<'_>,
+    method: Contender,
     budget: usize,
     note: &str,
     relits: &[Relit],
     exact: &[Vec<f64>],
 ) -> Result<Vec<RelightRow>> {
     let started = Instant::now();
-    let run = run_hr_at_budget(cx.kernel, budget, 1, &cx.plan.hr)?;
-    let op = run
-        .approx
-        .operator(cx.scorer.mesh(), &SolveParams::default(), cx.stop)?;
+    let (mesh, params) = (cx.scorer.mesh(), SolveParams::default());
+    let op = if method == Contender::Clustered {
+        let run = run_clustered(cx.kernel, budget, 1, &cx.plan.clustered)?;
+        run.approx.operator(mesh, &params, cx.stop)?
+    } else {
+        let run = run_hr_at_budget(cx.kernel, budget, 1, &cx.plan.hr)?;
+        run.approx.operator(mesh, &params, cx.stop)?
+    };
     let build_s = started.elapsed().as_secs_f64();
-    resolved(Contender::Hr, cx, op.as_ref(), build_s, relits, exact, note)
+    resolved(method, cx, op.as_ref(), build_s, relits, exact, note)
 }
 
 /// The tracer at the photon count that matched the learner's error, tracing every lighting.
@@ -400,12 +407,19 @@ pub(crate) fn relight_all(
     if asked(Contender::Exact) {
         keep(Contender::Exact, exact_relit(cx, relits, exact), &mut rows);
     }
-    if asked(Contender::Hr) {
-        let result = match matching(sweep, Contender::Hr, target) {
-            Some((Setting::Budget(b), note)) => hr_relit(cx, b, &note, relits, exact),
-            _ => Err(anyhow::anyhow!("no HR row in the sweep to match")),
-        };
-        keep(Contender::Hr, result, &mut rows);
+    for method in [Contender::Hr, Contender::Clustered] {
+        if asked(method) {
+            let result = match matching(sweep, method, target) {
+                Some((Setting::Budget(b), note)) => {
+                    links_relit(cx, method, b, &note, relits, exact)
+                }
+                _ => Err(anyhow::anyhow!(
+                    "no {} row in the sweep to match",
+                    method.name()
+                )),
+            };
+            keep(method, result, &mut rows);
+        }
     }
     if asked(Contender::Tracer) {
         let result = match matching(sweep, Contender::Tracer, target) {
@@ -485,7 +499,7 @@ mod tests {
     fn relighting_totals_are_the_sums_of_the_lightings() {
         let (kernel, scorer) = tiny();
         let mut plan = TimedPlan::new(Contender::ALL.to_vec());
-        plan.methods = vec![Contender::Hr, Contender::Tracer];
+        plan.methods = vec![Contender::Hr, Contender::Clustered, Contender::Tracer];
         plan.budgets = vec![200];
         plan.extend_budgets = false;
         plan.tracer_seconds = 0.1;
@@ -502,6 +516,7 @@ mod tests {
                 Contender::Default,
                 Contender::Exact,
                 Contender::Hr,
+                Contender::Clustered,
                 Contender::Tracer
             ]
         );

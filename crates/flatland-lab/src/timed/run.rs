@@ -35,7 +35,7 @@ pub fn run_timed(
         plan,
         stop,
     };
-    let elements = ElementRange::new(kernel, scorer.mesh().len());
+    let elements = ElementRange::new(kernel, scorer.mesh().len(), scorer.reference_elements());
     let mut rows: Vec<TimedRow> = Vec::new();
     let mut spare = Spare::new();
     for &method in &plan.methods {
@@ -116,7 +116,9 @@ fn computed(
             spare.insert((other.method, b, seed), other);
             Ok(mine)
         }
-        (Contender::Hr | Contender::Uniform, Setting::Budget(b)) => cx.baseline(method, b, seed),
+        (Contender::Hr | Contender::Clustered | Contender::Uniform, Setting::Budget(b)) => {
+            cx.baseline(method, b, seed)
+        }
         (Contender::Exact, Setting::Elements(n)) => cx.exact(n),
         (Contender::Tracer, Setting::Photons(p)) => cx.tracer(p, seed),
         _ => anyhow::bail!("{} has no {} setting", method.name(), setting.kind()),
@@ -185,6 +187,25 @@ mod tests {
         assert!(!row.failed && row.basis_functions.unwrap() > 5, "{row:?}");
         assert!(row.note.contains("initial linking"), "{row:?}");
         assert!(row.reflected_error().is_some_and(f64::is_finite));
+    }
+
+    #[test]
+    fn clustered_rows_land_on_their_budgets_and_light_the_scene() {
+        let mut plan = TimedPlan::new(vec![Contender::Clustered]);
+        plan.budgets = vec![16, 256, 4096];
+        plan.extend_budgets = false;
+        let (rows, _) = run(&plan);
+        assert_eq!(rows.len(), 3, "{rows:?}");
+        for r in &rows {
+            let Setting::Budget(b) = r.setting else {
+                panic!("{r:?}")
+            };
+            assert!(!r.failed && r.note.is_empty(), "{r:?}");
+            assert!(r.basis_functions.unwrap().abs_diff(b) <= 3, "{r:?}");
+            assert!(r.rays > 0 && r.bytes > 0, "{r:?}");
+        }
+        let error = |k: usize| rows[k].reflected_error().unwrap();
+        assert!(error(2) < error(0), "{rows:?}");
     }
 
     #[test]

@@ -17,18 +17,23 @@ const MAX_PHOTONS: u64 = 1 << 36;
 pub(crate) struct ElementRange {
     /// The scene's fewest elements ([`Mesh::min_elements`]).
     pub min: usize,
-    /// Four times the solve's elements, within what the exact operator can have.
+    /// Four times the solve's elements, within what the exact operator can have, and below
+    /// the reference's own count (a solve on the reference's mesh is the reference: its
+    /// "error" of 0 would measure nothing).
     pub max: usize,
     /// How the exact operator of the scene is assembled (its size limit).
     pub method: ExactMethod,
 }
 
 impl ElementRange {
-    /// The range of a scene whose solve has `elements` elements.
-    pub fn new(kernel: &flatland_geom::Kernel, elements: usize) -> ElementRange {
+    /// The range of a scene whose solve has `elements` elements, measured against a reference
+    /// on `reference` elements.
+    pub fn new(kernel: &flatland_geom::Kernel, elements: usize, reference: usize) -> ElementRange {
         ElementRange {
             min: Mesh::min_elements(kernel.scene()).max(1),
-            max: (4 * elements).min(MAX_MESH_ELEMENTS),
+            max: (4 * elements)
+                .min(MAX_MESH_ELEMENTS)
+                .min(reference.saturating_sub(1)),
             method: ExactMethod::of(kernel),
         }
     }

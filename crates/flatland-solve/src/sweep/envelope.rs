@@ -43,8 +43,9 @@ impl Envelope {
     ///
     /// Two segments swap places at most once within the directions both cover, where they
     /// cross; so each overlap is cut at the crossing (if it lies inside) and each part goes to
-    /// the segment nearer at its middle direction, which is never where they meet. Ties keep
-    /// the piece already there.
+    /// the segment nearer at its middle direction, which is never where they meet. Of two
+    /// segments as near (back to back: a thin wall's two faces on one line, up to rounding) the
+    /// surface facing `y` wins; other ties keep the piece already there.
     pub fn insert(&mut self, view: &View, segments: &[Segment], id: u32, span: [f64; 2]) {
         let [lo, hi] = span;
         let s = &segments[id as usize];
@@ -64,8 +65,7 @@ impl Envelope {
             let q = &segments[p.segment as usize];
             let cut = crossing(view, s, q).filter(|&c| o0 < c && c < o1);
             for [u0, u1] in halves(o0, o1, cut) {
-                let mid = 0.5 * (u0 + u1);
-                if view.depth(s, mid) < view.depth(q, mid) {
+                if wins(view, s, q, 0.5 * (u0 + u1)) {
                     push(&mut out, piece(view, s, id, u0, u1));
                 } else {
                     push(&mut out, piece(view, q, p.segment, u0, u1));
@@ -98,6 +98,23 @@ impl Envelope {
             k += 1;
         }
         true
+    }
+}
+
+/// Depths this close (relative) are a tie: back-to-back segments, up to rounding (grazing
+/// views lose digits to cancellation, hence far above one ulp).
+const TIE: f64 = 1e-9;
+
+/// Whether `s` wins over `q` in direction σ: nearer, or as near and a surface facing `y` where `q`
+/// is not. Without this a thin wall seen from one side would show its back face half the time
+/// (whichever was inserted first) and send nothing.
+#[inline]
+fn wins(view: &View, s: &Segment, q: &Segment, sigma: f64) -> bool {
+    let (ds, dq) = (view.depth(s, sigma), view.depth(q, sigma));
+    if (ds - dq).abs() <= TIE * ds.max(dq) {
+        view.faced_by(s) && !view.faced_by(q)
+    } else {
+        ds < dq
     }
 }
 
@@ -219,10 +236,12 @@ mod tests {
             Segment {
                 a: v(-2.0, 1.0),
                 b: v(2.0, 3.0),
+                front: false,
             },
             Segment {
                 a: v(-2.0, 3.0),
                 b: v(2.0, 1.0),
+                front: false,
             },
         ];
         let env = build(&segments);
@@ -241,22 +260,27 @@ mod tests {
             Segment {
                 a: v(1.0, 1.0),
                 b: v(-1.0, 1.0),
+                front: false,
             },
             Segment {
                 a: v(-1.0, 1.0),
                 b: v(-1.0, 2.0),
+                front: false,
             },
             Segment {
                 a: v(1.0, 2.0),
                 b: v(1.0, 1.0),
+                front: false,
             },
             Segment {
                 a: v(-10.0, 4.0),
                 b: v(10.0, 4.0),
+                front: false,
             },
             Segment {
                 a: v(6.0, 4.0),
                 b: v(6.0, 2.5),
+                front: false,
             },
         ];
         let env = build(&segments);
@@ -280,7 +304,11 @@ mod tests {
         for case in 0..60 {
             let mut p = || v(rng.random_range(-3.0..3.0), rng.random_range(-1.0..3.0));
             let mut segments: Vec<Segment> = (0..2 + case % 12)
-                .map(|_| Segment { a: p(), b: p() })
+                .map(|_| Segment {
+                    a: p(),
+                    b: p(),
+                    front: false,
+                })
                 .collect();
             let env = build(&segments);
             check_against_rays(&segments, &env, 997);
@@ -290,11 +318,67 @@ mod tests {
         }
     }
 
+    /// A thin wall as two one-sided faces back to back, on one line: from either side, in either
+    /// insertion order, the face towards the point owns every direction the wall covers, also
+    /// when the faces' end points went through the frame's rounding (an oblique wall).
+    #[test]
+    fn back_to_back_faces_show_the_one_facing_the_point() {
+        let mut rng = ChaCha8Rng::seed_from_u64(19);
+        let thin = |p: DVec2, q: DVec2| {
+            [
+                Segment {
+                    a: p,
+                    b: q,
+                    front: true,
+                },
+                Segment {
+                    a: q,
+                    b: p,
+                    front: true,
+                },
+            ]
+        };
+        let mut walls = vec![
+            thin(v(1.5, 1.0), v(-1.5, 1.0)),
+            thin(v(-2.0, 3.0), v(2.0, 0.5)),
+        ];
+        for _ in 0..40 {
+            let mut p = || v(rng.random_range(-3.0..3.0), rng.random_range(0.3..3.0));
+            walls.push(thin(p(), p()));
+        }
+        for (w, pair) in walls.iter().enumerate() {
+            for order in [[0, 1], [1, 0]] {
+                let segments = [pair[order[0]], pair[order[1]]];
+                for (y, n) in [(v(0.0, 0.0), v(0.0, 1.0)), (v(0.3, 4.0), v(0.0, -1.0))] {
+                    let view = View::new(y, n);
+                    let facing = segments.iter().position(|s| view.faced_by(s));
+                    let mut env = Envelope::default();
+                    for (id, s) in segments.iter().enumerate() {
+                        if let Some(span) = view.span(s) {
+                            env.insert(&view, &segments, id as u32, span);
+                        }
+                    }
+                    let Some(facing) = facing else {
+                        continue; // y on the wall's line: it is seen edge-on
+                    };
+                    assert!(!env.pieces().is_empty(), "wall {w}: nothing seen");
+                    for piece in env.pieces() {
+                        assert_eq!(
+                            piece.segment as usize, facing,
+                            "wall {w}, order {order:?}, from {y}: the back face owns {piece:?}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
     #[test]
     fn hiding_needs_full_cover_no_farther_than_the_distance() {
         let segments = [Segment {
             a: v(1.0, 1.0),
             b: v(-1.0, 1.0),
+            front: false,
         }];
         let env = build(&segments);
         assert!(env.hides([-0.5, 0.5], 1.5));

@@ -54,9 +54,7 @@ impl Sweep {
 
     /// Probes element `i`: its exact row (`(j, K_ij)`, ρ included, columns ascending — the
     /// numbers of [`sweep_operator`](crate::sweep_operator)) into `row`, and the stretches
-    /// of surfaces its midpoint sees into `spans`, sorted by edge and position. A two-sided
-    /// receiver looks to both sides; its stretches are not kept (`spans` is left empty), since
-    /// a stretch does not say which side saw it.
+    /// of surfaces its midpoint sees into `spans`, sorted by edge and position.
     pub fn probe(
         &self,
         mesh: &Mesh,
@@ -75,10 +73,7 @@ impl Sweep {
             row.extend(transfers.iter().map(|&(j, t)| (j, rho * t)));
         }
         let receiver = &mesh.edges()[k];
-        if receiver.two_sided {
-            return;
-        }
-        // The envelope of the one side is still in the buffers.
+        // The envelope of the receiver's view is still in the buffers.
         let view = View::new(y, receiver.normal);
         for piece in buffers.sweep.envelope.pieces() {
             if let Some(m) = self.scene.mesh_edge[piece.segment as usize]

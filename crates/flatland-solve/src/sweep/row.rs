@@ -9,8 +9,8 @@ use super::{SweepBuffers, SweepScene};
 use crate::Mesh;
 
 /// `∫_{element j} G(x, y) V(x, y) dl_x` for every element `j` of `mesh` that `y` (a frame
-/// point on mesh edge `k`) sees, as `(j, transfer)` sorted by `j`, without ρ. A two-sided
-/// receiver looks to both sides. The slice lives in `buffers` until the next row.
+/// point on mesh edge `k`) sees, as `(j, transfer)` sorted by `j`, without ρ: what its front
+/// half-plane holds. The slice lives in `buffers` until the next row.
 pub(crate) fn transfers<'b>(
     scene: &SweepScene,
     mesh: &Mesh,
@@ -23,21 +23,14 @@ pub(crate) fn transfers<'b>(
     let skip = scene.segment_of[k];
     let mut out = std::mem::take(&mut buffers.transfers);
     out.clear();
-    let sides: &[f64] = if receiver.two_sided {
-        &[1.0, -1.0]
-    } else {
-        &[1.0]
-    };
-    for &side in sides {
-        let view = View::new(y, receiver.normal * side);
-        scene.envelope(&view, skip, cull, buffers);
-        for piece in buffers.envelope.pieces() {
-            if let Some(m) = scene.mesh_edge[piece.segment as usize] {
-                seen_part(&view, mesh, m as usize, piece, &mut out);
-            }
+    let view = View::new(y, receiver.normal);
+    scene.envelope(&view, skip, cull, buffers);
+    for piece in buffers.envelope.pieces() {
+        if let Some(m) = scene.mesh_edge[piece.segment as usize] {
+            seen_part(&view, mesh, m as usize, piece, &mut out);
         }
     }
-    // Pieces of one element seen in several places (between occluders, from both sides) sum.
+    // Pieces of one element seen in several places (between occluders) sum.
     out.sort_by_key(|&(j, _)| j);
     out.dedup_by(|later, kept| {
         let same = later.0 == kept.0;
@@ -66,12 +59,7 @@ pub(super) fn seen_part(
         mesh.local(elements.start)[0],
         mesh.local(elements.end - 1)[1],
     );
-    let facing = edge.normal.dot(view.y - first);
-    if !(if edge.two_sided {
-        facing != 0.0
-    } else {
-        facing > 0.0
-    }) {
+    if edge.normal.dot(view.y - first) <= 0.0 {
         return;
     }
     // σ is monotone along the edge: increasing from `first` when `last` is counter-clockwise

@@ -12,11 +12,17 @@ pub(crate) struct Segment {
     pub a: DVec2,
     /// End point.
     pub b: DVec2,
+    /// Whether the left of `a → b` is a surface's front (false for a blocker, which has none).
+    pub front: bool,
 }
 
 /// Boxes nearer than this to the receiving point (unit frame) are taken to cover every
 /// direction: their corners' directions would be rounding there.
 const TOUCHING: f64 = 1e-9;
+
+/// A segment end this close to the horizon (in radians, seen from the receiving point) lies
+/// on it up to rounding.
+const ON_HORIZON: f64 = 1e-12;
 
 /// How much a box's range of directions is widened, so rounding never lets culling skip a
 /// segment whose end lies on the box's outline.
@@ -42,6 +48,12 @@ impl View {
     /// The view from `y` into the half-plane of the unit normal `n`.
     pub fn new(y: DVec2, n: DVec2) -> View {
         View { y, n, t: n.perp() }
+    }
+
+    /// Whether `s` is a surface whose front faces `y` (strictly).
+    #[inline]
+    pub fn faced_by(&self, s: &Segment) -> bool {
+        s.front && (s.b - s.a).perp_dot(self.y - s.a) > 0.0
     }
 
     /// Height of `p` above the horizon: positive in front.
@@ -89,9 +101,18 @@ impl View {
     /// The directions `[σ_lo, σ_hi]` in which the part of `s` in front of the horizon is seen;
     /// `None` when it lies behind or is seen edge-on (it subtends nothing). A segment leaving
     /// the front half-plane is clipped where it crosses the horizon, at σ = ±1.
+    ///
+    /// Edge-on includes a segment on the horizon up to rounding (both ends within
+    /// [`ON_HORIZON`] radians of it): the receiver's twin back to back, which holds `y`, would
+    /// otherwise cover every direction at depth zero whenever rounding lifts both its ends.
     pub fn span(&self, s: &Segment) -> Option<[f64; 2]> {
         let (ha, hb) = (self.height(s.a), self.height(s.b));
         if ha <= 0.0 && hb <= 0.0 {
+            return None;
+        }
+        if ha.abs() <= ON_HORIZON * (s.a - self.y).length()
+            && hb.abs() <= ON_HORIZON * (s.b - self.y).length()
+        {
             return None;
         }
         let crossing = || s.a + (s.b - s.a) * (ha / (ha - hb));
@@ -162,7 +183,7 @@ mod tests {
     }
 
     fn seg(a: DVec2, b: DVec2) -> Segment {
-        Segment { a, b }
+        Segment { a, b, front: true }
     }
 
     #[test]

@@ -50,9 +50,6 @@ pub(crate) struct Probes {
     section_of: Vec<u32>,
     /// Per element: its probe, if probed.
     probe_of: Vec<Option<u32>>,
-    /// Per element: whether a neighbour's view may be borrowed for it (`false` on a
-    /// two-sided receiver, whose view is kept only as a row).
-    lends: Vec<bool>,
     probes: Vec<Probe>,
     spans: Vec<SeenSpan>,
 }
@@ -62,7 +59,6 @@ impl Probes {
     pub(crate) fn new(mesh: &Mesh) -> Probes {
         let mut sections: Vec<Range<u32>> = Vec::new();
         let mut section_of = vec![0; mesh.len()];
-        let mut lends = vec![true; mesh.len()];
         for edge in mesh.edges() {
             let mut current: Option<usize> = None;
             for i in edge.elements.clone() {
@@ -75,7 +71,6 @@ impl Probes {
                 let last = sections.len() - 1;
                 sections[last].end = i as u32 + 1;
                 section_of[i] = last as u32;
-                lends[i] = !edge.two_sided;
             }
         }
         Probes {
@@ -83,25 +78,19 @@ impl Probes {
             sections,
             section_of,
             probe_of: vec![None; mesh.len()],
-            lends,
             probes: Vec::new(),
             spans: Vec::new(),
         }
     }
 
-    /// The elements the first round probes: both ends of every section, and every element
-    /// of a receiver whose view cannot be lent.
+    /// The elements the first round probes: both ends of every section.
     pub(crate) fn first(&self) -> Vec<usize> {
         let mut out = Vec::new();
         for range in &self.sections {
             let (a, b) = (range.start as usize, range.end as usize - 1);
-            if !self.lends[a] {
-                out.extend(a..=b);
-            } else {
-                out.push(a);
-                if b != a {
-                    out.push(b);
-                }
+            out.push(a);
+            if b != a {
+                out.push(b);
             }
         }
         out
@@ -197,7 +186,6 @@ impl Probes {
             + self.sections.capacity() * 8
             + self.section_of.capacity() * 4
             + self.probe_of.capacity() * 8
-            + self.lends.capacity()
     }
 
     /// The cells, in the order probed.

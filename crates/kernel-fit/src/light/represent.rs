@@ -8,16 +8,12 @@ use super::probes::Bracket;
 
 impl LightFit {
     /// `Ṽ(s, t)`: whether the probe bracketing `t` sees the sender point `s`, blended between
-    /// the two probes of a gap as the rows are. `None` before the first round, or where a
-    /// view cannot be borrowed (a two-sided receiver).
+    /// the two probes of a gap as the rows are. `None` before the first round.
     fn visibility(&self, s: f64, t: f64) -> Option<f64> {
         if self.probes.len() == 0 {
             return None;
         }
         let i = self.mesh.element_at(t);
-        if self.mesh.edge_of(i).two_sided {
-            return None;
-        }
         let sender = &self.mesh.elements()[self.mesh.element_at(s)];
         let edge = &self.mesh.edges()[sender.mesh_edge];
         let u = (s - edge.s[0]) / (edge.s[1] - edge.s[0]);
@@ -31,7 +27,7 @@ impl LightFit {
 }
 
 /// As a kernel: the unoccluded kernel (exact, closed form) times the probes' `Ṽ`; the exact
-/// kernel where the fit has no view to lend (before its first round, two-sided receivers).
+/// kernel before its first round, when the fit has no view to lend.
 impl Representation for LightFit {
     fn zeta(&self, s: f64, t: f64) -> f64 {
         let u = self.kernel.unoccluded(s, t);
