@@ -3,8 +3,8 @@
 # can be diffed bit for bit (`diff -r A B` after a refactor must print nothing):
 #   fit-SCENE-PRESET.json     flatland fit --json --preset PRESET (both presets)
 #   model-SCENE-PRESET.json   the model that fit wrote (--out), its summary's times stripped
-#   solve-SCENE-PRESET.json   flatland solve --json --kernel <that model>
-#   solve-SCENE-KERNEL.json   flatland solve --json --kernel exact | default (the light learner)
+#   solve-SCENE-fit-PRESET.json  flatland solve --json --kernel <that model>
+#   solve-SCENE-KERNEL.json      flatland solve --json --kernel exact | default (the light learner)
 # Usage: scripts/outputs.sh OUT_DIR [FLATLAND_BINARY]   (default: this tree's target/release/flatland)
 # Needs jq. Every run is seeded (the commands' default seed), so a difference is a change.
 set -euo pipefail
@@ -33,7 +33,7 @@ for scene in "$root"/scenes/*.ron; do
   for preset in default paper; do
     model="$models/$name-$preset.json"
     run "fit-$name-$preset" fit --scene "$scene" --preset "$preset" --out "$model"
-    run "solve-$name-$preset" solve --scene "$scene" --kernel "$model"
+    run "solve-$name-fit-$preset" solve --scene "$scene" --kernel "$model"
     jq -S 'walk(if type == "object" then with_entries(select(.key | test("_s$") | not)) else . end)' \
       "$model" >"$out/model-$name-$preset.json"
     count=$((count + 3))

@@ -7,6 +7,7 @@ use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
 use flatland_geom::{Kernel, Scene};
+use flatland_testkit::assert_close;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -375,7 +376,7 @@ fn solve_gives_e_over_one_minus_rho_in_a_uniformly_glowing_room() {
     let text = std::fs::read_to_string(&path).unwrap();
     for line in text.lines().skip(1) {
         let b: f64 = line.rsplit(',').next().unwrap().parse().unwrap();
-        assert!((b - 5.0).abs() < 1e-8, "B = {b}, expected E / (1 − ρ) = 5");
+        assert_close!(b, 5.0, 1e-8, "B = {b}, expected E / (1 − ρ) = 5");
     }
 }
 
@@ -547,12 +548,13 @@ fn write_scene(path: &Path, edges: &[([f64; 2], [f64; 2], f64)]) {
 
 /// The unit room, counter-clockwise, its floor emitting `e`.
 fn room(e: f64) -> Vec<([f64; 2], [f64; 2], f64)> {
-    vec![
-        ([0., 0.], [1., 0.], e),
-        ([1., 0.], [1., 1.], 0.),
-        ([1., 1.], [0., 1.], 0.),
-        ([0., 1.], [0., 0.], 0.),
-    ]
+    let c = flatland_testkit::rooms::unit_square();
+    (0..4)
+        .map(|i| {
+            let emission = if i == 0 { e } else { 0.0 };
+            (c[i].to_array(), c[(i + 1) % 4].to_array(), emission)
+        })
+        .collect()
 }
 
 /// `--res` outside its range was an allocation abort (exit 134) for `fit --res 50000` and

@@ -129,6 +129,7 @@ fn grid(kernel: &Kernel, res: usize, m: usize, weighted: bool) -> anyhow::Result
 #[cfg(test)]
 mod tests {
     use super::*;
+    use flatland_testkit::assert_close;
 
     #[test]
     fn cells_average_only_where_the_grid_is_coarser_than_the_edges() {
@@ -148,6 +149,6 @@ mod tests {
             .map(|(s, t)| kernel.k(s / 32.0, t / 32.0))
             .sum::<f64>()
             / 4.0;
-        assert!((mean - expected).abs() <= 1e-15 * expected.abs().max(1.0));
+        assert_close!(mean, expected, 1e-15 * expected.abs().max(1.0));
     }
 }

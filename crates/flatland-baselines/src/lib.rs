@@ -224,6 +224,7 @@ pub(crate) fn grouped(n: usize) -> String {
 #[cfg(test)]
 pub(crate) mod test_support {
     use flatland_geom::{Edge, Kernel, Role, Scene};
+    use flatland_testkit::rooms;
     use glam::DVec2;
 
     /// A surface edge from `a` to `b` (front = left of a→b).
@@ -238,14 +239,15 @@ pub(crate) mod test_support {
         }
     }
 
-    /// The closed unit box, counter-clockwise (facing in), the floor emitting.
+    /// The closed unit box, counter-clockwise (facing in), the floor emitting; each wall
+    /// reflects differently (0.5, 0.7, 0.6, 0.8 from the floor round).
     pub fn box_edges() -> Vec<Edge> {
-        vec![
-            surface([0.0, 0.0], [1.0, 0.0], 0.5, 1.0),
-            surface([1.0, 0.0], [1.0, 1.0], 0.7, 0.0),
-            surface([1.0, 1.0], [0.0, 1.0], 0.6, 0.0),
-            surface([0.0, 1.0], [0.0, 0.0], 0.8, 0.0),
-        ]
+        let mut edges = Edge::polygon(&rooms::unit_square(), 0.0);
+        for (edge, rho) in edges.iter_mut().zip([0.5, 0.7, 0.6, 0.8]) {
+            edge.reflectance = rho;
+        }
+        edges[0].emission = 1.0;
+        edges
     }
 
     /// The closed unit box.
@@ -256,9 +258,10 @@ pub(crate) mod test_support {
     /// The unit box with a floating two-sided blocker casting shadows (like the paper's Fig. 3).
     pub fn blocker_kernel() -> Kernel {
         let mut edges = box_edges();
+        let [a, b] = rooms::box_blocker();
         edges.push(Edge {
-            a: DVec2::new(0.3, 0.45),
-            b: DVec2::new(0.65, 0.55),
+            a,
+            b,
             reflectance: 0.5,
             emission: 0.0,
             role: Role::Blocker,

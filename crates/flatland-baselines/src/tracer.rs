@@ -328,6 +328,7 @@ mod tests {
     use crate::test_support::{box_edges, kernel};
     use flatland_geom::{DVec2, Edge, bundled};
     use flatland_solve::{ExactReference, SolveParams, never};
+    use flatland_testkit::assert_close;
     use std::sync::atomic::{AtomicU64, Ordering};
 
     fn photons(n: u64, seed: u64) -> TraceParams {
@@ -390,7 +391,7 @@ mod tests {
         let traced = trace(&kernel, &mesh, &photons(100_000, 3), &never).unwrap();
         for (i, (&b, &se)) in traced.radiosity.iter().zip(&traced.std_error).enumerate() {
             assert!(se < 0.02, "element {i}: standard error {se}");
-            assert!((b - 2.0).abs() <= 5.0 * se, "element {i}: B {b} ± {se}");
+            assert_close!(b, 2.0, 5.0 * se, "element {i}: B {b} ± {se}");
         }
         assert_eq!(traced.power.escaped, 0.0);
     }

@@ -51,6 +51,9 @@ mod visibility;
 
 #[cfg(test)]
 mod test_support;
+// The tests' `assert_close!` (the workspace's), at the crate root where they name it.
+#[cfg(test)]
+use flatland_testkit::assert_close;
 
 pub use error::GeomError;
 pub use glam::DVec2;

@@ -1,31 +1,13 @@
-//! Shared test helpers: `assert_close!`, one seeded RNG, scene generators.
+//! Shared test helpers: scene generators; `assert_close!` and the seeded generator are the
+//! workspace's (`flatland_testkit`), re-exported where the crate's tests have always named them.
 
 use glam::DVec2;
-use rand::{RngExt, SeedableRng};
+use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 
+pub use flatland_testkit::rng;
+
 use crate::{Edge, Scene};
-
-/// Asserts `|a − b| <= tol` (absolute) and prints both values and the difference otherwise.
-#[macro_export]
-macro_rules! assert_close {
-    ($a:expr, $b:expr, $tol:expr $(, $($msg:tt)+)?) => {{
-        let (a, b, tol): (f64, f64, f64) = ($a, $b, $tol);
-        assert!(
-            (a - b).abs() <= tol,
-            "assert_close failed: {} = {a:e}, {} = {b:e}, |diff| = {:e} > tol {tol:e}{}",
-            stringify!($a),
-            stringify!($b),
-            (a - b).abs(),
-            { let _m = String::new(); $( let _m = format!(": {}", format_args!($($msg)+)); )? _m }
-        );
-    }};
-}
-
-/// The one seeded generator of the crate's tests.
-pub fn rng(seed: u64) -> ChaCha8Rng {
-    ChaCha8Rng::seed_from_u64(seed)
-}
 
 /// A counter-clockwise (inward-facing) closed polygon room with reflectance `rho`.
 pub fn room(points: &[DVec2], rho: f64) -> Vec<Edge> {
@@ -34,13 +16,7 @@ pub fn room(points: &[DVec2], rho: f64) -> Vec<Edge> {
 
 /// The unit-square box room (4 surfaces, the floor emits).
 pub fn unit_box() -> Scene {
-    let p = [
-        DVec2::new(0.0, 0.0),
-        DVec2::new(1.0, 0.0),
-        DVec2::new(1.0, 1.0),
-        DVec2::new(0.0, 1.0),
-    ];
-    let mut edges = room(&p, 0.5);
+    let mut edges = room(&flatland_testkit::rooms::unit_square(), 0.5);
     edges[0].emission = 1.0;
     Scene::new(edges).unwrap()
 }
@@ -226,10 +202,10 @@ pub fn gauss(a: f64, b: f64, mut f: impl FnMut(f64) -> f64) -> f64 {
 
 #[test]
 fn gauss16_is_exact_for_degree_31() {
-    crate::assert_close!(
+    flatland_testkit::assert_close!(
         gauss(-1.0, 1.0, |x| x.powi(30) + x.powi(31)),
         2.0 / 31.0,
         1e-14
     );
-    crate::assert_close!(gauss(0.0, 2.0, |x| x * x), 8.0 / 3.0, 1e-14);
+    flatland_testkit::assert_close!(gauss(0.0, 2.0, |x| x * x), 8.0 / 3.0, 1e-14);
 }

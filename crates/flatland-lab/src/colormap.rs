@@ -146,6 +146,7 @@ pub fn radiosity_top(mesh: &flatland_solve::Mesh, b: &[f64]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use flatland_testkit::assert_close;
 
     #[test]
     fn inferno_runs_from_black_to_pale_yellow_and_brightens() {
@@ -181,10 +182,10 @@ mod tests {
             log: true,
         };
         assert_eq!(scale.unit(1.0), 1.0);
-        assert!((scale.unit(1e-2) - 0.5).abs() < 1e-12);
+        assert_close!(scale.unit(1e-2), 0.5, 1e-12);
         assert_eq!(scale.unit(1e-5), 0.0);
         for x in [0.0, 0.25, 0.5, 1.0] {
-            assert!((scale.unit(scale.value_at(x)) - x).abs() < 1e-12, "{x}");
+            assert_close!(scale.unit(scale.value_at(x)), x, 1e-12);
         }
         let linear = Scale {
             top: 2.0,

@@ -417,6 +417,7 @@ pub fn kind_name(kind: SceneKind) -> &'static str {
 mod tests {
     use super::*;
     use flatland_solve::never;
+    use flatland_testkit::assert_close;
 
     #[test]
     fn small_scenes_give_a_row_per_method_and_relighting() {
@@ -488,7 +489,7 @@ mod tests {
         }
         // Linear from 100 to 1000 edges: 100 s at 10⁴.
         let p = predicted(&all, Contender::Hr, SceneKind::Hall, 10_000).unwrap();
-        assert!((p - 100.0).abs() < 1e-9, "{p}");
+        assert_close!(p, 100.0, 1e-9);
         // Nothing measured on floor plans: no prediction.
         assert_eq!(
             predicted(&all, Contender::Hr, SceneKind::FloorPlan, 10_000),
@@ -497,7 +498,7 @@ mod tests {
         // One size only: quadratic.
         all.rows.pop();
         let p = predicted(&all, Contender::Hr, SceneKind::Hall, 1000).unwrap();
-        assert!((p - 100.0).abs() < 1e-9, "{p}");
+        assert_close!(p, 100.0, 1e-9);
     }
 
     #[test]

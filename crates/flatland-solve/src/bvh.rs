@@ -205,11 +205,10 @@ fn build(boxes: &[Aabb], items: &mut [u32], first: usize, nodes: &mut Vec<Node>)
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rand::{RngExt, SeedableRng};
-    use rand_chacha::ChaCha8Rng;
+    use rand::RngExt;
 
     fn random_boxes(n: usize, seed: u64) -> Vec<Aabb> {
-        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut rng = flatland_testkit::rng(seed);
         (0..n)
             .map(|_| {
                 let a = DVec2::new(rng.random_range(0.0..10.0), rng.random_range(0.0..10.0));

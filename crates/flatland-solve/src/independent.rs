@@ -11,7 +11,7 @@
 //! emitter, a shadow ray each): the same expectation, far less noise.
 
 use flatland_geom::{DVec2, Role, Scene};
-use rand::{RngExt, SeedableRng};
+use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 
 /// Hits this close (relative) are one point: back-to-back faces, up to rounding.
@@ -60,7 +60,7 @@ const BATCHES: usize = 16;
 /// The light arriving at `y` on edge `edge` (H, so that the reflected radiosity is ρ·H) from
 /// `paths` paths, and its standard error.
 pub fn irradiance(scene: &Scene, edge: usize, y: DVec2, paths: usize, seed: u64) -> (f64, f64) {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut rng = flatland_testkit::rng(seed);
     let per_batch = (paths / BATCHES).max(1);
     let means: Vec<f64> = (0..BATCHES)
         .map(|_| {

@@ -462,8 +462,8 @@ fn apportion(lengths: &[f64], total: usize) -> Vec<usize> {
 mod tests {
     use super::*;
     use crate::test_support::{bundled, floor_plan, hall, random_room};
-    use rand::{RngExt, SeedableRng};
-    use rand_chacha::ChaCha8Rng;
+    use flatland_testkit::assert_close;
+    use rand::RngExt;
 
     #[test]
     fn elements_tile_the_parameter_range_in_order_and_never_straddle_edges() {
@@ -480,7 +480,7 @@ mod tests {
                     assert_eq!(w[0].s[1], w[1].s[0], "{name}: a gap or overlap");
                 }
                 let total: f64 = els.iter().map(|e| e.length).sum();
-                assert!((total - scene.total_length()).abs() < 1e-12 * total);
+                assert_close!(total, scene.total_length(), 1e-12 * total);
                 for (i, e) in els.iter().enumerate() {
                     let p = scene.point(e.s_mid);
                     assert_eq!(p.edge, e.edge, "{name}: element {i}");
@@ -503,7 +503,7 @@ mod tests {
         let fine = Mesh::new(&Kernel::new(scene.subdivide(7).unwrap()), 60).unwrap();
         assert_eq!(coarse.edges().len(), fine.edges().len());
         for (a, b) in coarse.elements().iter().zip(fine.elements()) {
-            assert!((a.s_mid - b.s_mid).abs() < 1e-15);
+            assert_close!(a.s_mid, b.s_mid, 1e-15);
             assert!(a.midpoint.distance(b.midpoint) < 1e-12);
         }
         // Fewer elements than (whole) surface edges is an error naming the rule.
@@ -521,11 +521,11 @@ mod tests {
         let maze = Kernel::new(bundled("maze"));
         let mesh = Mesh::new(&maze, 300).unwrap();
         assert_eq!(mesh.edges()[0].junctions, vec![0.25]);
-        assert!((mesh.edges()[2].junctions[0] - 0.8 / 1.5).abs() < 1e-15);
+        assert_close!(mesh.edges()[2].junctions[0], 0.8 / 1.5, 1e-15);
         assert_eq!(Mesh::min_elements(maze.scene()), 14 + 2);
         let corners = Kernel::new(bundled("corners"));
         let mesh = Mesh::new(&corners, 100).unwrap();
-        assert!((mesh.edges()[1].junctions[0] - 0.6).abs() < 1e-15);
+        assert_close!(mesh.edges()[1].junctions[0], 0.6, 1e-15);
         for m in [&mesh, &Mesh::new(&maze, 77).unwrap()] {
             for edge in m.edges() {
                 for &u in &edge.junctions {
@@ -639,7 +639,7 @@ mod tests {
 
     #[test]
     fn apportionment_by_heap_is_the_scan() {
-        let mut rng = ChaCha8Rng::seed_from_u64(17);
+        let mut rng = flatland_testkit::rng(17);
         for case in 0..300 {
             let n = 1 + case % 40;
             // Equal lengths in some cases: ties must go the same way.

@@ -240,12 +240,12 @@ mod tests {
     use crate::never;
     use crate::test_support::bundled;
     use flatland_geom::Kernel;
-    use rand::{RngExt, SeedableRng};
-    use rand_chacha::ChaCha8Rng;
+    use flatland_testkit::assert_close;
+    use rand::RngExt;
 
     #[test]
     fn dense_apply_is_the_matrix_product() {
-        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let mut rng = flatland_testkit::rng(3);
         for n in [1, 3, 7, 64, 101] {
             let values: Vec<f64> = (0..n * n).map(|_| rng.random_range(-1.0..1.0)).collect();
             let op = DenseOperator::assemble(
@@ -259,7 +259,7 @@ mod tests {
             op.apply(&b, &mut out);
             for i in 0..n {
                 let expected: f64 = (0..n).map(|j| values[i * n + j] * b[j]).sum();
-                assert!((out[i] - expected).abs() < 1e-12, "n = {n}, row {i}");
+                assert_close!(out[i], expected, 1e-12, "n = {n}, row {i}");
             }
         }
     }
@@ -289,7 +289,7 @@ mod tests {
         // element by element by hand.
         let kernel = Kernel::new(bundled("fig3"));
         let mesh = Mesh::new(&kernel, 37).unwrap();
-        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let mut rng = flatland_testkit::rng(5);
         let rects: Vec<KernelRectangle> = (0..200)
             .map(|_| {
                 let (a, b): (f64, f64) = (rng.random_range(0.0..1.0), rng.random_range(0.0..1.0));

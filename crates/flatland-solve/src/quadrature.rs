@@ -62,12 +62,13 @@ pub fn integrate(rule: &(Vec<f64>, Vec<f64>), a: f64, b: f64, f: impl Fn(f64) ->
 #[cfg(test)]
 mod tests {
     use super::*;
+    use flatland_testkit::assert_close;
 
     #[test]
     fn rules_integrate_polynomials_of_degree_2n_minus_1_exactly() {
         for n in 1..=24 {
             let rule = gauss_legendre(n);
-            assert!((rule.1.iter().sum::<f64>() - 2.0).abs() < 1e-13, "n = {n}");
+            assert_close!(rule.1.iter().sum::<f64>(), 2.0, 1e-13, "n = {n}");
             assert!(rule.0.windows(2).all(|w| w[0] < w[1]), "n = {n}");
             for degree in 0..2 * n {
                 let got = integrate(&rule, 0.0, 1.0, |x| x.powi(degree as i32));

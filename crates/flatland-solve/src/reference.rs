@@ -275,6 +275,7 @@ pub fn density_ratio(mask: &[bool], res: usize, points: &[[f64; 2]]) -> Option<f
 #[cfg(test)]
 mod tests {
     use super::*;
+    use flatland_testkit::assert_close;
 
     #[test]
     fn relative_l2_is_scale_free_and_finite() {
@@ -283,22 +284,22 @@ mod tests {
         let e = relative_l2(&approx, &exact);
         let scaled: Vec<f64> = approx.iter().map(|v| v * 1e300).collect();
         let exact_scaled: Vec<f64> = exact.iter().map(|v| v * 1e300).collect();
-        assert!((relative_l2(&scaled, &exact_scaled) - e).abs() < 1e-12);
+        assert_close!(relative_l2(&scaled, &exact_scaled), e, 1e-12);
         let tiny: Vec<f64> = approx.iter().map(|v| v * 1e-300).collect();
         let exact_tiny: Vec<f64> = exact.iter().map(|v| v * 1e-300).collect();
-        assert!((relative_l2(&tiny, &exact_tiny) - e).abs() < 1e-9);
+        assert_close!(relative_l2(&tiny, &exact_tiny), e, 1e-9);
         assert_eq!(relative_l2(&[0.0; 3], &[0.0; 3]), 0.0);
-        assert!((relative_l2(&[0.0, 0.0], &[3.0, 4.0]) - 1.0).abs() < 1e-15);
+        assert_close!(relative_l2(&[0.0, 0.0], &[3.0, 4.0]), 1.0, 1e-15);
     }
 
     #[test]
     fn relative_l1_and_the_bootstrap_interval() {
         let exact = [1.0, 2.0, 3.0, 4.0];
         let approx = [1.5, 2.0, 2.0, 4.0];
-        assert!((relative_l1(&approx, &exact) - 1.5 / 10.0).abs() < 1e-15);
+        assert_close!(relative_l1(&approx, &exact), 1.5 / 10.0, 1e-15);
         let scaled: Vec<f64> = approx.iter().map(|v| v * 1e-300).collect();
         let exact_scaled: Vec<f64> = exact.iter().map(|v| v * 1e-300).collect();
-        assert!((relative_l1(&scaled, &exact_scaled) - 0.15).abs() < 1e-12);
+        assert_close!(relative_l1(&scaled, &exact_scaled), 0.15, 1e-12);
         assert_eq!(relative_l1(&[0.0; 3], &[0.0; 3]), 0.0);
         // The interval brackets the estimate and is empty of spread for a perfect fit.
         let exact: Vec<f64> = (0..500).map(|i| 1.0 + (i % 7) as f64).collect();
@@ -335,6 +336,6 @@ mod tests {
             })
             .collect();
         let ratio = density_ratio(&mask, res, &points).unwrap();
-        assert!((ratio - 3.0).abs() < 1e-12, "{ratio}");
+        assert_close!(ratio, 3.0, 1e-12);
     }
 }

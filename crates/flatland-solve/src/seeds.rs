@@ -34,4 +34,18 @@ mod tests {
         assert_ne!(draw(stream(7, 3)), draw(stream(7, 2)));
         assert_ne!(draw(heldout(7)), draw(stream(7, 0)));
     }
+
+    /// The tests' generators (`flatland_testkit`, which cannot depend on this crate) follow
+    /// this rule: the same numbers for the same seed and stream.
+    #[test]
+    fn the_tests_generators_follow_the_rule() {
+        let draw = |mut r: ChaCha8Rng| -> Vec<u64> { (0..4).map(|_| r.random()).collect() };
+        for seed in [0, 7, u64::MAX] {
+            assert_eq!(draw(flatland_testkit::rng(seed)), draw(stream(seed, 0)));
+            assert_eq!(
+                draw(flatland_testkit::stream(seed, 5)),
+                draw(stream(seed, 5))
+            );
+        }
+    }
 }

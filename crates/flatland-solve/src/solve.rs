@@ -381,8 +381,8 @@ mod tests {
     use crate::test_support::{bundled, l_room, room, thin_wall_plan};
     use crate::{exact_operator, never, quadrature_operator};
     use flatland_geom::{DVec2, Edge, Scene};
-    use rand::{RngExt, SeedableRng};
-    use rand_chacha::ChaCha8Rng;
+    use flatland_testkit::assert_close;
+    use rand::RngExt;
 
     fn v(x: f64, y: f64) -> DVec2 {
         DVec2::new(x, y)
@@ -397,7 +397,7 @@ mod tests {
 
     /// Random convex polygons: sorted angles on an ellipse, counter-clockwise.
     fn convex_rooms(count: usize, rho: f64, e: f64) -> Vec<Scene> {
-        let mut rng = ChaCha8Rng::seed_from_u64(21);
+        let mut rng = flatland_testkit::rng(21);
         (0..count)
             .map(|_| {
                 let mut angles: Vec<f64> = (0..rng.random_range(3..9))
@@ -567,7 +567,7 @@ mod tests {
         let (_, fine_mesh, fine) = exact(bundled("maze").subdivide(50).unwrap(), 300);
         assert_eq!(coarse_mesh.len(), fine_mesh.len());
         for (a, b) in coarse.radiosity.iter().zip(&fine.radiosity) {
-            assert!((a - b).abs() <= 1e-9 * a.max(1.0), "{a} vs {b}");
+            assert_close!(*a, *b, 1e-9 * a.max(1.0));
         }
     }
 
@@ -594,8 +594,7 @@ mod tests {
 
     #[test]
     fn a_closed_white_room_with_a_light_is_refused_not_nan() {
-        let p = [v(0.0, 0.0), v(1.0, 0.0), v(1.0, 1.0), v(0.0, 1.0)];
-        let scene = room(&p, 1.0, 1.0);
+        let scene = room(&flatland_testkit::rooms::unit_square(), 1.0, 1.0);
         let kernel = Kernel::new(scene);
         let mesh = Mesh::new(&kernel, 40).unwrap();
         let params = SolveParams {
@@ -634,7 +633,7 @@ mod tests {
             let op = kernel
                 .operator(&mesh, &SolveParams::default(), &never)
                 .unwrap();
-            let mut rng = ChaCha8Rng::seed_from_u64(3);
+            let mut rng = flatland_testkit::rng(3);
             let b: Vec<f64> = (0..mesh.len())
                 .map(|_| rng.random_range(0.0..1.0))
                 .collect();

@@ -190,12 +190,12 @@ impl TransferOperator for SparseOperator {
 mod tests {
     use super::*;
     use crate::never;
-    use rand::{RngExt, SeedableRng};
-    use rand_chacha::ChaCha8Rng;
+    use flatland_testkit::assert_close;
+    use rand::RngExt;
 
     /// A random sparse matrix, dense row-major, about `fill` of it non-zero.
     fn random(n: usize, fill: f64, seed: u64) -> Vec<f64> {
-        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut rng = flatland_testkit::rng(seed);
         (0..n * n)
             .map(|_| {
                 if rng.random_range(0.0..1.0) < fill {
@@ -225,7 +225,7 @@ mod tests {
 
     #[test]
     fn apply_is_the_matrix_product_and_entries_read_back() {
-        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        let mut rng = flatland_testkit::rng(4);
         for (n, fill) in [(1, 1.0), (3, 0.5), (64, 0.1), (65, 0.3), (300, 0.02)] {
             let dense = random(n, fill, n as u64);
             let op = sparse_of(&dense, n);
@@ -237,7 +237,7 @@ mod tests {
             op.apply(&b, &mut out);
             for i in 0..n {
                 let expected: f64 = (0..n).map(|j| dense[i * n + j] * b[j]).sum();
-                assert!((out[i] - expected).abs() < 1e-12, "n = {n}, row {i}");
+                assert_close!(out[i], expected, 1e-12, "n = {n}, row {i}");
                 for j in 0..n {
                     assert_eq!(op.get(i, j), dense[i * n + j]);
                 }

@@ -4,8 +4,7 @@
 use flatland_geom::{DVec2, Edge, Scene};
 
 use crate::{Mesh, SolveParams, TransferOperator, never, solve_operator};
-use rand::{RngExt, SeedableRng};
-use rand_chacha::ChaCha8Rng;
+use rand::RngExt;
 
 /// The bundled scene `NAME`.
 pub fn bundled(name: &str) -> Scene {
@@ -122,7 +121,7 @@ pub fn thin_wall_plan(cols: usize, rows: usize, seed: u64) -> Scene {
 /// (two surfaces back to back) and blockers, crossing and touching each other and the walls at random; some
 /// end exactly on a wall or on another segment's end (T-junctions and shared corners).
 pub fn random_room(inside: usize, seed: u64) -> Scene {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut rng = flatland_testkit::rng(seed);
     let corners = [
         DVec2::new(0.0, 0.0),
         DVec2::new(4.0, 0.0),

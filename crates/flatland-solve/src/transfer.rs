@@ -162,8 +162,8 @@ mod tests {
     use super::*;
     use crate::quadrature::{gauss_legendre, integrate};
     use flatland_geom::{Edge, Kernel, Scene};
-    use rand::{RngExt, SeedableRng};
-    use rand_chacha::ChaCha8Rng;
+    use flatland_testkit::assert_close;
+    use rand::RngExt;
 
     fn v(x: f64, y: f64) -> DVec2 {
         DVec2::new(x, y)
@@ -243,7 +243,7 @@ mod tests {
             normal: v(0.0, 1.0),
         };
         let x = sender(v(1.0, 1.0), v(-1.0, 1.0));
-        assert!((point_to_segment(&y, &x) - 0.5f64.sqrt()).abs() < 1e-15);
+        assert_close!(point_to_segment(&y, &x), 0.5f64.sqrt(), 1e-15);
         // Seen from behind the sender: nothing.
         assert_eq!(
             point_to_segment(&y, &sender(v(-1.0, 1.0), v(1.0, 1.0))),
@@ -251,12 +251,12 @@ mod tests {
         );
         // An infinite wall in front fills the half circle: 1.
         let wall = sender(v(1e9, 1.0), v(-1e9, 1.0));
-        assert!((point_to_segment(&y, &wall) - 1.0).abs() < 1e-9);
+        assert_close!(point_to_segment(&y, &wall), 1.0, 1e-9);
     }
 
     #[test]
     fn closed_form_and_visible_part_match_quadrature_on_random_configurations() {
-        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let mut rng = flatland_testkit::rng(11);
         let mut p = || v(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
         let mut checked = 0;
         let mut scratch = Vec::new();

@@ -43,7 +43,8 @@ struct Shown {
     moment: Option<Moment>,
     /// Whether it is the running learner's newest state.
     live: bool,
-    /// Cells with this id or more were inserted in the last [`NEW_FOR`](crate::views::NEW_FOR) before the moment.
+    /// Cells with this id or more were inserted in the last
+    /// [`NEW_FOR`](crate::views::NEW_FOR) before the moment.
     new_from: usize,
     /// The exact ζ at the plot's resolution, once the learner has made it for this world.
     kernel_grid: Option<Arc<KernelGrid>>,

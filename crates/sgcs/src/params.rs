@@ -252,6 +252,7 @@ impl Params {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use flatland_testkit::assert_close;
 
     #[test]
     fn defaults_are_the_papers_and_valid() {
@@ -353,7 +354,7 @@ mod tests {
             ..Params::default()
         };
         let r2 = p.reach_sq();
-        assert!(((-r2).exp() - 1e-8).abs() < 1e-20);
+        assert_close!((-r2).exp(), 1e-8, 1e-20);
         let p = Params {
             activation_cutoff: 0.0,
             ..Params::default()

@@ -1,34 +1,13 @@
-//! Shared test helpers: the one seeded generator, `assert_close!`, test functions and networks.
+//! Shared test helpers: test functions and networks; `assert_close!` and the seeded generator
+//! are the workspace's (`flatland_testkit`), re-exported where the crate's tests name them.
 
-use rand::{RngExt, SeedableRng};
-use rand_chacha::ChaCha8Rng;
+use rand::RngExt;
+
+pub(crate) use flatland_testkit::{assert_close, rng};
 
 use crate::{
     CellId, Gate, InsertRule, Insertion, Network, OutputMode, OutputRule, Params, Resource,
 };
-
-/// The seeded generator every test uses.
-pub(crate) fn rng(seed: u64) -> ChaCha8Rng {
-    ChaCha8Rng::seed_from_u64(seed)
-}
-
-/// `assert_close!(a, b, tol)`: `|a − b| ≤ tol`, printing both values and the difference.
-macro_rules! assert_close {
-    ($a:expr, $b:expr, $tol:expr $(,)?) => {{
-        let (a, b, tol): (f64, f64, f64) = ($a, $b, $tol);
-        assert!(
-            (a - b).abs() <= tol,
-            "assert_close!({}, {}): {} vs {}, difference {:e} > tolerance {:e}",
-            stringify!($a),
-            stringify!($b),
-            a,
-            b,
-            (a - b).abs(),
-            tol
-        );
-    }};
-}
-pub(crate) use assert_close;
 
 /// The 2D test function (like the paper's Fig. 1): a smooth Gaussian bump at (0.3, 0.7) plus a
 /// sharp Lorentzian ridge of half width 0.02 along the line `y = 0.2 + 0.5 x`.

@@ -278,7 +278,7 @@ mod tests {
         let kernel = blocker_kernel();
         let h = Hierarchy::new(&kernel, 1.0 / 256.0);
         let s = &h.surfaces;
-        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        let mut rng = flatland_testkit::rng(4);
         for _ in 0..2000 {
             let (i, j) = (rng.random_range(0..s.len()), rng.random_range(0..s.len()));
             if i == j {

@@ -280,7 +280,7 @@ mod tests {
             assert!(count >= budget && count <= budget + 3, "{budget}: {count}");
             // Each pair of surface points that face each other lies in exactly one final link.
             let s = &h.surfaces;
-            let mut rng = <ChaCha8Rng as rand::SeedableRng>::seed_from_u64(budget as u64);
+            let mut rng = flatland_testkit::rng(budget as u64);
             for _ in 0..500 {
                 use rand::RngExt;
                 let (i, j) = (rng.random_range(0..s.len()), rng.random_range(0..s.len()));
@@ -298,8 +298,6 @@ mod tests {
             }
         }
     }
-
-    use rand_chacha::ChaCha8Rng;
 
     #[test]
     fn priorities_never_rise_down_the_refinement() {

@@ -262,8 +262,7 @@ mod tests {
     use super::*;
     use crate::test_support::blocker_kernel;
     use flatland_solve::{Reference, Representation, grid_point, relative_l2};
-    use rand::{RngExt, SeedableRng};
-    use rand_chacha::ChaCha8Rng;
+    use rand::RngExt;
 
     #[test]
     fn error_falls_as_f_eps_falls() {
@@ -338,7 +337,7 @@ mod tests {
         let kernel = blocker_kernel();
         let hr = HierarchicalRadiosity::build(&kernel, &HrParams::default(), 4).unwrap();
         let links = hr.links();
-        let mut rng = ChaCha8Rng::seed_from_u64(77);
+        let mut rng = flatland_testkit::rng(77);
         for _ in 0..3000 {
             let (s, t) = (rng.random::<f64>(), rng.random::<f64>());
             if kernel.zeta(s, t) > 0.0 {

@@ -84,6 +84,7 @@ pub(super) fn cosine_direction(normal: DVec2, xi: f64) -> DVec2 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use flatland_testkit::assert_close;
 
     #[test]
     fn directions_are_cosine_distributed_about_the_normal() {
@@ -98,8 +99,8 @@ mod tests {
             cos_sum += d.dot(normal);
             sin2_sum += d.perp_dot(normal).powi(2);
         }
-        assert!((cos_sum / n as f64 - std::f64::consts::FRAC_PI_4).abs() < 1e-6);
-        assert!((sin2_sum / n as f64 - 1.0 / 3.0).abs() < 1e-6);
+        assert_close!(cos_sum / n as f64, std::f64::consts::FRAC_PI_4, 1e-6);
+        assert_close!(sin2_sum / n as f64, 1.0 / 3.0, 1e-6);
         let tangent = cosine_direction(normal, 1.0);
         assert!((tangent - normal.perp()).length() < 1e-12);
     }

@@ -127,6 +127,7 @@ impl Tallies {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use flatland_testkit::assert_close;
 
     #[test]
     fn batches_merge_into_the_mean_and_spread_of_their_means() {
@@ -143,8 +144,8 @@ mod tests {
         // 0.5, 1, 0.5 (mean 0.5, variance 1/6).
         assert_eq!((tallies.batches(), tallies.rays()), (4, 24));
         assert!((tallies.mean[0] - 1.0).abs() < 1e-15 && (tallies.mean[1] - 0.5).abs() < 1e-15);
-        assert!((tallies.m2[0] / 3.0 - 2.0 / 3.0).abs() < 1e-15);
-        assert!((tallies.m2[1] / 3.0 - 1.0 / 6.0).abs() < 1e-15);
+        assert_close!(tallies.m2[0] / 3.0, 2.0 / 3.0, 1e-15);
+        assert_close!(tallies.m2[1] / 3.0, 1.0 / 6.0, 1e-15);
         assert_eq!(tallies.absorbed, 16.0);
     }
 }

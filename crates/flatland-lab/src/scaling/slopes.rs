@@ -80,6 +80,7 @@ pub fn slopes(all: &Scaling, max_edges: usize) -> Vec<Slope> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use flatland_testkit::assert_close;
 
     #[test]
     fn a_power_law_has_its_exponent_as_slope() {
@@ -88,10 +89,10 @@ mod tests {
             .map(|&x: &f64| (x, 3.0 * x.powf(1.25)))
             .collect();
         let s = log_log_slope(&points).unwrap();
-        assert!((s - 1.25).abs() < 1e-12, "{s}");
+        assert_close!(s, 1.25, 1e-12);
         assert_eq!(log_log_slope(&points[..1]), None);
         // A zero (nothing measured) is left out rather than taken as -∞.
         let with_zero = [(10.0, 0.0), (100.0, 1.0), (1000.0, 10.0)];
-        assert!((log_log_slope(&with_zero).unwrap() - 1.0).abs() < 1e-12);
+        assert_close!(log_log_slope(&with_zero).unwrap(), 1.0, 1e-12);
     }
 }

@@ -254,9 +254,10 @@ mod tests {
     use super::*;
     use flatland_geom::{Edge, Kernel, Scene};
     use flatland_solve::Errors;
+    use flatland_testkit::assert_close;
 
     fn unit_box(rho: f64) -> Kernel {
-        let mut edges = room(&[v(0.0, 0.0), v(1.0, 0.0), v(1.0, 1.0), v(0.0, 1.0)], rho);
+        let mut edges = room(&flatland_testkit::rooms::unit_square(), rho);
         edges[0].emission = 1.0;
         Kernel::new(Scene::new(edges).unwrap())
     }
@@ -266,7 +267,7 @@ mod tests {
         let kernel = unit_box(0.5);
         for s in [0.125, 0.3, 0.5 + 1e-9, 0.999] {
             let integral = row_integral(&kernel, s, 500);
-            assert!((integral - 1.0).abs() < 1e-4, "s = {s}: {integral}");
+            assert_close!(integral, 1.0, 1e-4, "s = {s}: {integral}");
         }
         // (The paper's printed 1/(2πr) would give 1/π: far outside the 1 % tolerance.)
         let mut row = Row::new("box", "energy");
@@ -350,7 +351,7 @@ mod tests {
         assert_eq!(a, random_pairs(1000, 5));
         assert_ne!(a, random_pairs(1000, 6));
         let mean = a.iter().map(|p| p[0]).sum::<f64>() / 1000.0;
-        assert!((mean - 0.5).abs() < 0.05, "{mean}");
+        assert_close!(mean, 0.5, 0.05);
         assert!(
             a.iter()
                 .all(|p| (0.0..1.0).contains(&p[0]) && (0.0..1.0).contains(&p[1]))

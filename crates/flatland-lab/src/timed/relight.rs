@@ -470,6 +470,7 @@ mod tests {
     use crate::timed::scorer::tiny;
     use crate::timed::{TimedPlan, run_timed};
     use flatland_solve::never;
+    use flatland_testkit::assert_close;
 
     #[test]
     fn ten_lightings_the_first_as_is_the_last_a_glowing_wall() {
@@ -523,7 +524,7 @@ mod tests {
             let mine: Vec<&RelightRow> = rows.iter().filter(|r| r.method == s.method).collect();
             assert_eq!(mine.len(), 4);
             let total: f64 = mine.iter().map(|r| r.seconds).sum();
-            assert!((total - s.total_s).abs() <= 1e-12 * total.max(1.0), "{s:?}");
+            assert_close!(total, s.total_s, 1e-12 * total.max(1.0), "{s:?}");
             assert!(mine.iter().all(|r| r.errors.rel_l2_reflected.is_finite()));
             assert!(s.max_error >= s.mean_error);
         }

@@ -167,8 +167,7 @@ fn crossing(view: &View, s: &Segment, q: &Segment) -> Option<f64> {
 mod tests {
     use super::*;
     use glam::DVec2;
-    use rand::{RngExt, SeedableRng};
-    use rand_chacha::ChaCha8Rng;
+    use rand::RngExt;
 
     fn v(x: f64, y: f64) -> DVec2 {
         DVec2::new(x, y)
@@ -301,7 +300,7 @@ mod tests {
 
     #[test]
     fn random_segments_match_ray_casting_in_any_insertion_order() {
-        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let mut rng = flatland_testkit::rng(7);
         for case in 0..60 {
             let mut p = || v(rng.random_range(-3.0..3.0), rng.random_range(-1.0..3.0));
             let mut segments: Vec<Segment> = (0..2 + case % 12)

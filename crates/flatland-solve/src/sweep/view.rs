@@ -176,6 +176,7 @@ impl View {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use flatland_testkit::assert_close;
 
     fn v(x: f64, y: f64) -> DVec2 {
         DVec2::new(x, y)
@@ -190,18 +191,18 @@ mod tests {
         let view = View::new(v(0.0, 0.0), v(0.0, 1.0));
         assert_eq!(view.sine(v(0.0, 2.0)), 0.0);
         // Counter-clockwise from "up" is to the left.
-        assert!((view.sine(v(-1.0, 1.0)) - 0.5f64.sqrt()).abs() < 1e-15);
+        assert_close!(view.sine(v(-1.0, 1.0)), 0.5f64.sqrt(), 1e-15);
         assert!((view.sine(v(1.0, 1.0)) + 0.5f64.sqrt()).abs() < 1e-15);
         for sigma in [-1.0, -0.3, 0.0, 0.8, 1.0] {
             let d = view.direction(sigma);
-            assert!((d.length() - 1.0).abs() < 1e-15);
+            assert_close!(d.length(), 1.0, 1e-15);
             if sigma.abs() < 1.0 {
-                assert!((view.sine(d * 3.0) - sigma).abs() < 1e-15);
+                assert_close!(view.sine(d * 3.0), sigma, 1e-15);
             }
         }
         // Depth to the line y = 2 along σ: 2 / cos φ.
         let wall = seg(v(5.0, 2.0), v(-5.0, 2.0));
-        assert!((view.depth(&wall, 0.6) - 2.0 / 0.8).abs() < 1e-14);
+        assert_close!(view.depth(&wall, 0.6), 2.0 / 0.8, 1e-14);
         assert_eq!(view.depth(&wall, 1.0), f64::INFINITY);
     }
 
@@ -217,7 +218,7 @@ mod tests {
         // A post standing on the receiver's line, to the left: from its foot (σ = 1) up.
         let [lo, hi] = view.span(&seg(v(-1.0, 0.0), v(-1.0, 1.0))).unwrap();
         assert_eq!(hi, 1.0);
-        assert!((lo - 0.5f64.sqrt()).abs() < 1e-15);
+        assert_close!(lo, 0.5f64.sqrt(), 1e-15);
         assert_eq!(view.span(&seg(v(-1.0, -1.0), v(1.0, -0.5))), None);
         assert_eq!(
             view.span(&seg(v(1.0, 0.0), v(3.0, 0.0))),

@@ -65,9 +65,66 @@ impl Fit {
 
 #[cfg(test)]
 mod tests {
+    use flatland_geom::DVec2;
+    use rand::RngExt;
+
     use super::super::test_support::*;
     use super::*;
     use crate::Preset;
+
+    /// Every cell filed under the face its centre is in, and every sample's face the one a
+    /// fresh filing of the samples gives.
+    fn assert_filed(fit: &Fit, when: &str) {
+        fit.model()
+            .check_invariants()
+            .unwrap_or_else(|e| panic!("{when}: {e}"));
+        let fresh = fit.state.model.clone().intern_faces(&fit.state.samples);
+        assert_eq!(fresh, fit.sample_faces, "{when}: the samples' faces");
+    }
+
+    /// Scene edits at random (an end point of a random edge dragged, as in the viewer), each
+    /// followed by training that moves and inserts cells: the default learner's cells and
+    /// samples stay filed under the faces of the scene of the moment.
+    #[test]
+    fn face_filing_survives_random_scene_edits() {
+        let mut kernel = maze();
+        let mut fit = fit_with(&kernel, preset(Preset::Default, 60));
+        run(&mut fit);
+        assert_filed(&fit, "before any edit");
+        let mut rng = flatland_testkit::rng(31);
+        let (mut edits, mut refused) = (0, 0);
+        while edits < 6 {
+            let scene = kernel.scene();
+            let e = rng.random_range(0..scene.edges().len());
+            let mut edge = scene.edges()[e];
+            let shift = DVec2::new(rng.random_range(-0.4..0.4), rng.random_range(-0.4..0.4));
+            if rng.random_bool(0.5) {
+                edge.a += shift;
+            } else {
+                edge.b += shift;
+            }
+            let Ok(edited) = scene.with_edge(e, edge) else {
+                refused += 1; // an edit the scene refuses (a zero-length edge, say)
+                continue;
+            };
+            edits += 1;
+            kernel = Arc::new(Kernel::new(edited));
+            let reference = Arc::new(Reference::new(&kernel, 32, 256, 1));
+            let cells = fit.network().len();
+            fit.set_kernel(Arc::clone(&kernel), reference);
+            assert_filed(&fit, &format!("after edit {edits} (edge {e})"));
+            fit.set_params(preset(Preset::Default, cells + 15).live())
+                .unwrap();
+            for _ in 0..3000 {
+                if fit.step().is_some() {
+                    break;
+                }
+            }
+            assert_filed(&fit, &format!("after training on edit {edits}"));
+        }
+        assert!(refused < 20, "{refused} edits refused");
+        assert!(fit.network().len() > 60, "cells were inserted on the way");
+    }
 
     #[test]
     fn a_moved_blocker_is_learned_from_the_current_state() {

@@ -181,6 +181,7 @@ impl TransferOperator for Rows {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use flatland_testkit::assert_close;
 
     #[test]
     fn a_blend_of_equal_rows_is_that_row_without_doubt() {
@@ -189,7 +190,7 @@ mod tests {
         assert_eq!(blended.len(), 3);
         for (e, &(j, v)) in blended.iter().zip(&row) {
             assert_eq!(e.column, j);
-            assert!((e.value - v).abs() < 1e-15);
+            assert_close!(e.value, v, 1e-15);
             assert_eq!(e.doubt, 0.0);
         }
     }
@@ -201,11 +202,11 @@ mod tests {
         let b = Rows::blend(1.0, 0.25, &left, &right);
         let columns: Vec<u32> = b.iter().map(|e| e.column).collect();
         assert_eq!(columns, [1, 2, 3]);
-        assert!((b[0].value - 0.15).abs() < 1e-15);
-        assert!((b[1].value - 0.075).abs() < 1e-15);
+        assert_close!(b[0].value, 0.15, 1e-15);
+        assert_close!(b[1].value, 0.075, 1e-15);
         // 2 f (1 − f) = 0.375.
-        assert!((b[0].doubt - 0.375 * 0.2).abs() < 1e-15);
-        assert!((b[1].doubt - 0.375 * 0.3).abs() < 1e-15);
+        assert_close!(b[0].doubt, 0.375 * 0.2, 1e-15);
+        assert_close!(b[1].doubt, 0.375 * 0.3, 1e-15);
         assert_eq!(b[2].doubt, 0.0);
     }
 

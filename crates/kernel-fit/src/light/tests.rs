@@ -9,6 +9,7 @@ use flatland_solve::{
 };
 
 use super::*;
+use flatland_testkit::assert_close;
 
 fn fit(scene: Scene, params: LightParams) -> LightFit {
     let kernel = Arc::new(Kernel::new(scene));
@@ -115,7 +116,7 @@ fn solving_with_the_fit_gives_its_own_radiosity() {
     );
     let solved = solve(&fit, fit.mesh(), &SolveParams::default(), &never).unwrap();
     for (a, b) in solved.radiosity.iter().zip(fit.radiosity()) {
-        assert!((a - b).abs() <= 1e-6 * (1.0 + b.abs()), "{a} vs {b}");
+        assert_close!(*a, *b, 1e-6 * (1.0 + b.abs()));
     }
     assert_eq!(fit.basis_functions(), Some(fit.cells().len()));
 }

@@ -60,7 +60,8 @@ pub(super) struct Cells {
     pub(super) worst_out: PerCell<f64>,
 }
 
-/// The per-cell worst samples of [`Insertion::WorstSample`](crate::Insertion::WorstSample), as saved.
+/// The per-cell worst samples of [`Insertion::WorstSample`](crate::Insertion::WorstSample), as
+/// saved.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub(super) struct WorstSamples {
     pub(super) error: Vec<f64>,

@@ -161,6 +161,7 @@ impl Learner {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use flatland_testkit::assert_close;
 
     #[test]
     fn growth_waits_for_credit_at_the_pace_asked_for() {
@@ -193,7 +194,7 @@ mod tests {
         pace.record(Duration::from_millis(10), Duration::from_millis(90));
         assert_eq!(pace.idle_share(), 0.0, "no pace, no waiting");
         pace.set(Some(20.0));
-        assert!((pace.idle_share() - 0.9).abs() < 1e-9);
+        assert_close!(pace.idle_share(), 0.9, 1e-9);
         // Training flat out for a few seconds: the waiting is forgotten.
         for _ in 0..100 {
             pace.record(Duration::from_millis(100), Duration::ZERO);
