@@ -16,7 +16,7 @@ pub struct Args {
     #[command(flatten)]
     pub scene: SceneArgs,
     /// Grid resolution R in [16, 4096]: row i is s = (i+0.5)/R, column j is t = (j+0.5)/R.
-    /// On a scene of more than R/4 surface edges a cell spans several pairs of edges, and a
+    /// On a scene of more than R surface edges a cell spans several pairs of edges, and a
     /// value at its centre would miss most of what the edges see: each value is then the mean
     /// over m × m points of the cell (m = 4 × edges / R, from 2 to 8).
     #[arg(long, default_value_t = 256)]
@@ -81,10 +81,10 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Points per side of a cell whose mean is its value: 1 (the centre) while the grid has four
-/// cells per surface edge or more, else 4 × edges / R, from 2 to 8.
+/// Points per side of a cell whose mean is its value: 1 (the centre) while the grid has a cell
+/// per surface edge or more, else 4 × edges / R, from 2 to 8.
 fn points_per_side(surface_edges: usize, res: usize) -> usize {
-    if 4 * surface_edges <= res {
+    if surface_edges <= res {
         1
     } else {
         (4 * surface_edges).div_ceil(res).clamp(2, 8)
@@ -133,9 +133,9 @@ mod tests {
 
     #[test]
     fn cells_average_only_where_the_grid_is_coarser_than_the_edges() {
-        assert_eq!(points_per_side(6, 256), 1);
-        assert_eq!(points_per_side(64, 256), 1);
-        assert_eq!(points_per_side(65, 256), 2);
+        assert_eq!(points_per_side(6, 16), 1);
+        assert_eq!(points_per_side(256, 256), 1);
+        assert_eq!(points_per_side(257, 256), 5);
         assert_eq!(points_per_side(1000, 256), 8);
         let kernel = Kernel::new(flatland_geom::bundled::scene("fig3").unwrap());
         // One point per side is the kernel at the centre of the cell, exactly.

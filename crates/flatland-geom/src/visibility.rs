@@ -31,6 +31,7 @@ mod expansion;
 mod predicates;
 mod ray;
 mod shaft;
+mod side;
 
 pub(crate) use bvh::{Bvh, Segment, wins_tie};
 pub use events::{OnRay, PairEvents, RayFace, SenderFace};
@@ -40,4 +41,5 @@ pub(crate) use predicates::{open_segment_hits, orient};
 pub(crate) use ray::{Contact, Ray};
 #[cfg(test)]
 pub(crate) use shaft::Candidates;
-pub(crate) use shaft::{Shaft, Side, classify};
+pub(crate) use shaft::{Shaft, classify};
+pub(crate) use side::Side;

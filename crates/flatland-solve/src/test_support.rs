@@ -4,7 +4,8 @@
 use flatland_geom::{DVec2, Edge, Scene};
 
 use crate::{Mesh, SolveParams, TransferOperator, never, solve_operator};
-use rand::RngExt;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 
 /// The bundled scene `NAME`.
 pub fn bundled(name: &str) -> Scene {

@@ -8,7 +8,7 @@ use super::bvh::Segment;
 use super::predicates::{
     convex_hull, on_closed_segment, orient, proper_crossing, strictly_inside, strictly_opposite,
 };
-use super::shaft::Side;
+use super::side::Side;
 
 /// Where the visibility between two parent surface edges `P` and `Q` can change.
 ///

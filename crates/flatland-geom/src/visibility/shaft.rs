@@ -5,6 +5,7 @@ use glam::DVec2;
 use super::bvh::{Bvh, Segment};
 use super::events::{PairEvents, event_points, pair_events};
 use super::predicates::{open_segment_hits, orient, strictly_same_side};
+use super::side::Side;
 
 /// What a pair of parent surface edges `P`, `Q` needs for the visibility of its facing samples
 /// (both cosines positive, checked exactly). Computed once per pair of *parent* edges, so
@@ -33,29 +34,6 @@ pub(crate) struct Candidates {
     /// Visibility of every segment between interior points of `P` and `Q`, when there are no
     /// events (decided by one ray).
     pub interior: Option<bool>,
-}
-
-/// One side of a shaft: a parent surface edge (one-sided: its front is the left of `a → b`).
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Side {
-    pub index: usize,
-    pub a: DVec2,
-    pub b: DVec2,
-}
-
-impl Side {
-    /// Whether `p` is strictly in front: the facing condition the classification assumes for
-    /// the *other* end of a segment.
-    #[inline]
-    pub(crate) fn faces(&self, p: DVec2) -> bool {
-        orient(self.a, self.b, p) > 0.0
-    }
-
-    /// Whether the closed segment `[p, q]` is entirely on or behind this edge's line, where no
-    /// facing segment can reach it.
-    fn hides(&self, p: DVec2, q: DVec2) -> bool {
-        orient(self.a, self.b, p) <= 0.0 && orient(self.a, self.b, q) <= 0.0
-    }
 }
 
 /// Classifies the shaft between `p` and `q` (see [`Shaft`]). Valid for segments `x–y` with `x`

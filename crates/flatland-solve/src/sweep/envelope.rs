@@ -167,7 +167,8 @@ fn crossing(view: &View, s: &Segment, q: &Segment) -> Option<f64> {
 mod tests {
     use super::*;
     use glam::DVec2;
-    use rand::RngExt;
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
 
     fn v(x: f64, y: f64) -> DVec2 {
         DVec2::new(x, y)
