@@ -87,14 +87,14 @@ pub fn thin_wall_plan(cols: usize, rows: usize, seed: u64) -> Scene {
             edges.push(Edge::surface(b, a, rho));
         }
     };
-    for c in 1..cols {
-        for r in 0..rows {
-            wall(p(xs[c], ys[r]), p(xs[c], ys[r + 1]), &mut rng);
+    for &x in &xs[1..cols] {
+        for y in ys[..=rows].windows(2) {
+            wall(p(x, y[0]), p(x, y[1]), &mut rng);
         }
     }
-    for r in 1..rows {
-        for c in 0..cols {
-            wall(p(xs[c], ys[r]), p(xs[c + 1], ys[r]), &mut rng);
+    for &y in &ys[1..rows] {
+        for x in xs[..=cols].windows(2) {
+            wall(p(x[0], y), p(x[1], y), &mut rng);
         }
     }
     for lamp in 0..2 {

@@ -190,7 +190,7 @@ mod tests {
                 let fit_params = FitParams {
                     target_cells: 60,
                     eval_every: 0,
-                    ..base.clone()
+                    ..base
                 };
                 let mut fit = Fit::new(Arc::clone(&kernel), reference, fit_params).unwrap();
                 fit.run(u64::MAX, |_| ControlFlow::Continue(())).unwrap();
