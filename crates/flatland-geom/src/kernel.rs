@@ -7,6 +7,7 @@ mod pairs;
 mod params;
 mod rays;
 mod values;
+mod varying;
 mod visible;
 
 use glam::DVec2;
@@ -19,6 +20,7 @@ use cache::PairCache;
 pub use pairs::PairEventsRef;
 pub use params::KernelParams;
 pub use values::{Hit, KernelSample, PairClass, PairVisibility, Unoccluded};
+pub use varying::VaryingPairs;
 
 /// What the hot loop needs of one parent edge, packed together.
 #[derive(Clone, Copy, Debug)]

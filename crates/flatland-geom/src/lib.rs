@@ -60,6 +60,7 @@ pub use glam::DVec2;
 pub use io::write_atomic;
 pub use kernel::{
     Hit, Kernel, KernelParams, KernelSample, PairClass, PairEventsRef, PairVisibility, Unoccluded,
+    VaryingPairs,
 };
 pub use scene::{Edge, Role, Scene, SurfacePoint};
 pub use visibility::{OnRay, PairEvents, RayFace, SenderFace};

@@ -25,6 +25,7 @@
 //! Of several edges met at one point (a corner, a junction) the first listed wins.
 
 mod boxes;
+mod bundle;
 mod bvh;
 mod events;
 mod expansion;
@@ -33,6 +34,7 @@ mod ray;
 mod shaft;
 mod side;
 
+pub(crate) use bundle::{Hull, cuts_bundle};
 pub(crate) use bvh::{Bvh, Segment, wins_tie};
 pub use events::{OnRay, PairEvents, RayFace, SenderFace};
 #[cfg(test)]

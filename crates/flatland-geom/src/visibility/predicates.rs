@@ -62,25 +62,27 @@ pub(crate) fn on_closed_segment(e: DVec2, a: DVec2, b: DVec2) -> bool {
         && e.y <= a.y.max(b.y)
 }
 
-/// The convex hull of four points, counter-clockwise, collinear points dropped (exact).
-pub(super) fn convex_hull(pts: &[DVec2; 4]) -> Vec<DVec2> {
+/// The convex hull of `pts`, counter-clockwise, collinear points and repeats dropped (exact);
+/// fewer than 3 points when they all lie on one line.
+pub(super) fn convex_hull(pts: &[DVec2]) -> Vec<DVec2> {
     // Andrew's monotone chain.
-    let mut sorted = *pts;
+    let mut sorted = pts.to_vec();
     // `+ 0.0` makes -0.0 equal to 0.0 for `total_cmp`: equal coordinates must sort by y.
     sorted.sort_by(|a, b| {
         (a.x + 0.0)
             .total_cmp(&(b.x + 0.0))
             .then((a.y + 0.0).total_cmp(&(b.y + 0.0)))
     });
-    let mut hull: Vec<DVec2> = Vec::with_capacity(8);
+    let mut hull: Vec<DVec2> = Vec::with_capacity(sorted.len() + 1);
+    let n = sorted.len();
     for pass in 0..2 {
         let start = hull.len();
-        let points: Vec<DVec2> = if pass == 0 {
-            sorted.to_vec()
-        } else {
-            sorted.iter().rev().copied().collect()
-        };
-        for p in points {
+        for k in 0..n {
+            let p = if pass == 0 {
+                sorted[k]
+            } else {
+                sorted[n - 1 - k]
+            };
             while hull.len() >= start + 2
                 && orient(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0
             {

@@ -1,0 +1,330 @@
+//! The pairs of surface edges whose visibility varies, found without classifying every pair:
+//! a walk over pairs of clusters of surface edges that settles a whole bundle of pairs at once
+//! where geometry decides it, and classifies one by one only the pairs an occluder may cut in
+//! part.
+//!
+//! A pair's visibility varies only where an occluder's end point, or its crossing with the
+//! pair's edges, lies in the convex hull of the two edges (docs/ALGORITHM.md §2.1): then the
+//! occluder meets the hull's interior. So a bundle whose hull's interior no edge meets holds no
+//! such pair (in a convex room the walls lie on every hull's boundary), nor does one that a
+//! single edge cuts through (every segment between its two clusters crosses that edge), nor
+//! one whose edges on one side all have the other side behind them (no pair faces).
+
+use glam::DVec2;
+
+use super::{Kernel, PairClass};
+use crate::visibility::{Hull, cuts_bundle, orient};
+
+/// What [`Kernel::varying_pairs`] found, and the work it took.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct VaryingPairs {
+    /// The pairs of surface ranks `(a, b)`, `a < b`, whose [`Kernel::pair_class`] is
+    /// [`PairClass::Varies`], in increasing order.
+    pub pairs: Vec<(usize, usize)>,
+    /// Pairs of surface edges classified one by one (the others were settled in bundles).
+    pub classified: usize,
+    /// Bundles of pairs tested at once.
+    pub bundles: usize,
+}
+
+impl VaryingPairs {
+    fn merge(mut self, other: VaryingPairs) -> VaryingPairs {
+        self.pairs.extend(other.pairs);
+        self.classified += other.classified;
+        self.bundles += other.bundles;
+        self
+    }
+}
+
+/// Bundles of at least this many pairs walk their parts on both threads of a `rayon::join`.
+const PARALLEL_PAIRS: usize = 1 << 12;
+
+/// A bundle is tested for one edge cutting all of it while its clusters' hulls have at most
+/// this many pairs of vertices (the test takes one orientation per pair).
+const MAX_CUT_TEST: usize = 1 << 10;
+
+/// A cluster is tested for hiding the other of its bundle while it has at most this many edges.
+const MAX_HIDING_TEST: usize = 4;
+
+/// A cluster of surface edges: a node of a median-split tree over the surface ranks.
+struct Cluster {
+    /// Its ranks: `Tree::ranks[first..first + len]`.
+    first: usize,
+    len: usize,
+    /// The convex hull of its edges' end points (2 points for one edge).
+    hull: Hull,
+    /// Its two halves (`None` for one edge).
+    halves: Option<(usize, usize)>,
+}
+
+/// The clusters of a scene's surface edges, `clusters[0]` all of them.
+struct Tree {
+    ranks: Vec<usize>,
+    clusters: Vec<Cluster>,
+}
+
+impl Kernel {
+    /// The pairs of parent surface edges whose visibility varies ([`PairClass::Varies`]),
+    /// exactly those a loop over all pairs finds, at a cost that grows with the pairs near an
+    /// occluder's end point rather than with all pairs: bundles of pairs (two clusters of
+    /// nearby edges) are settled at once where no edge meets the interior of the convex hull
+    /// of their end points, one edge cuts every segment between them, or no pair faces; only
+    /// the pairs left are classified (and kept, as [`Kernel::pair_class`] keeps them). A convex
+    /// room of `n` walls and a box classifies `O(n)` pairs, not `n²` (4096 walls: 8220 pairs,
+    /// every one of them varying); a floor plan, where rooms see each other through doors,
+    /// about as many as vary (1032 edges: 16 343 for 15 445).
+    #[must_use]
+    pub fn varying_pairs(&self) -> VaryingPairs {
+        if self.surface_parents.is_empty() {
+            return VaryingPairs::default();
+        }
+        let tree = Tree::new(self);
+        let near: Vec<u32> = (0..self.segments.len() as u32).collect();
+        let mut found = tree.walk(self, 0, 0, &near);
+        found.pairs.sort_unstable();
+        found
+    }
+}
+
+impl Tree {
+    fn new(kernel: &Kernel) -> Tree {
+        let mut ranks: Vec<usize> = (0..kernel.surface_parents()).collect();
+        let mut clusters = Vec::with_capacity(2 * ranks.len());
+        split(kernel, &mut ranks, 0, &mut clusters);
+        Tree { ranks, clusters }
+    }
+
+    /// The varying pairs between clusters `a` and `b` (within `a` when `a == b`); `near` holds
+    /// every edge that may meet the interior of their hull (those that meet the hull of the
+    /// bundle this one is part of).
+    fn walk(&self, kernel: &Kernel, a: usize, b: usize, near: &[u32]) -> VaryingPairs {
+        let (ca, cb) = (&self.clusters[a], &self.clusters[b]);
+        if a == b && ca.halves.is_none() {
+            return VaryingPairs::default(); // an edge with itself: k = 0
+        }
+        let mut found = VaryingPairs {
+            bundles: 1,
+            ..VaryingPairs::default()
+        };
+        let Some(near) = self.unsettled(kernel, a, b, near) else {
+            return found;
+        };
+        let parts: Vec<(usize, usize)> = match (ca.halves, cb.halves) {
+            _ if a == b => {
+                let (l, r) = ca.halves.expect("a cluster of one edge returned above");
+                vec![(l, l), (l, r), (r, r)]
+            }
+            (None, None) => {
+                let (r0, r1) = (self.ranks[ca.first], self.ranks[cb.first]);
+                found.classified = 1;
+                if kernel.pair_class(r0, r1) == PairClass::Varies {
+                    found.pairs.push((r0.min(r1), r0.max(r1)));
+                }
+                return found;
+            }
+            // Halve both clusters where they are of a size, else the larger.
+            (Some((al, ar)), Some((bl, br))) if ca.len <= 2 * cb.len && cb.len <= 2 * ca.len => {
+                vec![(al, bl), (al, br), (ar, bl), (ar, br)]
+            }
+            (Some(_), Some((l, r))) if cb.len > ca.len => vec![(a, l), (a, r)],
+            (None, Some((l, r))) => vec![(a, l), (a, r)],
+            (Some((l, r)), _) => vec![(l, b), (r, b)],
+        };
+        let parallel = ca.len * cb.len >= PARALLEL_PAIRS;
+        found.merge(self.walk_parts(kernel, &parts, &near, parallel))
+    }
+
+    /// The edges that meet the interior of the hull of bundle `(a, b)` (of those in `near`),
+    /// or `None` when geometry settles every pair in it: no pair faces, one edge cuts all of
+    /// them (every pair is hidden or never faces), or no edge meets the hull's interior (every
+    /// pair is clear or never faces).
+    fn unsettled(&self, kernel: &Kernel, a: usize, b: usize, near: &[u32]) -> Option<Vec<u32>> {
+        let (ca, cb) = (&self.clusters[a], &self.clusters[b]);
+        if a != b && (self.hides(kernel, ca, &cb.hull) || self.hides(kernel, cb, &ca.hull)) {
+            return None;
+        }
+        let joint;
+        let hull = if a == b {
+            &ca.hull
+        } else {
+            joint = ca.hull.join(&cb.hull);
+            &joint
+        };
+        let try_cut = a != b && ca.hull.points().len() * cb.hull.points().len() <= MAX_CUT_TEST;
+        let mut inside = Vec::new();
+        for &i in near {
+            let s = kernel.segments[i as usize];
+            // An edge that cuts the bundle meets its interior.
+            if hull.meets_interior(s) {
+                if try_cut && cuts_bundle(&ca.hull, &cb.hull, s) {
+                    return None;
+                }
+                inside.push(i);
+            }
+        }
+        (!inside.is_empty()).then_some(inside)
+    }
+
+    /// Whether every edge of the (small) cluster `c` has all of `hull` on or behind its line,
+    /// where no facing segment reaches: then no pair of theirs faces.
+    fn hides(&self, kernel: &Kernel, c: &Cluster, hull: &Hull) -> bool {
+        c.len <= MAX_HIDING_TEST
+            && self.ranks[c.first..c.first + c.len].iter().all(|&r| {
+                let (a, b) = kernel.surface_parent(r);
+                hull.points().iter().all(|&p| orient(a, b, p) <= 0.0)
+            })
+    }
+
+    /// [`Tree::walk`] over `parts`, on both threads when `parallel`.
+    fn walk_parts(
+        &self,
+        kernel: &Kernel,
+        parts: &[(usize, usize)],
+        near: &[u32],
+        parallel: bool,
+    ) -> VaryingPairs {
+        match parts {
+            [] => VaryingPairs::default(),
+            [(a, b)] => self.walk(kernel, *a, *b, near),
+            [(a, b), rest @ ..] if parallel => {
+                let (first, others) = rayon::join(
+                    || self.walk(kernel, *a, *b, near),
+                    || self.walk_parts(kernel, rest, near, parallel),
+                );
+                first.merge(others)
+            }
+            [(a, b), rest @ ..] => self
+                .walk(kernel, *a, *b, near)
+                .merge(self.walk_parts(kernel, rest, near, parallel)),
+        }
+    }
+}
+
+/// Appends the cluster of `ranks` (which start at `first` in the tree's order) and those below
+/// it, halving at the median of the edges' midpoints along the longer side of their bounding
+/// box; returns its index.
+fn split(kernel: &Kernel, ranks: &mut [usize], first: usize, clusters: &mut Vec<Cluster>) -> usize {
+    let index = clusters.len();
+    let (a, b) = kernel.surface_parent(ranks[0]);
+    clusters.push(Cluster {
+        first,
+        len: ranks.len(),
+        hull: Hull::of(&[a, b]),
+        halves: None,
+    });
+    if ranks.len() == 1 {
+        return index;
+    }
+    let middle = |r: usize| {
+        let (a, b) = kernel.surface_parent(r);
+        (a + b) * 0.5
+    };
+    let (lo, hi) = ranks
+        .iter()
+        .fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(lo, hi), &r| {
+            (lo.min(middle(r)), hi.max(middle(r)))
+        });
+    let axis = usize::from(hi.y - lo.y > hi.x - lo.x);
+    let half = ranks.len() / 2;
+    // Ties by rank: the same scene always gives the same tree.
+    ranks.select_nth_unstable_by(half, |&p, &q| {
+        middle(p)[axis].total_cmp(&middle(q)[axis]).then(p.cmp(&q))
+    });
+    let (left, right) = ranks.split_at_mut(half);
+    let l = split(kernel, left, first, clusters);
+    let r = split(kernel, right, first + half, clusters);
+    clusters[index].hull = clusters[l].hull.join(&clusters[r].hull);
+    clusters[index].halves = Some((l, r));
+    index
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_support::{bundled, random_scene};
+    use crate::{Edge, Scene};
+    use flatland_testkit::rooms;
+
+    /// What a loop over all pairs finds.
+    fn every_pair(kernel: &Kernel) -> Vec<(usize, usize)> {
+        let n = kernel.surface_parents();
+        (0..n)
+            .flat_map(|a| (a + 1..n).map(move |b| (a, b)))
+            .filter(|&(a, b)| kernel.pair_class(a, b) == PairClass::Varies)
+            .collect()
+    }
+
+    /// Issue 20's convex room: `n` inward walls on a circle of radius 10 around a box of 4
+    /// blockers off the centre.
+    fn convex_room(n: usize) -> Scene {
+        let mut edges = Edge::polygon(&rooms::regular_polygon(n, 10.0), 0.5);
+        edges[0].emission = 1.0;
+        let c = rooms::off_centre_box();
+        edges.extend((0..4).map(|i| Edge::blocker(c[i], c[(i + 1) % 4])));
+        Scene::new(edges).unwrap()
+    }
+
+    #[test]
+    fn the_walk_finds_what_every_pair_finds_on_the_bundled_scenes() {
+        for name in crate::bundled::names() {
+            let kernel = Kernel::new(bundled(name));
+            let found = kernel.varying_pairs();
+            assert_eq!(found.pairs, every_pair(&kernel), "{name}");
+        }
+    }
+
+    #[test]
+    fn the_walk_finds_what_every_pair_finds_on_random_scenes() {
+        for seed in 0..3000 {
+            let kernel = Kernel::new(random_scene(seed, seed % 2 == 0));
+            assert_eq!(
+                kernel.varying_pairs().pairs,
+                every_pair(&kernel),
+                "seed {seed}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_walk_finds_what_every_pair_finds_on_generated_plans() {
+        for seed in 0..4 {
+            let scene = crate::generate::floor_plan(120, seed).unwrap();
+            let kernel = Kernel::new(scene);
+            assert_eq!(
+                kernel.varying_pairs().pairs,
+                every_pair(&kernel),
+                "seed {seed}"
+            );
+        }
+        let kernel = Kernel::new(convex_room(96));
+        let found = kernel.varying_pairs();
+        assert!(!found.pairs.is_empty(), "the box casts shadows");
+        assert_eq!(found.pairs, every_pair(&kernel));
+    }
+
+    /// The guard of issue 20: in the convex room the pairs classified one by one grow with the
+    /// walls, not with the pairs of walls (n² / 2 = 2 million at 2048 walls).
+    #[test]
+    fn a_convex_room_classifies_pairs_in_proportion_to_its_walls() {
+        let (small, large) = (convex_room(256), convex_room(2048));
+        let (small, large) = (
+            Kernel::new(small).varying_pairs(),
+            Kernel::new(large).varying_pairs(),
+        );
+        // Eight times the walls: about eight times the varying pairs and the work.
+        let ratio = large.classified as f64 / small.classified as f64;
+        assert!(
+            ratio < 12.0,
+            "{} → {} classified",
+            small.classified,
+            large.classified
+        );
+        assert!(
+            large.classified < 40 * 2048,
+            "{} classified",
+            large.classified
+        );
+        assert!(large.bundles < 200 * 2048, "{} bundles", large.bundles);
+        assert!(large.pairs.len() > 4 * small.pairs.len());
+    }
+}
