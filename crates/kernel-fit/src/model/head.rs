@@ -13,6 +13,9 @@ use super::Sample;
 use crate::visibility::{FaceGate, FaceId, FaceKey, Faces, Labeller};
 use crate::{Gating, Head, Target};
 
+/// Up to this many surface edges a model's bytes count the class of every pair (n² of them).
+const MAX_COUNTED_PARENTS: usize = 512;
+
 /// A learned kernel's head (see [`Head`], from which it is built).
 #[derive(Clone, Debug)]
 pub(crate) enum ModelHead {
@@ -197,7 +200,7 @@ impl VisibilityHead {
     /// varies (two f64 each).
     pub(crate) fn memory_bytes(&self, cells: usize) -> usize {
         let n = self.kernel.surface_parents();
-        if n > crate::visibility::MAX_LISTED_PARENTS {
+        if n > MAX_COUNTED_PARENTS {
             // Not kept: computed per pair when asked (as the exact kernel does).
             return cells * 4;
         }

@@ -11,12 +11,14 @@ use rand::{Rng, RngExt};
 /// `∫∫ g (·) ds dt` over those pairs (so errors count where the target is bright).
 ///
 /// The pairs of surface edges where visibility varies are listed with the area of their
-/// rectangle of `(s, t)`; a uniform draw picks one in proportion to its area, then a point in
-/// it (no draw is wasted on pairs geometry decides). The importance proposal cuts each pair's
-/// rectangle into [`TILES`]² tiles, estimates `g` on each from a few points (geometry only, no
-/// ray) and draws tiles in proportion to area × estimate. A scene with more than
-/// [`MAX_LISTED_PARENTS`] surface edges draws from the whole square instead, keeps what lands on
-/// such a pair, and draws in proportion to `g` by rejection.
+/// rectangle of `(s, t)` ([`Kernel::varying_pairs`] finds them without classifying every pair,
+/// so a scene of thousands of edges lists them in about the time it takes to classify the
+/// pairs near its occluders); a uniform draw picks one in proportion to its area by a binary
+/// search of the cumulative areas, then a point in it: no draw is wasted on pairs geometry
+/// decides, and none costs more with more edges than a search. The importance proposal cuts
+/// each pair's rectangle into `tiles`² tiles ([`TILES`] per side, fewer where the pairs are
+/// so many that the tiles would pass [`MAX_TILES`]), estimates `g` on each from a few points
+/// (geometry only, no ray) and draws tiles in proportion to area × estimate.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub(crate) struct Sampler {
     importance: f64,
@@ -28,7 +30,11 @@ pub(crate) struct Sampler {
     pairs: Vec<(u32, u32, f64)>,
     /// Parameter ranges of the surface edges, by rank.
     ranges: Vec<(f64, f64)>,
-    /// Per tile (pair-major, [`TILES`]² per pair): the estimate of `g`, and the cumulative
+    /// Tiles per side of a pair's rectangle (a checkpoint written before this was chosen per
+    /// scene has [`TILES`]).
+    #[serde(default = "default_tiles")]
+    tiles: usize,
+    /// Per tile (pair-major, `tiles`² per pair): the estimate of `g`, and the cumulative
     /// area × estimate the importance proposal draws by.
     tile_g: Vec<f64>,
     tile_cumulative: Vec<f64>,
@@ -43,6 +49,9 @@ pub(crate) struct Draw {
     pub weight: f64,
 }
 
+/// A drawn `(s, t)` with its unoccluded kernel.
+type Drawn = ([f64; 2], Unoccluded);
+
 /// Uniform draws tried before concluding that no pair has varying visibility.
 const MAX_TRIES: usize = 1 << 20;
 /// Uniform draws that set the clip level.
@@ -50,47 +59,66 @@ const PILOT: usize = 4096;
 /// The clip level is this quantile of the unoccluded ζ: the 1/r corners of a light must not
 /// take every sample.
 const CLIP_QUANTILE: f64 = 0.99;
-/// Up to this many surface edges the pairs are listed (n² entries).
-pub(crate) const MAX_LISTED_PARENTS: usize = 512;
 /// Tiles per side of a pair's rectangle in the importance proposal.
 const TILES: usize = 8;
-/// Points per tile estimating `g` (a jittered 2 × 2 grid).
+/// The most tiles the importance proposal keeps (16 bytes each): a scene with more than
+/// `MAX_TILES / TILES²` varying pairs (16 384) gets fewer tiles per pair.
+const MAX_TILES: usize = 1 << 20;
+/// Points per side of a tile estimating `g` (a jittered 2 × 2 grid) at [`TILES`] per side;
+/// fewer tiles have more points each.
 const TILE_POINTS: usize = 2;
 
 impl Sampler {
     /// Lists the pairs, sets the clip level from a pilot of uniform draws and builds the
     /// importance proposal; `None` when visibility varies nowhere.
     pub(crate) fn new(kernel: &Kernel, importance: f64, rng: &mut impl Rng) -> Option<Sampler> {
+        Sampler::with_max_tiles(kernel, importance, rng, MAX_TILES)
+    }
+
+    /// [`Sampler::new`] with at most `max_tiles` tiles.
+    fn with_max_tiles(
+        kernel: &Kernel,
+        importance: f64,
+        rng: &mut impl Rng,
+        max_tiles: usize,
+    ) -> Option<Sampler> {
         let n = kernel.surface_parents();
+        let scene = kernel.scene();
+        let ranges: Vec<(f64, f64)> = (0..n)
+            .map(|r| scene.parent_param_range(r).unwrap_or((0.0, 0.0)))
+            .collect();
+        // Both orders of each pair, in (sender, receiver) order.
+        let mut ordered: Vec<(u32, u32)> = kernel
+            .varying_pairs()
+            .pairs
+            .iter()
+            .flat_map(|&(a, b)| [(a as u32, b as u32), (b as u32, a as u32)])
+            .collect();
+        if ordered.is_empty() {
+            return None;
+        }
+        ordered.sort_unstable();
+        let mut total = 0.0;
+        let pairs = ordered
+            .into_iter()
+            .map(|(a, b)| {
+                let (ra, rb) = (ranges[a as usize], ranges[b as usize]);
+                total += (ra.1 - ra.0) * (rb.1 - rb.0);
+                (a, b, total)
+            })
+            .collect::<Vec<_>>();
+        let tiles = tiles_per_side(pairs.len(), max_tiles);
         let mut sampler = Sampler {
             importance,
             clip: 1.0,
             mean_g: 1.0,
-            pairs: Vec::new(),
-            ranges: Vec::new(),
+            pairs,
+            ranges,
+            tiles,
             tile_g: Vec::new(),
             tile_cumulative: Vec::new(),
             mean_tile_g: 1.0,
         };
-        if n <= MAX_LISTED_PARENTS {
-            let scene = kernel.scene();
-            sampler.ranges = (0..n)
-                .map(|r| scene.parent_param_range(r).unwrap_or((0.0, 0.0)))
-                .collect();
-            let mut total = 0.0;
-            for a in 0..n {
-                for b in 0..n {
-                    if kernel.pair_class(a, b) == PairClass::Varies {
-                        let (ra, rb) = (sampler.ranges[a], sampler.ranges[b]);
-                        total += (ra.1 - ra.0) * (rb.1 - rb.0);
-                        sampler.pairs.push((a as u32, b as u32, total));
-                    }
-                }
-            }
-            if sampler.pairs.is_empty() {
-                return None;
-            }
-        }
         let mut values: Vec<f64> = Vec::with_capacity(PILOT);
         for _ in 0..PILOT {
             values.push(sampler.uniform(kernel, rng)?.1.zeta);
@@ -110,6 +138,10 @@ impl Sampler {
     /// positive (all the uniform draws cover): each tile counts with the share of its points in
     /// `V`, not with its whole area.
     fn build_tiles(&mut self, kernel: &Kernel, rng: &mut impl Rng) {
+        let tiles = self.side();
+        // A pair's estimate rests on as many points however many tiles it has: too few in a
+        // tile bias the normaliser (its share in V and its g come from the same points).
+        let points = (TILE_POINTS * TILES).div_ceil(tiles);
         let (mut cumulative, mut weighted) = (0.0, 0.0);
         // The listed area outside V; subtracted from the whole, so that a scene where ζ > 0 on
         // every listed pair normalises exactly as the whole area does.
@@ -120,24 +152,22 @@ impl Sampler {
             let pair_area = end - previous;
             previous = end;
             let (ra, rb) = (self.ranges[a as usize], self.ranges[b as usize]);
-            let (ws, wt) = ((ra.1 - ra.0) / TILES as f64, (rb.1 - rb.0) / TILES as f64);
-            for i in 0..TILES {
-                for j in 0..TILES {
+            let (ws, wt) = ((ra.1 - ra.0) / tiles as f64, (rb.1 - rb.0) / tiles as f64);
+            for i in 0..tiles {
+                for j in 0..tiles {
                     let (mut sum, mut inside) = (0.0, 0);
-                    for p in 0..TILE_POINTS * TILE_POINTS {
-                        let u =
-                            ((p / TILE_POINTS) as f64 + rng.random::<f64>()) / TILE_POINTS as f64;
-                        let v =
-                            ((p % TILE_POINTS) as f64 + rng.random::<f64>()) / TILE_POINTS as f64;
+                    for p in 0..points * points {
+                        let u = ((p / points) as f64 + rng.random::<f64>()) / points as f64;
+                        let v = ((p % points) as f64 + rng.random::<f64>()) / points as f64;
                         let z = kernel
                             .unoccluded(ra.0 + ws * (i as f64 + u), rb.0 + wt * (j as f64 + v))
                             .zeta;
                         sum += g(z, self.clip);
                         inside += usize::from(z > 0.0);
                     }
-                    let estimate = sum / (TILE_POINTS * TILE_POINTS) as f64;
-                    let area = pair_area / (TILES * TILES) as f64;
-                    let share = inside as f64 / (TILE_POINTS * TILE_POINTS) as f64;
+                    let estimate = sum / (points * points) as f64;
+                    let area = pair_area / (tiles * tiles) as f64;
+                    let share = inside as f64 / (points * points) as f64;
                     cumulative += area * estimate;
                     weighted += area * estimate * share;
                     outside += area * (1.0 - share);
@@ -206,6 +236,7 @@ impl Sampler {
                 .min(self.ranges.len() - 1)
         };
         let (a, b) = (rank(s) as u32, rank(t) as u32);
+        let tiles = self.side();
         // Pairs are listed in (sender, receiver) order.
         let k = self
             .pairs
@@ -213,27 +244,39 @@ impl Sampler {
             .ok()?;
         let (ra, rb) = (self.ranges[a as usize], self.ranges[b as usize]);
         let cell = |x: f64, r: (f64, f64)| {
-            (((x - r.0) / (r.1 - r.0) * TILES as f64) as usize).min(TILES - 1)
+            (((x - r.0) / (r.1 - r.0) * tiles as f64) as usize).min(tiles - 1)
         };
-        Some(k * TILES * TILES + cell(s, ra) * TILES + cell(t, rb))
+        Some(k * tiles * tiles + cell(s, ra) * tiles + cell(t, rb))
     }
 
     /// A uniform point in tile `tile`.
     fn point_in_tile(&self, tile: usize, rng: &mut impl Rng) -> (f64, f64) {
-        let (k, rest) = (tile / (TILES * TILES), tile % (TILES * TILES));
-        let (i, j) = (rest / TILES, rest % TILES);
+        let tiles = self.side();
+        let (k, rest) = (tile / (tiles * tiles), tile % (tiles * tiles));
+        let (i, j) = (rest / tiles, rest % tiles);
         let (a, b, _) = self.pairs[k];
         let (ra, rb) = (self.ranges[a as usize], self.ranges[b as usize]);
-        let (ws, wt) = ((ra.1 - ra.0) / TILES as f64, (rb.1 - rb.0) / TILES as f64);
+        let (ws, wt) = ((ra.1 - ra.0) / tiles as f64, (rb.1 - rb.0) / tiles as f64);
         (
             ra.0 + ws * (i as f64 + rng.random::<f64>()),
             rb.0 + wt * (j as f64 + rng.random::<f64>()),
         )
     }
 
+    /// Tiles per side, within `1..=TILES` whatever a checkpoint says.
+    fn side(&self) -> usize {
+        self.tiles.clamp(1, TILES)
+    }
+
     /// A uniform `(s, t)` on a pair where visibility varies and the unoccluded ζ is positive.
-    fn uniform(&self, kernel: &Kernel, rng: &mut impl Rng) -> Option<([f64; 2], Unoccluded)> {
-        for _ in 0..MAX_TRIES {
+    fn uniform(&self, kernel: &Kernel, rng: &mut impl Rng) -> Option<Drawn> {
+        self.uniform_tries(kernel, rng).map(|(drawn, _)| drawn)
+    }
+
+    /// [`Sampler::uniform`], and the points it drew to find it: one, but where the unoccluded
+    /// ζ is 0 (a receiver behind the sender's line), whatever the scene's size.
+    fn uniform_tries(&self, kernel: &Kernel, rng: &mut impl Rng) -> Option<(Drawn, usize)> {
+        for tries in 1..=MAX_TRIES {
             let (s, t) = match self.pairs.last() {
                 Some(&(_, _, total)) => {
                     let x = rng.random::<f64>() * total;
@@ -248,15 +291,31 @@ impl Sampler {
                         rb.0 + (rb.1 - rb.0) * rng.random::<f64>(),
                     )
                 }
+                // A checkpoint written when large scenes listed no pairs: the whole square.
                 None => (rng.random::<f64>(), rng.random::<f64>()),
             };
             let u = kernel.unoccluded(s, t);
             if u.zeta > 0.0 && kernel.pair_class(u.sender, u.receiver) == PairClass::Varies {
-                return Some(([s, t], u));
+                return Some((([s, t], u), tries));
             }
         }
         None
     }
+}
+
+/// Tiles per side for `pairs` listed pairs: [`TILES`], or as many as keep the tiles within
+/// `max_tiles` (at least one: a pair's own estimate of `g`).
+fn tiles_per_side(pairs: usize, max_tiles: usize) -> usize {
+    let mut side = TILES;
+    while side > 1 && pairs.saturating_mul(side * side) > max_tiles {
+        side -= 1;
+    }
+    side
+}
+
+/// The tiles of checkpoints written before their number was chosen per scene.
+fn default_tiles() -> usize {
+    TILES
 }
 
 /// `min(z / c, 1)²`.
@@ -266,6 +325,9 @@ fn g(z: f64, c: f64) -> f64 {
 
 #[cfg(test)]
 mod tests {
+    use flatland_geom::{Edge, Scene};
+    use flatland_testkit::rooms;
+
     use super::*;
 
     /// A function of `(s, t)`.
@@ -337,12 +399,14 @@ mod tests {
         })
     }
 
-    /// Checks `E[w · f]` against the quadrature on each scene, with `importance`.
-    fn check_unbiased(cases: &[(&str, f64)]) {
+    /// Checks `E[w · f]` against the quadrature on each scene, with `importance` and at most
+    /// `max_tiles` tiles.
+    fn check_unbiased(cases: &[(&str, f64)], max_tiles: usize) {
         for &(scene, importance) in cases {
             let kernel = Kernel::new(flatland_geom::bundled::scene(scene).unwrap());
             let mut rng = crate::seeds::stream(3, 0);
-            let sampler = Sampler::new(&kernel, importance, &mut rng).expect("shadows");
+            let sampler =
+                Sampler::with_max_tiles(&kernel, importance, &mut rng, max_tiles).expect("shadows");
             let expected = quadrature(&kernel, &sampler, 64);
             let measured = weighted_means(&kernel, &sampler, 400_000);
             for (k, (name, _)) in FUNCTIONS.iter().enumerate() {
@@ -369,13 +433,70 @@ mod tests {
     /// and 18 % low on corners).
     #[test]
     fn importance_weights_are_unbiased() {
-        check_unbiased(&[
-            ("fig3", 0.7),
-            ("fig3", 0.0),
-            ("maze", 0.7),
-            ("maze", 0.0),
-            ("corners", 0.7),
-            ("corners", 0.0),
-        ]);
+        check_unbiased(
+            &[
+                ("fig3", 0.7),
+                ("fig3", 0.0),
+                ("maze", 0.7),
+                ("maze", 0.0),
+                ("corners", 0.7),
+                ("corners", 0.0),
+            ],
+            MAX_TILES,
+        );
+    }
+
+    /// The same with one tile per pair, as a scene of very many varying pairs gets.
+    #[test]
+    fn importance_weights_are_unbiased_with_one_tile_per_pair() {
+        check_unbiased(&[("fig3", 0.7), ("maze", 0.7), ("corners", 0.7)], 1);
+    }
+
+    #[test]
+    fn tiles_shrink_to_keep_within_their_bound() {
+        assert_eq!(tiles_per_side(16_384, MAX_TILES), TILES);
+        assert_eq!(tiles_per_side(16_385, MAX_TILES), TILES - 1);
+        assert_eq!(tiles_per_side(100_000, MAX_TILES), 3);
+        assert_eq!(tiles_per_side(usize::MAX, MAX_TILES), 1);
+    }
+
+    /// Issue 20's guard, without a clock: on a convex room of 1024 walls around a box (twice
+    /// the 512 walls up to which the pairs were once listed; above, a draw took the whole square
+    /// and kept what landed on a pair where visibility varies, about one point in a hundred
+    /// here) the pairs are listed and a uniform draw lands on one at its first try, as in a
+    /// small scene, and every draw is on a listed pair.
+    #[test]
+    fn a_draw_in_a_large_room_lands_on_a_varying_pair_at_once() {
+        let mut edges = Edge::polygon(&rooms::regular_polygon(1024, 10.0), 0.5);
+        edges[0].emission = 1.0;
+        let c = rooms::off_centre_box();
+        edges.extend((0..4).map(|i| Edge::blocker(c[i], c[(i + 1) % 4])));
+        let kernel = Kernel::new(Scene::new(edges).unwrap());
+        let mut rng = crate::seeds::stream(5, 0);
+        let sampler = Sampler::new(&kernel, 0.7, &mut rng).expect("the box casts shadows");
+        let listed = sampler.pairs.last().unwrap().2;
+        assert!(
+            listed < 0.02,
+            "the varying pairs cover {listed} of the square"
+        );
+        let draws = 20_000;
+        let tries: usize = (0..draws)
+            .map(|_| sampler.uniform_tries(&kernel, &mut rng).unwrap().1)
+            .sum();
+        assert_eq!(
+            tries, draws,
+            "every wall faces every other: no point is redrawn"
+        );
+        for _ in 0..draws {
+            let [s, t] = sampler.draw(&kernel, &mut rng).st;
+            let u = kernel.unoccluded(s, t);
+            let pair = (u.sender as u32, u.receiver as u32);
+            assert!(
+                sampler
+                    .pairs
+                    .binary_search_by_key(&pair, |p| (p.0, p.1))
+                    .is_ok()
+            );
+        }
     }
 }
