@@ -17,9 +17,11 @@ use sgcs::{CellId, Gate};
 
 use crate::Gating;
 
+mod nearest;
 mod sampler;
 
-pub(crate) use sampler::{MAX_LISTED_PARENTS, Sampler};
+use nearest::NearestEdges;
+pub(crate) use sampler::Sampler;
 
 /// One face of a pair's visibility structure: the ordered pair of surface edges (sender rank,
 /// receiver rank) and the ray's [`RayFace`] (sub-pair, the side of each of the sub-pair's
@@ -261,8 +263,8 @@ impl Gate for FaceGate<'_> {
 #[derive(Clone, Debug)]
 pub(crate) struct Labeller {
     frame: InputFrame,
-    /// Each parent surface edge, by rank: its end points.
-    parents: Vec<(DVec2, DVec2)>,
+    /// The parent surface edges, by rank.
+    parents: NearestEdges,
     /// Distances closer than this are a tie (rounding of the frame's unmap).
     tie: f64,
 }
@@ -271,9 +273,11 @@ impl Labeller {
     pub(crate) fn new(kernel: &Kernel, frame: InputFrame) -> Labeller {
         Labeller {
             frame,
-            parents: (0..kernel.surface_parents())
-                .map(|r| kernel.surface_parent(r))
-                .collect(),
+            parents: NearestEdges::new(
+                (0..kernel.surface_parents())
+                    .map(|r| kernel.surface_parent(r))
+                    .collect(),
+            ),
             tie: TIE / frame.inv_scale,
         }
     }
@@ -297,39 +301,21 @@ impl Labeller {
     /// stands on a floor or against a wall, its bottom lies on the floor, back to back, and a
     /// ray from the room to a point there ends on the floor, not on the box.
     fn nearest_parent(&self, p: DVec2, other: DVec2) -> usize {
-        let distance = |&(a, b): &(DVec2, DVec2)| distance_to_segment(p, a, b);
-        let nearest = self
-            .parents
-            .iter()
-            .map(distance)
-            .fold(f64::INFINITY, f64::min);
-        let near = |r: &usize| distance(&self.parents[*r]) <= nearest + self.tie;
-        let faces = |r: &usize| {
-            let (a, b) = self.parents[*r];
+        let near = self.parents.within_tie(p, self.tie);
+        let faces = |r: &&usize| {
+            let (a, b) = self.parents.edge(**r);
             (b - a).perp_dot(other - a) > 0.0
         };
-        let ranks = 0..self.parents.len();
-        ranks
-            .clone()
-            .find(|r| near(r) && faces(r))
-            .or_else(|| ranks.clone().find(near))
+        near.iter()
+            .find(faces)
+            .or_else(|| near.first())
+            .copied()
             .unwrap_or(0)
     }
 }
 
 /// Distances within this share of the scene's size are a tie in [`Labeller::nearest_parent`].
 const TIE: f64 = 1e-12;
-
-fn distance_to_segment(p: DVec2, a: DVec2, b: DVec2) -> f64 {
-    let d = b - a;
-    let len2 = d.length_squared();
-    let u = if len2 > 0.0 {
-        ((p - a).dot(d) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    p.distance(a + d * u)
-}
 
 #[cfg(test)]
 mod tests {
