@@ -6,6 +6,9 @@ use flatland_geom::{Kernel, PairVisibility, Role, Scene};
 
 /// Pairs listed one by one at most; larger scenes print counts only.
 const MAX_LISTED: usize = 40;
+/// Emitters, or a pair's occluders, named on one line at most; the rest are counted, so a
+/// scene of thousands of edges still prints lines a terminal shows whole.
+const MAX_NAMED: usize = 4;
 /// Above this many surface edges the pair classification is skipped (it is quadratic).
 const MAX_CLASSIFIED: usize = 512;
 
@@ -51,19 +54,16 @@ pub fn summary(name: &str, scene: &Scene) -> String {
         plural(blockers, "blocker"),
         edges.iter().filter(|e| e.two_sided).count()
     );
-    let list: Vec<String> = emitters
-        .iter()
-        .map(|&i| format!("edge {i} (E = {})", edges[i].emission))
-        .collect();
-    let _ = writeln!(
-        w,
-        "emitters: {}",
-        if list.is_empty() {
-            "none".into()
-        } else {
-            list.join(", ")
-        }
+    let list = named(
+        emitters
+            .iter()
+            .map(|&i| format!("edge {i} (E = {})", edges[i].emission)),
     );
+    let _ = match emitters.len() {
+        0 => writeln!(w, "emitters: none"),
+        1 => writeln!(w, "emitters: {list}"),
+        n => writeln!(w, "emitters: {n}: {list}"),
+    };
     if emitters.is_empty() {
         let _ = writeln!(
             w,
@@ -119,8 +119,8 @@ pub fn summary(name: &str, scene: &Scene) -> String {
     let _ = writeln!(w, "  fully blocked (V = 0, no ray):   {blocked}");
     let _ = writeln!(w, "  need visibility rays:            {}", rays.len());
     for (a, b, occluders) in rays.iter().take(MAX_LISTED) {
-        let names: Vec<String> = occluders.iter().map(usize::to_string).collect();
-        let _ = writeln!(w, "    {a}-{b}: against edges {}", names.join(", "));
+        let names = named(occluders.iter().map(usize::to_string));
+        let _ = writeln!(w, "    {a}-{b}: against edges {names}");
     }
     if rays.len() > MAX_LISTED {
         let _ = writeln!(w, "    ... and {} more", rays.len() - MAX_LISTED);
@@ -128,10 +128,62 @@ pub fn summary(name: &str, scene: &Scene) -> String {
     out
 }
 
+/// The first [`MAX_NAMED`] of `items`, comma-separated, and how many more there are.
+fn named(items: impl ExactSizeIterator<Item = String>) -> String {
+    let more = items.len().saturating_sub(MAX_NAMED);
+    let list: Vec<String> = items.take(MAX_NAMED).collect();
+    match more {
+        0 => list.join(", "),
+        _ => format!("{} and {more} more", list.join(", ")),
+    }
+}
+
 fn plural(n: usize, word: &str) -> String {
     if n == 1 {
         format!("1 {word}")
     } else {
         format!("{n} {word}s")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 20: a floor plan of 10⁴ edges listed each of its 264 emitters on one line of 5288
+    /// characters. Every line stays short on plans with many emitters, classified (under 512
+    /// surfaces: pairs seen past many occluders) or not.
+    #[test]
+    fn large_scenes_print_short_lines() {
+        for (edges, seed) in [(400, 5), (2000, 5)] {
+            let scene = flatland_geom::generate::floor_plan(edges, seed).unwrap();
+            let text = summary("plan", &scene);
+            assert!(text.contains("emitters: "), "{text}");
+            assert!(
+                text.contains(" more"),
+                "something is counted, not listed:\n{text}"
+            );
+            for line in text.lines() {
+                assert!(
+                    line.chars().count() <= 120,
+                    "{} characters: {line}",
+                    line.len()
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn lists_name_the_first_items_and_count_the_rest() {
+        let items = |n: usize| {
+            (0..n)
+                .map(|i| i.to_string())
+                .collect::<Vec<_>>()
+                .into_iter()
+        };
+        assert_eq!(named(items(0)), "");
+        assert_eq!(named(items(3)), "0, 1, 2");
+        assert_eq!(named(items(MAX_NAMED)), "0, 1, 2, 3");
+        assert_eq!(named(items(12)), "0, 1, 2, 3 and 8 more");
     }
 }
