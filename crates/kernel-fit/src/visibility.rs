@@ -301,16 +301,11 @@ impl Labeller {
     /// stands on a floor or against a wall, its bottom lies on the floor, back to back, and a
     /// ray from the room to a point there ends on the floor, not on the box.
     fn nearest_parent(&self, p: DVec2, other: DVec2) -> usize {
-        let near = self.parents.within_tie(p, self.tie);
-        let faces = |r: &&usize| {
-            let (a, b) = self.parents.edge(**r);
+        let faces = |r: usize| {
+            let (a, b) = self.parents.edge(r);
             (b - a).perp_dot(other - a) > 0.0
         };
-        near.iter()
-            .find(faces)
-            .or_else(|| near.first())
-            .copied()
-            .unwrap_or(0)
+        self.parents.nearest(p, self.tie, faces).unwrap_or(0)
     }
 }
 

@@ -89,19 +89,50 @@ impl NearestEdges {
         self.split(children + 1, half, end);
     }
 
-    /// The ranks, ascending, whose distance from `p` is at most the least distance plus `tie`:
-    /// exactly those a scan of every edge with [`distance_to_segment`] finds.
-    pub(crate) fn within_tie(&self, p: DVec2, tie: f64) -> Vec<usize> {
+    /// Of the edges whose distance from `p` is at most the least distance plus `tie`, the
+    /// lowest rank that `prefer` accepts, else the lowest rank (`None` without edges): what a
+    /// scan of every edge in rank order with [`distance_to_segment`] picks.
+    pub(crate) fn nearest(
+        &self,
+        p: DVec2,
+        tie: f64,
+        prefer: impl Fn(usize) -> bool,
+    ) -> Option<usize> {
         let mut best = f64::INFINITY;
-        let mut found: Vec<(usize, f64)> = Vec::new();
-        let mut stack: Vec<u32> = Vec::new();
-        if !self.nodes.is_empty() {
-            stack.push(0);
+        self.search(p, best, |_, d| {
+            best = best.min(d);
+            best
+        });
+        let bound = best + tie;
+        let (mut preferred, mut first): (Option<usize>, Option<usize>) = (None, None);
+        self.search(p, bound, |rank, d| {
+            if d <= bound {
+                let lower = |found: Option<usize>| Some(found.map_or(rank, |f| f.min(rank)));
+                first = lower(first);
+                if prefer(rank) {
+                    preferred = lower(preferred);
+                }
+            }
+            bound
+        });
+        preferred.or(first)
+    }
+
+    /// Visits the edges of the leaves whose boxes lie within `bound` of `p` (the margin
+    /// added), the nearer child first; `edge` gets each edge's rank and distance and returns
+    /// the bound from then on (it may only fall, so a box beyond it stays beyond it).
+    fn search(&self, p: DVec2, mut bound: f64, mut edge: impl FnMut(usize, f64) -> f64) {
+        if self.nodes.is_empty() {
+            return;
         }
-        while let Some(n) = stack.pop() {
-            let node = &self.nodes[n as usize];
-            // `best` only falls, so a box beyond it now stays beyond it.
-            if box_distance(p, node.lo, node.hi) > best + tie + self.margin {
+        // A median split of up to 2³² edges is at most 31 levels deep, and each level leaves
+        // one node on the stack.
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let node = &self.nodes[stack[top] as usize];
+            if box_distance(p, node.lo, node.hi) > bound + self.margin {
                 continue;
             }
             if node.count == 0 {
@@ -110,31 +141,19 @@ impl NearestEdges {
                     let c = &self.nodes[c as usize];
                     box_distance(p, c.lo, c.hi)
                 };
-                // The nearer child last, so it is searched first.
-                if near(l) <= near(r) {
-                    stack.extend([r, l]);
-                } else {
-                    stack.extend([l, r]);
-                }
+                // The nearer child on top, so it is searched first.
+                let (first, second) = if near(l) <= near(r) { (l, r) } else { (r, l) };
+                stack[top] = second;
+                stack[top + 1] = first;
+                top += 2;
                 continue;
             }
             let leaf = node.first as usize..(node.first + node.count) as usize;
             for &rank in &self.order[leaf] {
                 let (a, b) = self.edges[rank as usize];
-                let d = distance_to_segment(p, a, b);
-                best = best.min(d);
-                if d <= best + tie {
-                    found.push((rank as usize, d));
-                }
+                bound = edge(rank as usize, distance_to_segment(p, a, b));
             }
         }
-        let mut ranks: Vec<usize> = found
-            .into_iter()
-            .filter(|&(_, d)| d <= best + tie)
-            .map(|(r, _)| r)
-            .collect();
-        ranks.sort_unstable();
-        ranks
     }
 
     /// Each edge by rank: its end points.
@@ -176,13 +195,19 @@ mod tests {
 
     use super::*;
 
-    /// What a scan of every edge finds.
-    fn scan(edges: &[(DVec2, DVec2)], p: DVec2, tie: f64) -> Vec<usize> {
+    /// What a scan of every edge picks.
+    fn scan(
+        edges: &[(DVec2, DVec2)],
+        p: DVec2,
+        tie: f64,
+        prefer: impl Fn(usize) -> bool,
+    ) -> Option<usize> {
         let distance = |&(a, b): &(DVec2, DVec2)| distance_to_segment(p, a, b);
         let nearest = edges.iter().map(distance).fold(f64::INFINITY, f64::min);
+        let near = |r: &usize| distance(&edges[*r]) <= nearest + tie;
         (0..edges.len())
-            .filter(|&r| distance(&edges[r]) <= nearest + tie)
-            .collect()
+            .find(|r| near(r) && prefer(*r))
+            .or_else(|| (0..edges.len()).find(near))
     }
 
     /// Random edges, many sharing end points and lying on one grid (ties), and points on and
@@ -221,17 +246,23 @@ mod tests {
                     _ => DVec2::new(rng.random_range(-6.0..6.0), rng.random_range(-6.0..6.0)),
                 };
                 let tie = [0.0, 1e-12, 0.3][rng.random_range(0..3)];
+                // Preferring the edges whose fronts face a point, as the labeller does.
+                let other = point(&mut rng);
+                let faces = |r: usize| {
+                    let (a, b) = edges[r];
+                    (b - a).perp_dot(other - a) > 0.0
+                };
+                let picked = index.nearest(p, tie, faces);
+                assert_eq!(picked, scan(&edges, p, tie, faces), "case {case}");
                 assert_eq!(
-                    index.within_tie(p, tie),
-                    scan(&edges, p, tie),
-                    "case {case}"
+                    index.nearest(p, tie, |_| false),
+                    scan(&edges, p, tie, |_| false)
                 );
             }
         }
-        assert!(
-            NearestEdges::new(Vec::new())
-                .within_tie(DVec2::ZERO, 0.0)
-                .is_empty()
+        assert_eq!(
+            NearestEdges::new(Vec::new()).nearest(DVec2::ZERO, 0.0, |_| true),
+            None
         );
     }
 }
