@@ -2,6 +2,11 @@
 //! once, outside the timing):
 //!
 //! - `fit/default_maze_400`: the default learner (visibility only) on `maze` to 400 cells;
+//! - `fit/default_convex_4096_400`: the same on issue 20's convex room (4096 inward walls
+//!   around a box of 4 blockers, `examples/convex_room.rs`), a new kernel each time (so no
+//!   pair classified in one run is kept for the next): its pairs where visibility varies are
+//!   found by the kernel's bundle walk and drawn by a binary search (issue 20: 270 s and more
+//!   before, when the draws were rejected on the whole square);
 //! - `fit/paper_fig3_400`: the paper's network on `fig3` to 400 cells, without its refit;
 //! - `fit/paper_fig3_400_finish`: how that fit ends (`Fit::finish`): its least-squares refit
 //!   (ridge chosen on held-back samples, then the final solve) and the final errors against a
@@ -22,6 +27,17 @@ use kernel_fit::{Fit, FitParams};
 fn kernel(name: &str) -> Arc<Kernel> {
     let path = format!("{}/scenes/{name}.ron", env!("CARGO_MANIFEST_DIR"));
     Arc::new(Kernel::new(Scene::load(path).expect("bundled scene loads")))
+}
+
+/// Issue 20's convex room of `walls` inward walls around a box of 4 blockers.
+fn convex_room(walls: usize) -> Arc<Kernel> {
+    use flatland_geom::Edge;
+    use flatland_testkit::rooms;
+    let mut edges = Edge::polygon(&rooms::regular_polygon(walls, 10.0), 0.5);
+    edges[0] = edges[0].with_emission(1.0);
+    let c = rooms::off_centre_box();
+    edges.extend((0..4).map(|i| Edge::blocker(c[i], c[(i + 1) % 4])));
+    Arc::new(Kernel::new(Scene::new(edges).expect("a valid room")))
 }
 
 fn new_fit(kernel: &Arc<Kernel>, params: FitParams) -> Fit {
@@ -57,6 +73,16 @@ fn whole_fit(c: &mut Criterion) {
             fit.network().len()
         })
     });
+    let convex = convex_room(4096);
+    group.bench_function("default_convex_4096_400", |b| {
+        b.iter(|| {
+            // A kernel of its own each time: the pairs it classified are not kept from the last.
+            let kernel = Arc::new(Kernel::new(convex.scene().clone()));
+            let mut fit = new_fit(&kernel, params(false, 400));
+            train(&mut fit);
+            fit.network().len()
+        })
+    });
     group.bench_function("paper_fig3_400", |b| {
         b.iter(|| {
             let mut fit = new_fit(&fig3, params(true, 400));
@@ -84,7 +110,7 @@ fn full(kernel: &Arc<Kernel>, paper: bool, cells: usize) -> Fit {
     let mut p = *fit.params();
     // No growth period can end, so the target-cells rule never stops it.
     p.network.lambda = u32::MAX;
-    p.max_steps = u64::MAX;
+    p.max_steps = 1 << 50; // the most it takes: no step budget ends it either
     fit.set_params(p.live()).expect("valid parameters");
     fit
 }
