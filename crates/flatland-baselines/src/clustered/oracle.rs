@@ -186,7 +186,11 @@ pub(super) fn estimate(
             };
             i / (np.length * nq.length) * visible
         }
-        None => sums.visible_g / rays as f64,
+        // A few rays' mean of G (singular where the ends come close) can exceed what any
+        // two nodes can exchange; the bounds of F_pq and F_qp cap it, so no link makes light.
+        None => (sums.visible_g / rays as f64)
+            .min(t.f_pq / nq.length)
+            .min(t.f_qp / np.length),
     };
     Estimate {
         g,
