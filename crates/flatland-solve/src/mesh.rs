@@ -14,7 +14,8 @@ use crate::{InputFrame, SolveError};
 /// [`Scene::subdivide`] cut, which share one line and one material), with its elements.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MeshEdge {
-    /// The scene edges (pieces) it is made of; `pieces.start` names it in pair classifications.
+    /// The scene edges (pieces) it is made of, as indices into [`Scene::edges`]; `pieces.start`
+    /// names it.
     pub pieces: Range<usize>,
     /// Its parameter interval `[s0, s1)`.
     pub s: [f64; 2],
