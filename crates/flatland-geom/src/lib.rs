@@ -43,6 +43,7 @@
 pub mod bundled;
 mod error;
 pub mod generate;
+mod ids;
 mod io;
 mod kernel;
 mod overlap;
@@ -57,9 +58,8 @@ use flatland_testkit::assert_close;
 
 pub use error::GeomError;
 pub use glam::DVec2;
+pub use ids::{EdgeId, SurfaceRank};
 pub use io::write_atomic;
-pub use kernel::{
-    Hit, Kernel, KernelParams, KernelSample, PairClass, PairEventsRef, PairVisibility, Unoccluded,
-};
+pub use kernel::{Hit, Kernel, KernelParams, KernelSample, PairClass, PairEventsRef, Unoccluded};
 pub use scene::{Edge, Role, Scene, SurfacePoint};
 pub use visibility::{OnRay, PairEvents, RayFace, SenderFace};

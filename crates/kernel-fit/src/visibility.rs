@@ -11,7 +11,7 @@
 
 use foldhash::HashMap;
 
-use flatland_geom::{DVec2, Kernel, PairClass, RayFace, Unoccluded};
+use flatland_geom::{DVec2, Kernel, PairClass, RayFace, SurfaceRank, Unoccluded};
 use flatland_solve::InputFrame;
 use sgcs::{CellId, Gate};
 
@@ -27,20 +27,26 @@ pub(crate) use sampler::{MAX_LISTED_PARENTS, Sampler};
 /// one face.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub(crate) struct FaceKey {
-    pair: (u32, u32),
+    pair: (SurfaceRank, SurfaceRank),
     face: RayFace,
 }
 
 impl FaceKey {
     /// The face of the ray from `x` (on the surface of rank `a`) to `y` (rank `b`); `None`
     /// unless visibility varies on that pair.
-    pub(crate) fn of(kernel: &Kernel, a: usize, b: usize, x: DVec2, y: DVec2) -> Option<FaceKey> {
+    pub(crate) fn of(
+        kernel: &Kernel,
+        a: SurfaceRank,
+        b: SurfaceRank,
+        x: DVec2,
+        y: DVec2,
+    ) -> Option<FaceKey> {
         if a == b || kernel.pair_class(a, b) != PairClass::Varies {
             return None;
         }
         let events = kernel.visibility_events(a, b)?;
         Some(FaceKey {
-            pair: (a as u32, b as u32),
+            pair: (a, b),
             face: events.face(x, y),
         })
     }
@@ -65,7 +71,7 @@ pub(crate) struct FaceId {
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Faces {
     ids: HashMap<FaceKey, FaceId>,
-    pair_ids: HashMap<(u32, u32), u32>,
+    pair_ids: HashMap<(SurfaceRank, SurfaceRank), u32>,
     face_cells: Vec<Vec<CellId>>,
     pair_cells: Vec<Vec<CellId>>,
     /// Per cell: its face, `None` when its centre ray is on no varying pair.
@@ -271,7 +277,8 @@ impl Labeller {
     pub(crate) fn new(kernel: &Kernel, frame: InputFrame) -> Labeller {
         Labeller {
             frame,
-            parents: (0..kernel.surface_parents())
+            parents: kernel
+                .surface_ranks()
                 .map(|r| kernel.surface_parent(r))
                 .collect(),
             tie: TIE / frame.inv_scale,
@@ -296,7 +303,7 @@ impl Labeller {
     /// rounding) one whose front faces `other`, the ray's other end, comes first: where a box
     /// stands on a floor or against a wall, its bottom lies on the floor, back to back, and a
     /// ray from the room to a point there ends on the floor, not on the box.
-    fn nearest_parent(&self, p: DVec2, other: DVec2) -> usize {
+    fn nearest_parent(&self, p: DVec2, other: DVec2) -> SurfaceRank {
         let distance = |&(a, b): &(DVec2, DVec2)| distance_to_segment(p, a, b);
         let nearest = self
             .parents
@@ -309,11 +316,12 @@ impl Labeller {
             (b - a).perp_dot(other - a) > 0.0
         };
         let ranks = 0..self.parents.len();
-        ranks
+        let rank = ranks
             .clone()
             .find(|r| near(r) && faces(r))
             .or_else(|| ranks.clone().find(near))
-            .unwrap_or(0)
+            .unwrap_or(0);
+        SurfaceRank::new(rank)
     }
 }
 
@@ -339,8 +347,9 @@ mod tests {
 
     /// A face of one of `pairs` pairs, with one of four side patterns.
     fn random_key(rng: &mut impl rand::Rng, pairs: u32) -> FaceKey {
+        let mut rank = || SurfaceRank::new(rng.random_range(0..pairs) as usize);
         FaceKey {
-            pair: (rng.random_range(0..pairs), rng.random_range(0..pairs)),
+            pair: (rank(), rank()),
             face: RayFace {
                 sub: rng.random_range(0..2),
                 sides: vec![rng.random_range(0..4u64)].into(),

@@ -2,7 +2,7 @@
 //! where visibility varies, and by importance where the unoccluded ζ is large, each draw with
 //! the weight that undoes its density.
 
-use flatland_geom::{Kernel, PairClass, Unoccluded};
+use flatland_geom::{Kernel, PairClass, SurfaceRank, Unoccluded};
 use rand::{Rng, RngExt};
 
 /// Draws `(s, t)` where visibility varies: a share `importance` from a proposal that follows
@@ -74,13 +74,15 @@ impl Sampler {
         };
         if n <= MAX_LISTED_PARENTS {
             let scene = kernel.scene();
-            sampler.ranges = (0..n)
+            sampler.ranges = kernel
+                .surface_ranks()
                 .map(|r| scene.parent_param_range(r).unwrap_or((0.0, 0.0)))
                 .collect();
             let mut total = 0.0;
             for a in 0..n {
                 for b in 0..n {
-                    if kernel.pair_class(a, b) == PairClass::Varies {
+                    let class = kernel.pair_class(SurfaceRank::new(a), SurfaceRank::new(b));
+                    if class == PairClass::Varies {
                         let (ra, rb) = (sampler.ranges[a], sampler.ranges[b]);
                         total += (ra.1 - ra.0) * (rb.1 - rb.0);
                         sampler.pairs.push((a as u32, b as u32, total));
@@ -287,10 +289,9 @@ mod tests {
     /// 768² grid is 2 % off where this is within 0.05 % at n = 64.
     fn quadrature(kernel: &Kernel, sampler: &Sampler, n: usize) -> [f64; 4] {
         let scene = kernel.scene();
-        let parents = kernel.surface_parents();
         let (mut area, mut sums) = (0.0, [0.0; 4]);
-        for a in 0..parents {
-            for b in 0..parents {
+        for a in kernel.surface_ranks() {
+            for b in kernel.surface_ranks() {
                 if kernel.pair_class(a, b) != PairClass::Varies {
                     continue;
                 }
