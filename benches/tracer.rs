@@ -14,7 +14,7 @@ use std::time::Duration;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use flatland_baselines::{TraceBudget, TraceParams, trace};
-use flatland_geom::{DVec2, Kernel, generate};
+use flatland_geom::{DVec2, EdgeId, Kernel, generate};
 use flatland_solve::{Mesh, never};
 
 mod support;
@@ -25,7 +25,7 @@ const BRUTE_FORCE_RAYS: usize = 1_000;
 const PHOTONS: u64 = 20_000;
 
 /// A ray as the tracer casts it: origin, direction, the edge it leaves.
-type CastRay = (DVec2, DVec2, usize);
+type CastRay = (DVec2, DVec2, EdgeId);
 
 /// `n` rays from uniformly random surface points, cosine-distributed (`sin θ` uniform).
 fn rays(kernel: &Kernel, n: usize, seed: u64) -> Vec<CastRay> {
@@ -51,6 +51,8 @@ fn first_hit(c: &mut Criterion) {
         let rays = rays(&kernel, RAYS, 5);
         let (lo, hi) = kernel.scene().bounds();
         let reach = 2.0 * (hi - lo).length();
+        // The far end of a ray is on no edge: an id past the scene's edges excludes nothing.
+        let nowhere = EdgeId::new(kernel.scene().edges().len());
         group.throughput(Throughput::Elements(rays.len() as u64));
         group.bench_function(format!("{name}/bvh"), |b| {
             b.iter(|| {
@@ -62,7 +64,7 @@ fn first_hit(c: &mut Criterion) {
         group.bench_function(format!("{name}/any_hit_same_rays"), |b| {
             b.iter(|| {
                 rays.iter()
-                    .filter(|&&(o, d, e)| kernel.visible(o, e, o + d * reach, usize::MAX))
+                    .filter(|&&(o, d, e)| kernel.visible(o, e, o + d * reach, nowhere))
                     .count()
             })
         });

@@ -338,10 +338,10 @@ fn solve_writes_the_csv_one_row_per_element_in_order_of_s() {
         last_s = s;
         // s is the kernel's parameter: it names the row's edge and point.
         let p = fig3.point(s);
-        assert_eq!(p.edge as f64, edge);
+        assert_eq!(p.edge.index() as f64, edge);
         assert!(p.position.distance(flatland_geom::DVec2::new(x, y)) < 1e-9);
         // B includes emission, and the exact kernel only adds light.
-        let e = fig3.edges()[p.edge].emission;
+        let e = fig3.edge(p.edge).emission;
         assert!(b >= e && b.is_finite(), "b = {b} below E = {e}");
     }
 }

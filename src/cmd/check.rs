@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use flatland_geom::{Kernel, PairVisibility, Role, Scene};
+use flatland_geom::{Kernel, PairClass, Role, Scene};
 
 /// Pairs listed one by one at most; larger scenes print counts only.
 const MAX_LISTED: usize = 40;
@@ -99,15 +99,19 @@ pub fn summary(name: &str, scene: &Scene) -> String {
     let kernel = Kernel::new(scene.clone());
     let (mut same, mut never, mut clear, mut blocked) = (0, 0, 0, 0);
     let mut rays = Vec::new();
+    let rank = |e| scene.surface_rank(e).expect("a surface edge has a rank");
     for (i, &a) in surfaces.iter().enumerate() {
         for &b in &surfaces[i + 1..] {
-            match kernel.pair_visibility(a, b) {
-                Some(PairVisibility::SameEdge) => same += 1,
-                Some(PairVisibility::NeverFacing) => never += 1,
-                Some(PairVisibility::Clear) => clear += 1,
-                Some(PairVisibility::Blocked(_)) => blocked += 1,
-                Some(PairVisibility::Rays(occluders)) => rays.push((a, b, occluders)),
-                _ => {}
+            let (ra, rb) = (rank(a), rank(b));
+            if ra == rb {
+                same += 1; // pieces of one parent edge
+                continue;
+            }
+            match kernel.pair_class(ra, rb) {
+                PairClass::Zero => never += 1,
+                PairClass::Visible => clear += 1,
+                PairClass::Hidden => blocked += 1,
+                PairClass::Varies => rays.push((a, b, kernel.pair_occluders(ra, rb))),
             }
         }
     }
@@ -119,7 +123,7 @@ pub fn summary(name: &str, scene: &Scene) -> String {
     let _ = writeln!(w, "  fully blocked (V = 0, no ray):   {blocked}");
     let _ = writeln!(w, "  need visibility rays:            {}", rays.len());
     for (a, b, occluders) in rays.iter().take(MAX_LISTED) {
-        let names = named(occluders.iter().map(usize::to_string));
+        let names = named(occluders.iter().map(ToString::to_string));
         let _ = writeln!(w, "    {a}-{b}: against edges {names}");
     }
     if rays.len() > MAX_LISTED {

@@ -8,8 +8,8 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use flatland_baselines::{
-    BlockValue, ClusteredParams, HrParams, UniformParams, run_clustered, run_hr_at_budget,
-    run_uniform,
+    BlockValue, ClusteredParams, DEFAULT_LINKS_PER_EDGE, HrParams, UniformParams, run_clustered,
+    run_hr_at_budget, run_uniform,
 };
 use flatland_geom::{Kernel, Scene, write_atomic};
 use flatland_solve::{
@@ -35,8 +35,9 @@ pub struct Args {
     #[arg(long, value_name = "KERNEL", default_value = "exact")]
     pub kernel: String,
     /// Basis functions of the representation built: links (hr, clustered), blocks (uniform),
-    /// cells (first-shot; default 400 for these). For the default learner, the most cells it may
-    /// grow (default: as many as the tolerance takes).
+    /// cells (first-shot); default 400 for these, except clustered: 100 links per edge of the
+    /// scene. For the default learner, the most cells it may grow (default: as many as the
+    /// tolerance takes).
     #[arg(long, value_name = "N")]
     pub basis: Option<usize>,
     /// The default learner stops when its own estimate of the relative L2 error of the
@@ -326,7 +327,11 @@ fn build(choice: &Choice, kernel: &Kernel, mesh: &Mesh, args: &Args, stop: &Stop
             Box::new(run.approx)
         }
         Choice::Clustered => {
-            let run = run_clustered(kernel, basis, args.seed, &ClusteredParams::default())?;
+            // Clustered HR has no initial linking to set its floor: its default follows the
+            // scene, as HR's does through that linking.
+            let edges = kernel.scene().edges().len();
+            let links = args.basis.unwrap_or(DEFAULT_LINKS_PER_EDGE * edges);
+            let run = run_clustered(kernel, links, args.seed, &ClusteredParams::default())?;
             note = run.note.map(|n| n.to_string());
             Box::new(run.approx)
         }

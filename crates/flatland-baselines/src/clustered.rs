@@ -53,6 +53,6 @@ mod run;
 mod solve;
 mod weights;
 
-pub use params::ClusteredParams;
+pub use params::{ClusteredParams, DEFAULT_LINKS_PER_EDGE};
 pub use represent::{ClusteredLink, ClusteredRadiosity, ClusteredStats, LinkEnd};
 pub use run::run_clustered;

@@ -58,7 +58,8 @@ mod uniform;
 pub use error::BaselineError;
 
 pub use clustered::{
-    ClusteredLink, ClusteredParams, ClusteredRadiosity, ClusteredStats, LinkEnd, run_clustered,
+    ClusteredLink, ClusteredParams, ClusteredRadiosity, ClusteredStats, DEFAULT_LINKS_PER_EDGE,
+    LinkEnd, run_clustered,
 };
 pub use hr::{
     HierarchicalRadiosity, HrLink, HrParams, HrStats, LinkEstimate, Oracle, count_initial_links,

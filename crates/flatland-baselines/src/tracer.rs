@@ -36,7 +36,7 @@
 //!
 //! ```
 //! use flatland_baselines::{Lighting, LightTracer, TraceBudget, TraceParams, trace};
-//! use flatland_geom::{Kernel, bundled};
+//! use flatland_geom::{EdgeId, Kernel, bundled};
 //! use flatland_solve::{ExactReference, Mesh, SolveParams, never, solve_errors};
 //!
 //! let kernel = Kernel::new(bundled::scene("fig3")?);
@@ -50,7 +50,9 @@
 //!
 //! // Another lighting of the same scene: the light off, the floor (edge 0) glowing.
 //! let tracer = LightTracer::new(&kernel, &mesh)?;
-//! let floor_lit = Lighting::default().with_emission(3, 0.0).with_emission(0, 0.5);
+//! let floor_lit = Lighting::default()
+//!     .with_emission(EdgeId::new(3), 0.0)
+//!     .with_emission(EdgeId::new(0), 0.5);
 //! let relit = tracer.trace(&floor_lit, &params, &never)?;
 //! assert!(relit.radiosity[0] >= 0.5 && relit.rays > 0);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
@@ -62,7 +64,7 @@ mod tally;
 
 use std::time::{Duration, Instant};
 
-use flatland_geom::Kernel;
+use flatland_geom::{EdgeId, Kernel};
 use flatland_solve::{Mesh, Stop};
 use rayon::prelude::*;
 
@@ -137,23 +139,22 @@ impl TraceParams {
 /// A lighting of a scene: the scene's own emissions, with some edges' overridden.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Lighting {
-    overrides: Vec<(usize, f64)>,
+    overrides: Vec<(EdgeId, f64)>,
 }
 
 impl Lighting {
-    /// The same lighting with surface edge `edge` (an index into the scene's edges) emitting
-    /// `emission`; for a piece of a subdivided edge, the whole edge. A later override of the
-    /// same edge wins. Checked when traced: a surface edge of the scene, `emission` finite
-    /// and ≥ 0.
+    /// The same lighting with surface edge `edge` emitting `emission`; for a piece of a
+    /// subdivided edge, the whole edge. A later override of the same edge wins. Checked when
+    /// traced: a surface edge of the scene, `emission` finite and ≥ 0.
     #[must_use]
-    pub fn with_emission(mut self, edge: usize, emission: f64) -> Lighting {
+    pub fn with_emission(mut self, edge: EdgeId, emission: f64) -> Lighting {
         self.overrides.push((edge, emission));
         self
     }
 
     /// The overrides, in the order given.
     #[must_use]
-    pub fn overrides(&self) -> &[(usize, f64)] {
+    pub fn overrides(&self) -> &[(EdgeId, f64)] {
         &self.overrides
     }
 }
@@ -499,15 +500,15 @@ mod tests {
         let kernel = Kernel::new(scene.clone());
         let mesh = Mesh::new(&kernel, 32).unwrap();
         let lighting = Lighting::default()
-            .with_emission(3, 0.0)
-            .with_emission(0, 0.5);
+            .with_emission(EdgeId::new(3), 0.0)
+            .with_emission(EdgeId::new(0), 0.5);
         let relit = LightTracer::new(&kernel, &mesh)
             .unwrap()
             .trace(&lighting, &photons(20_000, 9), &never)
             .unwrap();
         let edited = scene
-            .with_edge(3, scene.edges()[3].with_emission(0.0))
-            .and_then(|s| s.with_edge(0, s.edges()[0].with_emission(0.5)))
+            .with_edge(EdgeId::new(3), scene.edges()[3].with_emission(0.0))
+            .and_then(|s| s.with_edge(EdgeId::new(0), s.edges()[0].with_emission(0.5)))
             .unwrap();
         let edited_kernel = Kernel::new(edited);
         let edited_mesh = Mesh::new(&edited_kernel, 32).unwrap();
@@ -565,7 +566,7 @@ mod tests {
         let dark = LightTracer::new(&kernel, &mesh)
             .unwrap()
             .trace(
-                &Lighting::default().with_emission(3, 0.0),
+                &Lighting::default().with_emission(EdgeId::new(3), 0.0),
                 &photons(1_000, 1),
                 &never,
             )

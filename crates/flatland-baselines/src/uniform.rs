@@ -289,6 +289,7 @@ pub fn run_uniform(
 mod tests {
     use super::*;
     use crate::test_support::{blocker_kernel, box_kernel};
+    use flatland_geom::EdgeId;
     use flatland_solve::{Reference, grid_point};
 
     #[test]
@@ -447,10 +448,13 @@ mod tests {
         assert_eq!(k.block_value(), BlockValue::ExactKernelMean);
         let (s, t) = (0.1, 0.6); // the emitting floor is s ∈ [0, 0.25)
         let block = (s * 8.0) as usize * 8 + (t * 8.0) as usize;
-        assert_eq!(k.zeta(s, t), k.values()[block] * kernel.source_weight(0));
+        assert_eq!(
+            k.zeta(s, t),
+            k.values()[block] * kernel.source_weight(EdgeId::new(0))
+        );
         assert_eq!(
             k.zeta(0.4, t),
-            k.values()[3 * 8 + 4] * kernel.source_weight(1)
+            k.values()[3 * 8 + 4] * kernel.source_weight(EdgeId::new(1))
         );
     }
 }

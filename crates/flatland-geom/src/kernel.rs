@@ -12,14 +12,14 @@ mod visible;
 
 use glam::DVec2;
 
-use crate::GeomError;
 use crate::scene::{Role, Scene};
 use crate::visibility::{Bvh, Segment};
+use crate::{EdgeId, GeomError, SurfaceRank};
 use cache::PairCache;
 
 pub use pairs::PairEventsRef;
 pub use params::KernelParams;
-pub use values::{Hit, KernelSample, PairClass, PairVisibility, Unoccluded};
+pub use values::{Hit, KernelSample, PairClass, Unoccluded};
 pub use varying::VaryingPairs;
 
 /// What the hot loop needs of one parent edge, packed together.
@@ -30,8 +30,8 @@ struct Parent {
     normal: DVec2,
     reflectance: f64,
     weight: f64,
-    /// Rank among surface parents, `usize::MAX` for a blocker.
-    rank: usize,
+    /// Rank among surface parents, `None` for a blocker.
+    rank: Option<SurfaceRank>,
 }
 
 /// The exact kernel of one scene, with its acceleration structures. `Send + Sync`: share it
@@ -104,7 +104,7 @@ impl Kernel {
                 } else {
                     floor
                 },
-                rank: g.rank.unwrap_or(usize::MAX),
+                rank: g.rank,
             })
             .collect();
         let segments: Vec<Segment> = scene
@@ -145,13 +145,10 @@ impl Kernel {
     }
 
     /// `E'` of docs/ALGORITHM.md §2: the emission of an emitter, `emission_floor · max emission` for any
-    /// other edge (so 0 everywhere if nothing emits). 0 for a bad index.
+    /// other edge (so 0 everywhere if nothing emits). 0 for an edge not in the scene.
     #[must_use]
-    pub fn source_weight(&self, edge: usize) -> f64 {
-        if edge >= self.scene.edges().len() {
-            return 0.0;
-        }
-        self.parents[self.scene.group_of(edge)].weight
+    pub fn source_weight(&self, edge: EdgeId) -> f64 {
+        self.group(edge).map_or(0.0, |g| self.parents[g].weight)
     }
 
     /// Number of parent surface edges (the ranks of [`Unoccluded`] run over `0..this`).
@@ -160,13 +157,18 @@ impl Kernel {
         self.surface_parents.len()
     }
 
+    /// Every parent surface edge's rank, in order: `0..surface_parents()`.
+    pub fn surface_ranks(&self) -> impl ExactSizeIterator<Item = SurfaceRank> + use<> {
+        (0..self.surface_parents.len()).map(SurfaceRank::new)
+    }
+
     /// The end points `(a, b)` of the parent surface edge of rank `rank`.
     ///
     /// # Panics
     /// If `rank >= surface_parents()`.
     #[must_use]
-    pub fn surface_parent(&self, rank: usize) -> (DVec2, DVec2) {
-        let s = self.segments[self.surface_parents[rank]];
+    pub fn surface_parent(&self, rank: SurfaceRank) -> (DVec2, DVec2) {
+        let s = self.segments[self.surface_parents[rank.index()]];
         (s.a, s.b)
     }
 
@@ -175,8 +177,13 @@ impl Kernel {
     /// # Panics
     /// If `rank >= surface_parents()`.
     #[must_use]
-    pub fn source_weight_of_rank(&self, rank: usize) -> f64 {
-        self.parents[self.surface_parents[rank]].weight
+    pub fn source_weight_of_rank(&self, rank: SurfaceRank) -> f64 {
+        self.parents[self.surface_parents[rank.index()]].weight
+    }
+
+    /// The parent (group) of `edge`, `None` for an edge not in the scene.
+    fn group(&self, edge: EdgeId) -> Option<usize> {
+        (edge.index() < self.scene.edges().len()).then(|| self.scene.group_of(edge.index()))
     }
 }
 

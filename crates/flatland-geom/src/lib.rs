@@ -43,6 +43,7 @@
 pub mod bundled;
 mod error;
 pub mod generate;
+mod ids;
 mod io;
 mod kernel;
 mod overlap;
@@ -57,10 +58,10 @@ use flatland_testkit::assert_close;
 
 pub use error::GeomError;
 pub use glam::DVec2;
+pub use ids::{EdgeId, SurfaceRank};
 pub use io::write_atomic;
 pub use kernel::{
-    Hit, Kernel, KernelParams, KernelSample, PairClass, PairEventsRef, PairVisibility, Unoccluded,
-    VaryingPairs,
+    Hit, Kernel, KernelParams, KernelSample, PairClass, PairEventsRef, Unoccluded, VaryingPairs,
 };
 pub use scene::{Edge, Role, Scene, SurfacePoint};
 pub use visibility::{OnRay, PairEvents, RayFace, SenderFace};

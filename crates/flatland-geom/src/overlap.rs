@@ -10,6 +10,7 @@ use std::collections::HashMap;
 
 use glam::DVec2;
 
+use crate::EdgeId;
 use crate::scene::Scene;
 
 /// Relative tolerance: distances below this times the scene's diagonal count as zero.
@@ -20,7 +21,7 @@ impl Scene {
     /// a relative 1e-9 of the scene's size) and face the same way.
     /// Sorted. `O(n log n)` for scenes without overlaps, e.g. every subdivided scene.
     #[must_use]
-    pub fn overlapping_surface_edges(&self) -> Vec<(usize, usize)> {
+    pub fn overlapping_surface_edges(&self) -> Vec<(EdgeId, EdgeId)> {
         let (lo, hi) = self.bounds();
         let tol = REL_TOL * (hi - lo).length();
         let edges = self.edges();
@@ -29,7 +30,7 @@ impl Scene {
         let angle_quantum = REL_TOL * 16.0;
         let offset_quantum = (tol * 16.0).max(f64::MIN_POSITIVE);
         let mut lines: HashMap<(i64, i64), Vec<usize>> = HashMap::new();
-        for &i in self.surface_edges() {
+        for i in self.surface_edges().iter().map(|e| e.index()) {
             let (theta, offset) = line_of(edges[i].a, edges[i].b);
             let key = (
                 (theta / angle_quantum).floor() as i64,
@@ -50,6 +51,9 @@ impl Scene {
         pairs.sort_unstable();
         pairs.dedup();
         pairs
+            .into_iter()
+            .map(|(i, j)| (EdgeId::new(i), EdgeId::new(j)))
+            .collect()
     }
 }
 
@@ -145,18 +149,27 @@ mod tests {
     #[test]
     fn a_duplicated_edge_and_a_collinear_overlap_are_found() {
         let dup = room(vec![wall([0., 0.], [4., 0.])]);
-        assert_eq!(dup.overlapping_surface_edges(), vec![(0, 4)]);
+        assert_eq!(
+            dup.overlapping_surface_edges(),
+            vec![(EdgeId::new(0), EdgeId::new(4))]
+        );
         // Same line, partly shared, given in the other order: still facing the same way? No:
         // reversed, it faces out of the room, a back-to-back face, not an overlap.
         let back = room(vec![wall([3., 0.], [1., 0.])]);
         assert!(back.overlapping_surface_edges().is_empty());
         let part = room(vec![wall([1., 0.], [6., 0.])]);
-        assert_eq!(part.overlapping_surface_edges(), vec![(0, 4)]);
+        assert_eq!(
+            part.overlapping_surface_edges(),
+            vec![(EdgeId::new(0), EdgeId::new(4))]
+        );
         // An oblique, off-origin line, slightly perturbed by rounding.
         let (a, b) = ([0.1, 0.3], [3.7, 2.9]);
         let c = [0.1 + 3.6 * 0.3, 0.3 + 2.6 * 0.3];
         let oblique = room(vec![wall(a, b), wall(c, b)]);
-        assert_eq!(oblique.overlapping_surface_edges(), vec![(4, 5)]);
+        assert_eq!(
+            oblique.overlapping_surface_edges(),
+            vec![(EdgeId::new(4), EdgeId::new(5))]
+        );
     }
 
     #[test]

@@ -11,6 +11,7 @@ use std::fmt;
 
 use glam::DVec2;
 
+use crate::{EdgeId, SurfaceRank};
 pub use edge::{Edge, Role};
 pub use param::SurfacePoint;
 pub(crate) use raw::RawScene;
@@ -36,7 +37,7 @@ pub(crate) struct Group {
     /// Parent material and role (shared by every piece).
     pub edge: Edge,
     /// Rank among the surface groups (parameter order), `None` for a blocker.
-    pub rank: Option<usize>,
+    pub rank: Option<SurfaceRank>,
 }
 
 /// A validated Flatland scene (docs/ALGORITHM.md §1): edges, the arc-length parameterization of its surface
@@ -55,7 +56,7 @@ pub struct Scene {
     edges: Vec<Edge>,
     group_of: Vec<usize>,
     groups: Vec<Group>,
-    surface_edges: Vec<usize>,
+    surface_edges: Vec<EdgeId>,
     /// Surface group indices in parameter order.
     surface_groups: Vec<usize>,
     /// `cum[r]` = arc length before surface group of rank `r`; `cum[n] = L`.
@@ -85,9 +86,18 @@ impl Scene {
         &self.edges
     }
 
-    /// Indices (into [`Scene::edges`]) of the surface edges, in parameter (file) order.
+    /// Edge `id`.
+    ///
+    /// # Panics
+    /// If `id` is not an edge of this scene.
     #[must_use]
-    pub fn surface_edges(&self) -> &[usize] {
+    pub fn edge(&self, id: EdgeId) -> &Edge {
+        &self.edges[id.index()]
+    }
+
+    /// The surface edges, in parameter (file) order.
+    #[must_use]
+    pub fn surface_edges(&self) -> &[EdgeId] {
         &self.surface_edges
     }
 

@@ -44,9 +44,9 @@ pub const METHODS: [Contender; 5] = [
     Contender::Tracer,
 ];
 
-/// Clustered HR's links per edge: its resources in proportion to the scene (at 10⁵ links a
-/// 300-edge floor plan is lit to about 7 %; it has no initial linking to set a floor).
-pub const CLUSTERED_LINKS_PER_EDGE: usize = 100;
+/// Clustered HR's links per edge: its resources in proportion to the scene (the default of
+/// `flatland solve --kernel clustered` too).
+pub const CLUSTERED_LINKS_PER_EDGE: usize = flatland_baselines::DEFAULT_LINKS_PER_EDGE;
 
 /// What a scaling run measures.
 #[derive(Clone, Debug, PartialEq)]

@@ -1,5 +1,7 @@
 //! The crate's one error type.
 
+use flatland_geom::EdgeId;
+
 /// Everything that can go wrong while meshing, building an operator or solving.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -20,8 +22,8 @@ pub enum SolveError {
          from an approximation of ζ; use an emission floor > 0 (or the exact kernel)"
     )]
     ZeroSourceWeight {
-        /// The edge (index into the scene's edges).
-        edge: usize,
+        /// The edge (the first piece of its parent).
+        edge: EdgeId,
     },
     /// The linear solve did not reach its tolerance.
     #[error(

@@ -2,20 +2,22 @@
 //! the exact visible part where occluders may intervene, nothing where they cannot interact.
 //!
 //! Pairs of surface edges are classified once per mesh by the exact kernel's cached shaft test
-//! ([`Kernel::pair_visibility`], no rays): *zero* (same edge, never facing, or one occluder
-//! cuts every ray), *clear*, or *occluded by these candidates*. Only the last kind needs the
+//! ([`Kernel::pair_class`], no rays), which decides how light passes between them
+//! ([`PairTransfer`]): not at all (same edge, never facing, or every ray blocked), *clear*, or
+//! *occluded by these candidates* ([`Kernel::pair_occluders`]). Only the last kind needs the
 //! visible-interval computation of [`point_to_segment_visible`], and only against its
 //! candidates.
 
-use flatland_geom::{DVec2, Kernel, PairVisibility};
+use flatland_geom::{DVec2, EdgeId, Kernel, PairClass};
 use rayon::prelude::*;
 
 use crate::transfer::{Receiver, Sender, point_to_segment, point_to_segment_visible};
 use crate::{DenseOperator, Mesh, SolveError, Stop};
 
-/// How light passes between two surface edges of a mesh.
+/// How light passes between two surface edges of a mesh: what their [`PairClass`] means for
+/// the closed form, with the candidate occluders as segments.
 #[derive(Clone, Debug, PartialEq)]
-pub(crate) enum PairClass {
+pub(crate) enum PairTransfer {
     /// No transfer at all.
     Zero,
     /// Nothing can occlude: the closed form as it is.
@@ -24,11 +26,11 @@ pub(crate) enum PairClass {
     Occluded(Vec<[DVec2; 2]>),
 }
 
-/// [`PairClass`] for every ordered pair of mesh edges (symmetric).
+/// [`PairTransfer`] for every ordered pair of mesh edges (symmetric).
 #[derive(Clone, Debug)]
 pub(crate) struct PairTable {
     n: usize,
-    classes: Vec<PairClass>,
+    classes: Vec<PairTransfer>,
 }
 
 impl PairTable {
@@ -38,37 +40,34 @@ impl PairTable {
         let scene = kernel.scene();
         let edges = mesh.edges();
         let n = edges.len();
-        let segment = |edge: usize| -> Option<[DVec2; 2]> {
+        let segment = |edge: EdgeId| -> Option<[DVec2; 2]> {
             let pieces = scene.parent_pieces(edge)?;
-            let all = scene.edges();
             Some([
-                mesh.to_local(all[pieces.start].a),
-                mesh.to_local(all[pieces.end - 1].b),
+                mesh.to_local(scene.edge(pieces.start).a),
+                mesh.to_local(scene.edges()[pieces.end.index() - 1].b),
             ])
         };
-        let classify = |x: usize, y: usize| -> PairClass {
-            let (ex, ey) = (edges[x].pieces.start, edges[y].pieces.start);
-            match kernel.pair_visibility(ex, ey) {
-                Some(PairVisibility::Clear) => PairClass::Clear,
-                Some(PairVisibility::Rays(candidates)) => {
-                    PairClass::Occluded(candidates.into_iter().filter_map(segment).collect())
-                }
-                Some(PairVisibility::SameEdge | PairVisibility::NeverFacing)
-                | Some(PairVisibility::Blocked(_)) => PairClass::Zero,
-                // A classification this build does not know: test every other edge.
-                _ => PairClass::Occluded(
-                    (0..scene.edges().len())
-                        .filter(|&e| {
-                            let p = scene.parent_pieces(e);
-                            p.as_ref()
-                                .is_some_and(|p| p.start == e && e != ex && e != ey)
-                        })
+        let rank = |x: usize| {
+            let edge = EdgeId::new(edges[x].pieces.start);
+            scene
+                .surface_rank(edge)
+                .expect("a mesh edge is a surface edge")
+        };
+        let classify = |x: usize, y: usize| -> PairTransfer {
+            let (a, b) = (rank(x), rank(y));
+            match kernel.pair_class(a, b) {
+                PairClass::Visible => PairTransfer::Clear,
+                PairClass::Varies => PairTransfer::Occluded(
+                    kernel
+                        .pair_occluders(a, b)
+                        .into_iter()
                         .filter_map(segment)
                         .collect(),
                 ),
+                PairClass::Zero | PairClass::Hidden => PairTransfer::Zero,
             }
         };
-        let upper: Vec<(usize, usize, PairClass)> = (0..n)
+        let upper: Vec<(usize, usize, PairTransfer)> = (0..n)
             .into_par_iter()
             .flat_map_iter(|x| (x..n).map(move |y| (x, y)))
             .map(|(x, y)| {
@@ -76,14 +75,14 @@ impl PairTable {
                     x,
                     y,
                     if x == y {
-                        PairClass::Zero
+                        PairTransfer::Zero
                     } else {
                         classify(x, y)
                     },
                 )
             })
             .collect();
-        let mut classes = vec![PairClass::Zero; n * n];
+        let mut classes = vec![PairTransfer::Zero; n * n];
         for (x, y, class) in upper {
             classes[y * n + x] = class.clone();
             classes[x * n + y] = class;
@@ -92,7 +91,7 @@ impl PairTable {
     }
 
     /// How light passes from mesh edge `sender` to mesh edge `receiver`.
-    pub(crate) fn get(&self, sender: usize, receiver: usize) -> &PairClass {
+    pub(crate) fn get(&self, sender: usize, receiver: usize) -> &PairTransfer {
         &self.classes[sender * self.n + receiver]
     }
 }
@@ -126,6 +125,7 @@ impl ExactMethod {
     pub fn of(kernel: &Kernel) -> ExactMethod {
         let scene = kernel.scene();
         let whole = (0..scene.edges().len())
+            .map(EdgeId::new)
             .filter(|&e| scene.parent_pieces(e).is_some_and(|p| p.start == e))
             .count();
         if whole < SWEEP_FROM_EDGES {
@@ -194,13 +194,13 @@ pub(crate) fn transfer_row(
     for (k, edge) in mesh.edges().iter().enumerate() {
         let range = edge.elements.clone();
         match table.get(k, receiver_edge) {
-            PairClass::Zero => out[range].fill(0.0),
-            PairClass::Clear => {
+            PairTransfer::Zero => out[range].fill(0.0),
+            PairTransfer::Clear => {
                 for j in range {
                     out[j] = point_to_segment(&r, &sender(mesh, j));
                 }
             }
-            PairClass::Occluded(occluders) => {
+            PairTransfer::Occluded(occluders) => {
                 for j in range {
                     out[j] = occluded(&r, j, &sender(mesh, j), occluders, &mut scratch);
                 }
@@ -345,9 +345,9 @@ fn block_means_with(
                             .iter()
                             .map(|(k, s, weight)| {
                                 let t = match table.get(*k, r) {
-                                    PairClass::Zero => 0.0,
-                                    PairClass::Clear => point_to_segment(&y, s),
-                                    PairClass::Occluded(occ) => {
+                                    PairTransfer::Zero => 0.0,
+                                    PairTransfer::Clear => point_to_segment(&y, s),
+                                    PairTransfer::Occluded(occ) => {
                                         point_to_segment_visible(&y, s, occ, scratch)
                                     }
                                 };

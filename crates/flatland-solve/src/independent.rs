@@ -10,18 +10,27 @@
 //! by sampling the emitters directly (next-event estimation, stratified points along each
 //! emitter, a shadow ray each): the same expectation, far less noise.
 
-use flatland_geom::{DVec2, Role, Scene};
+use std::ops::Range;
+
+use flatland_geom::{DVec2, EdgeId, Role, Scene};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 
 /// Hits this close (relative) are one point: back-to-back faces, up to rounding.
 const TIE: f64 = 1e-12;
 
+/// The edges (indices) of `edge`'s parent: the edge alone if it was never subdivided.
+fn pieces(scene: &Scene, edge: usize) -> Range<usize> {
+    scene
+        .parent_pieces(EdgeId::new(edge))
+        .map_or(edge..edge + 1, |p| p.start.index()..p.end.index())
+}
+
 /// The first edge hit by the ray `o + λ d`, `λ > 0`, ignoring edges on the origin's line; the
 /// edge index and the hit point. Of edges hit at one point (within rounding) one whose front
 /// faces `o` comes first.
 fn first_hit(scene: &Scene, o: DVec2, d: DVec2, own: usize) -> Option<(usize, DVec2)> {
-    let own = scene.parent_pieces(own).unwrap_or(own..own + 1);
+    let own = pieces(scene, own);
     let mut best: Option<(f64, usize)> = None;
     let faces = |i: usize| scene.edges()[i].normal().dot(d) < 0.0;
     for (i, e) in scene.edges().iter().enumerate() {
@@ -86,7 +95,7 @@ const EMITTER_SAMPLES: usize = 4;
 /// Whether the open segment `y–x` crosses any edge other than those of `skip` (parents). An
 /// end within rounding of an edge's line does not cross it: that edge lies back to back with
 /// the end's own edge.
-fn blocked(scene: &Scene, y: DVec2, x: DVec2, skip: [&std::ops::Range<usize>; 2]) -> bool {
+fn blocked(scene: &Scene, y: DVec2, x: DVec2, skip: [&Range<usize>; 2]) -> bool {
     let o = |a: DVec2, b: DVec2, p: DVec2| (b - a).perp_dot(p - a);
     let side = |a: DVec2, b: DVec2, p: DVec2| {
         let v = o(a, b, p);
@@ -103,14 +112,14 @@ fn blocked(scene: &Scene, y: DVec2, x: DVec2, skip: [&std::ops::Range<usize>; 2]
 /// `∫ E G V dl_x` over every emitter, seen from `y` on edge `edge`: stratified points along each
 /// emitter, one shadow ray each.
 fn direct(scene: &Scene, edge: usize, y: DVec2, rng: &mut ChaCha8Rng) -> f64 {
-    let own = scene.parent_pieces(edge).unwrap_or(edge..edge + 1);
+    let own = pieces(scene, edge);
     let receiver = scene.edges()[edge];
     let mut total = 0.0;
     for (i, e) in scene.edges().iter().enumerate() {
         if e.emission <= 0.0 || e.role == Role::Blocker || own.contains(&i) {
             continue;
         }
-        let theirs = scene.parent_pieces(i).unwrap_or(i..i + 1);
+        let theirs = pieces(scene, i);
         let mut sum = 0.0;
         for m in 0..EMITTER_SAMPLES {
             let u = (m as f64 + rng.random::<f64>()) / EMITTER_SAMPLES as f64;
@@ -183,7 +192,8 @@ mod tests {
             .enumerate()
             .map(|(i, el)| {
                 let rho = probes.edge_of(i).reflectance;
-                let (h, se) = irradiance(&scene, el.edge, el.midpoint, paths, 1000 + i as u64);
+                let (h, se) =
+                    irradiance(&scene, el.edge.index(), el.midpoint, paths, 1000 + i as u64);
                 (rho * h, rho * se)
             })
             .collect();

@@ -4,7 +4,7 @@ use std::cmp::{Ordering, Reverse};
 use std::collections::BinaryHeap;
 use std::ops::Range;
 
-use flatland_geom::{DVec2, Kernel, Scene};
+use flatland_geom::{DVec2, EdgeId, Kernel, Scene};
 use rayon::prelude::*;
 
 use crate::bvh::{Aabb, Bvh};
@@ -14,7 +14,8 @@ use crate::{InputFrame, SolveError};
 /// [`Scene::subdivide`] cut, which share one line and one material), with its elements.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MeshEdge {
-    /// The scene edges (pieces) it is made of; `pieces.start` names it in pair classifications.
+    /// The scene edges (pieces) it is made of, as indices into [`Scene::edges`]; `pieces.start`
+    /// names it.
     pub pieces: Range<usize>,
     /// Its parameter interval `[s0, s1)`.
     pub s: [f64; 2],
@@ -45,7 +46,7 @@ pub struct Element {
     /// Index into [`Mesh::edges`].
     pub mesh_edge: usize,
     /// The scene edge (piece) its midpoint lies on.
-    pub edge: usize,
+    pub edge: EdgeId,
     /// Its parameter interval `[s0, s1)`.
     pub s: [f64; 2],
     /// The parameter of its midpoint (the collocation point).
@@ -162,11 +163,11 @@ impl Mesh {
             let first = scene.edges()[run.start];
             let (a, b) = (first.a, scene.edges()[run.end - 1].b);
             let s0 = scene
-                .edge_param_range(run.start)
+                .edge_param_range(EdgeId::new(run.start))
                 .expect("a surface edge has a parameter range")
                 .0;
             let s1 = scene
-                .edge_param_range(run.end - 1)
+                .edge_param_range(EdgeId::new(run.end - 1))
                 .expect("a surface edge has a parameter range")
                 .1;
             if edges.len() == k {
@@ -178,7 +179,7 @@ impl Mesh {
                     normal: first.normal(),
                     reflectance: first.reflectance,
                     emission: first.emission,
-                    source_weight: kernel.source_weight(run.start),
+                    source_weight: kernel.source_weight(EdgeId::new(run.start)),
                     elements: out.len()..out.len(),
                     junctions: cuts[k][1..cuts[k].len() - 1].to_vec(),
                 });
@@ -204,7 +205,7 @@ impl Mesh {
                 let (pa, pb, pm) = (at(u0), at(u1), at(um));
                 out.push(Element {
                     mesh_edge: k,
-                    edge: run.start + ((um * pieces as f64) as usize).min(pieces - 1),
+                    edge: EdgeId::new(run.start + ((um * pieces as f64) as usize).min(pieces - 1)),
                     s: [param(u0), param(u1)],
                     s_mid: param(um),
                     a: pa,
@@ -315,11 +316,13 @@ impl Mesh {
     }
 }
 
-/// The surface edges of `scene` as runs of pieces, in parameter order.
+/// The surface edges of `scene` as runs of pieces (indices into [`Scene::edges`]), in
+/// parameter order.
 fn surface_runs(scene: &Scene) -> Vec<Range<usize>> {
     let mut runs: Vec<Range<usize>> = Vec::new();
     for &e in scene.surface_edges() {
         let run = scene.parent_pieces(e).expect("a surface edge has a parent");
+        let run = run.start.index()..run.end.index();
         if runs.last() != Some(&run) {
             runs.push(run);
         }

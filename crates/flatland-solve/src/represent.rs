@@ -1,7 +1,7 @@
 //! The one trait every representation of the kernel implements (the exact kernel here; the
 //! learned model and the baselines in their crates), and the generic operator of any of them.
 
-use flatland_geom::Kernel;
+use flatland_geom::{EdgeId, Kernel};
 
 use crate::exact::exact_operator;
 use crate::physical::make_physical;
@@ -89,7 +89,7 @@ pub fn inverse_source_weights(mesh: &Mesh) -> Result<Vec<f64>, SolveError> {
                 Ok(1.0 / e.source_weight)
             } else {
                 Err(SolveError::ZeroSourceWeight {
-                    edge: e.pieces.start,
+                    edge: EdgeId::new(e.pieces.start),
                 })
             }
         })

@@ -22,7 +22,7 @@ mod view;
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
-use flatland_geom::{Kernel, Role, Scene};
+use flatland_geom::{EdgeId, Kernel, Role, Scene};
 
 use crate::bvh::{Aabb, Bvh, Contents};
 use crate::exact::check_scene;
@@ -53,11 +53,13 @@ impl SweepScene {
         let mut segments = Vec::new();
         let mut first_piece = Vec::new();
         for e in 0..edges.len() {
-            let pieces = scene.parent_pieces(e).expect("an edge of the scene");
-            if pieces.start == e {
+            let pieces = scene
+                .parent_pieces(EdgeId::new(e))
+                .expect("an edge of the scene");
+            if pieces.start.index() == e {
                 segments.push(Segment {
                     a: mesh.to_local(edges[e].a),
-                    b: mesh.to_local(edges[pieces.end - 1].b),
+                    b: mesh.to_local(edges[pieces.end.index() - 1].b),
                     front: edges[e].role == Role::Surface,
                 });
                 first_piece.push(e);

@@ -161,7 +161,7 @@ fn shadow(y: DVec2, p0: DVec2, p1: DVec2, c0: DVec2, c1: DVec2) -> Option<[f64; 
 mod tests {
     use super::*;
     use crate::quadrature::{gauss_legendre, integrate};
-    use flatland_geom::{Edge, Kernel, Scene};
+    use flatland_geom::{Edge, EdgeId, Kernel, Scene};
     use flatland_testkit::assert_close;
     use rand::RngExt;
 
@@ -302,7 +302,7 @@ mod tests {
                 position: yp,
                 normal: v(0.0, -1.0),
             };
-            let t = kernel.scene().param_of(1, yp).unwrap();
+            let t = kernel.scene().param_of(EdgeId::new(1), yp).unwrap();
             let n = 200_000;
             let rays: f64 = (0..n)
                 .map(|i| kernel.k((i as f64 + 0.5) / n as f64 * 4.0 / l, t))

@@ -11,7 +11,7 @@
 
 use foldhash::HashMap;
 
-use flatland_geom::{DVec2, Kernel, PairClass, RayFace, Unoccluded};
+use flatland_geom::{DVec2, Kernel, PairClass, RayFace, SurfaceRank, Unoccluded};
 use flatland_solve::InputFrame;
 use sgcs::{CellId, Gate};
 
@@ -29,20 +29,26 @@ pub(crate) use sampler::Sampler;
 /// one face.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub(crate) struct FaceKey {
-    pair: (u32, u32),
+    pair: (SurfaceRank, SurfaceRank),
     face: RayFace,
 }
 
 impl FaceKey {
     /// The face of the ray from `x` (on the surface of rank `a`) to `y` (rank `b`); `None`
     /// unless visibility varies on that pair.
-    pub(crate) fn of(kernel: &Kernel, a: usize, b: usize, x: DVec2, y: DVec2) -> Option<FaceKey> {
+    pub(crate) fn of(
+        kernel: &Kernel,
+        a: SurfaceRank,
+        b: SurfaceRank,
+        x: DVec2,
+        y: DVec2,
+    ) -> Option<FaceKey> {
         if a == b || kernel.pair_class(a, b) != PairClass::Varies {
             return None;
         }
         let events = kernel.visibility_events(a, b)?;
         Some(FaceKey {
-            pair: (a as u32, b as u32),
+            pair: (a, b),
             face: events.face(x, y),
         })
     }
@@ -67,7 +73,7 @@ pub(crate) struct FaceId {
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Faces {
     ids: HashMap<FaceKey, FaceId>,
-    pair_ids: HashMap<(u32, u32), u32>,
+    pair_ids: HashMap<(SurfaceRank, SurfaceRank), u32>,
     face_cells: Vec<Vec<CellId>>,
     pair_cells: Vec<Vec<CellId>>,
     /// Per cell: its face, `None` when its centre ray is on no varying pair.
@@ -274,7 +280,8 @@ impl Labeller {
         Labeller {
             frame,
             parents: NearestEdges::new(
-                (0..kernel.surface_parents())
+                kernel
+                    .surface_ranks()
                     .map(|r| kernel.surface_parent(r))
                     .collect(),
             ),
@@ -300,12 +307,12 @@ impl Labeller {
     /// rounding) one whose front faces `other`, the ray's other end, comes first: where a box
     /// stands on a floor or against a wall, its bottom lies on the floor, back to back, and a
     /// ray from the room to a point there ends on the floor, not on the box.
-    fn nearest_parent(&self, p: DVec2, other: DVec2) -> usize {
+    fn nearest_parent(&self, p: DVec2, other: DVec2) -> SurfaceRank {
         let faces = |r: usize| {
             let (a, b) = self.parents.edge(r);
             (b - a).perp_dot(other - a) > 0.0
         };
-        self.parents.nearest(p, self.tie, faces).unwrap_or(0)
+        SurfaceRank::new(self.parents.nearest(p, self.tie, faces).unwrap_or(0))
     }
 }
 
@@ -320,8 +327,9 @@ mod tests {
 
     /// A face of one of `pairs` pairs, with one of four side patterns.
     fn random_key(rng: &mut impl rand::Rng, pairs: u32) -> FaceKey {
+        let mut rank = || SurfaceRank::new(rng.random_range(0..pairs) as usize);
         FaceKey {
-            pair: (rng.random_range(0..pairs), rng.random_range(0..pairs)),
+            pair: (rank(), rank()),
             face: RayFace {
                 sub: rng.random_range(0..2),
                 sides: vec![rng.random_range(0..4u64)].into(),

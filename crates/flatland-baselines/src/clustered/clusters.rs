@@ -4,7 +4,7 @@
 //! is larger than its parent's: pulling runs backwards over the nodes, pushing forwards.
 
 use crate::hr::elements::{Elem, Surfaces};
-use flatland_geom::Kernel;
+use flatland_geom::{EdgeId, Kernel};
 use glam::DVec2;
 
 /// No node (no parent, no children yet).
@@ -81,7 +81,10 @@ impl Hierarchy {
         let parent_edge = surfaces
             .edge
             .iter()
-            .map(|&e| scene.parent_pieces(e).map_or(e, |r| r.start) as u32)
+            .map(|&e| {
+                let parent = scene.parent_pieces(EdgeId::new(e));
+                parent.map_or(e, |r| r.start.index()) as u32
+            })
             .collect();
         let mut h = Hierarchy {
             nodes: Vec::with_capacity(2 * n),

@@ -3,7 +3,7 @@
 
 use super::clusters::{Hierarchy, Node};
 use crate::hr::elements::{Elem, interacts};
-use flatland_geom::{Kernel, PairClass};
+use flatland_geom::{EdgeId, Kernel, PairClass};
 use glam::DVec2;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -186,7 +186,11 @@ pub(super) fn estimate(
             };
             i / (np.length * nq.length) * visible
         }
-        None => sums.visible_g / rays as f64,
+        // A few rays' mean of G (singular where the ends come close) can exceed what any
+        // two nodes can exchange; the bounds of F_pq and F_qp cap it, so no link makes light.
+        None => (sums.visible_g / rays as f64)
+            .min(t.f_pq / nq.length)
+            .min(t.f_qp / np.length),
     };
     Estimate {
         g,
@@ -247,7 +251,8 @@ fn sample(kernel: &Kernel, h: &Hierarchy, (p, q): (u32, u32), n: usize, seed: u6
         }
         sums.facing += 1;
         sums.g += g;
-        if kernel.visible(x, s.edge[ox], y, s.edge[oy]) {
+        let (ex, ey) = (EdgeId::new(s.edge[ox]), EdgeId::new(s.edge[oy]));
+        if kernel.visible(x, ex, y, ey) {
             sums.seen += 1;
             sums.visible_g += g;
         }

@@ -6,7 +6,7 @@ use super::clusters::{Hierarchy, Kind, NONE};
 use super::refine::refine;
 use super::solve::{ClusterOperator, Gather};
 use crate::BaselineError;
-use flatland_geom::Kernel;
+use flatland_geom::{EdgeId, Kernel};
 use flatland_solve::{
     Mesh, Representation, SolveError, SolveParams, Stop, TransferOperator, check_fingerprint,
 };
@@ -56,8 +56,8 @@ pub enum LinkEnd {
     },
     /// An interval of one surface edge.
     Element {
-        /// The edge (index into `Scene::edges`).
-        edge: usize,
+        /// The edge.
+        edge: EdgeId,
         /// Its parameter interval `[s0, s1)`.
         s: [f64; 2],
     },
@@ -143,7 +143,7 @@ impl ClusteredRadiosity {
                 edges: (hi - lo) as usize,
             },
             Kind::Element(e) => LinkEnd::Element {
-                edge: self.h.surfaces.edge[e.ord],
+                edge: EdgeId::new(self.h.surfaces.edge[e.ord]),
                 s: [e.s0, e.s1],
             },
         };

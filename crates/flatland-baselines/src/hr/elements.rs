@@ -10,6 +10,7 @@ const INTERACTION_FLOOR: f64 = 1e-9;
 /// The surface edges in parameter order, with what refinement needs of each.
 #[derive(Clone, Debug)]
 pub(crate) struct Surfaces {
+    /// Each one's scene edge, as an index (what [`Surfaces::heap_bytes`] counts).
     pub(crate) edge: Vec<usize>,
     pub(crate) s0: Vec<f64>,
     pub(crate) s1: Vec<f64>,
@@ -37,11 +38,11 @@ impl Surfaces {
             total_length: scene.total_length(),
         };
         for &e in scene.surface_edges() {
-            let edge = &scene.edges()[e];
+            let edge = scene.edge(e);
             let (s0, s1) = scene
                 .edge_param_range(e)
                 .expect("a surface edge has a parameter range");
-            out.edge.push(e);
+            out.edge.push(e.index());
             out.s0.push(s0);
             out.s1.push(s1);
             out.a.push(edge.a);

@@ -99,6 +99,7 @@ mod tests {
     use super::*;
     use crate::test_support::{blocker_kernel, box_kernel};
     use crate::{HierarchicalRadiosity, run_hr};
+    use flatland_geom::EdgeId;
 
     #[test]
     fn rays_are_counted_and_values_finite() {
@@ -133,7 +134,7 @@ mod tests {
         let hr = HierarchicalRadiosity::build(&kernel, &HrParams::default(), 1).unwrap();
         let surfaces = Surfaces::new(&kernel);
         for link in hr.links() {
-            let ord = |e| surfaces.edge.iter().position(|&x| x == e).unwrap();
+            let ord = |e: EdgeId| surfaces.edge.iter().position(|&x| x == e.index()).unwrap();
             let (i, j) = (ord(link.sender), ord(link.receiver));
             let elem = |o: usize, [u0, u1]: [f64; 2]| {
                 let f = |u| {

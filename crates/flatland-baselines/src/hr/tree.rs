@@ -7,7 +7,7 @@ use super::estimate::estimate;
 use super::linking::InitialLinks;
 use super::refine::{Node, Pending, Refiner};
 use crate::{BaselineError, seeds};
-use flatland_geom::Kernel;
+use flatland_geom::{EdgeId, Kernel};
 use rayon::prelude::*;
 
 /// What one HR build did.
@@ -32,10 +32,10 @@ pub struct HrStats {
 /// One final link, as exported for plots and checks.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HrLink {
-    /// Sender edge (index into `Scene::edges`).
-    pub sender: usize,
-    /// Receiver edge (index into `Scene::edges`).
-    pub receiver: usize,
+    /// Sender edge.
+    pub sender: EdgeId,
+    /// Receiver edge.
+    pub receiver: EdgeId,
     /// The sender element's s-interval `[s0, s1)`.
     pub s: [f64; 2],
     /// The receiver element's t-interval `[t0, t1)`.
@@ -152,8 +152,8 @@ impl HierarchicalRadiosity {
     ) {
         match self.nodes[slot as usize] {
             Node::Leaf(value) => out.push(HrLink {
-                sender: self.surfaces.edge[ij.0],
-                receiver: self.surfaces.edge[ij.1],
+                sender: EdgeId::new(self.surfaces.edge[ij.0]),
+                receiver: EdgeId::new(self.surfaces.edge[ij.1]),
                 s,
                 t,
                 value,

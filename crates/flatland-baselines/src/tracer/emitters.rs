@@ -1,6 +1,6 @@
 //! The emitters of a lighting: each edge's emission, the power it sends, stratified start points.
 
-use flatland_geom::DVec2;
+use flatland_geom::{DVec2, EdgeId};
 use flatland_solve::Mesh;
 
 use super::Lighting;
@@ -13,7 +13,7 @@ struct Emitter {
     b: DVec2,
     normal: DVec2,
     /// Its first piece: the edge a photon leaving it skips.
-    edge: usize,
+    edge: EdgeId,
     /// Where its share of the total power starts, and its power.
     start: f64,
     power: f64,
@@ -25,7 +25,7 @@ struct Emitter {
 pub(super) struct Start {
     pub point: DVec2,
     pub normal: DVec2,
-    pub edge: usize,
+    pub edge: EdgeId,
 }
 
 /// The emission of every mesh edge under a lighting, and the emitters laid end to end by power.
@@ -53,7 +53,7 @@ impl Emitters {
                 value: format!("{value} on edge {edge}"),
                 valid,
             };
-            let Some(&slot) = surface_of.get(edge) else {
+            let Some(&slot) = surface_of.get(edge.index()) else {
                 return Err(bad("on an edge of the scene"));
             };
             let Some(m) = slot else {
@@ -73,7 +73,7 @@ impl Emitters {
                     a: edge.a,
                     b: edge.b,
                     normal: edge.normal,
-                    edge: edge.pieces.start,
+                    edge: EdgeId::new(edge.pieces.start),
                     start: total,
                     power,
                 });
@@ -142,8 +142,8 @@ mod tests {
         let mut along_wall = 0.0;
         for k in 0..n {
             let start = emitters.start((k as f64 + 0.5) / n as f64);
-            counts[start.edge] += 1;
-            if start.edge == 1 {
+            counts[start.edge.index()] += 1;
+            if start.edge == EdgeId::new(1) {
                 along_wall += start.point.y / 3.0;
             }
         }
@@ -175,20 +175,20 @@ mod tests {
         let mesh = Mesh::new(&kernel, 8).unwrap();
         let surface_of = vec![Some(0), Some(1), Some(2), None];
         let relit = Lighting::default()
-            .with_emission(0, 0.0)
-            .with_emission(2, 3.0)
-            .with_emission(2, 2.0);
+            .with_emission(EdgeId::new(0), 0.0)
+            .with_emission(EdgeId::new(2), 3.0)
+            .with_emission(EdgeId::new(2), 2.0);
         let emitters = Emitters::new(&mesh, &surface_of, &relit).unwrap();
         assert_eq!((emitters.emission(0), emitters.emission(2)), (0.0, 2.0));
         assert_eq!(emitters.power(), 2.0);
-        assert_eq!(emitters.start(0.3).edge, 2);
+        assert_eq!(emitters.start(0.3).edge, EdgeId::new(2));
         for (edge, value, says) in [
             (3, 1.0, "blockers do not emit"),
             (4, 1.0, "an edge of the scene"),
             (1, -1.0, "at least 0"),
             (1, f64::NAN, "finite"),
         ] {
-            let lighting = Lighting::default().with_emission(edge, value);
+            let lighting = Lighting::default().with_emission(EdgeId::new(edge), value);
             let err = Emitters::new(&mesh, &surface_of, &lighting)
                 .unwrap_err()
                 .to_string();

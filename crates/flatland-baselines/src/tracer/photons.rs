@@ -45,7 +45,7 @@ impl Batch<'_> {
                 tally.escaped += power;
                 return;
             };
-            let Some(m) = self.surface_of[hit.edge] else {
+            let Some(m) = self.surface_of[hit.edge.index()] else {
                 tally.absorbed += power; // a blocker
                 return;
             };

@@ -43,9 +43,11 @@ impl Kernel {
         } else {
             py.reflectance * self.geometry(gx, x, gy, y)
         };
+        // `locate` gives surface parents only, and every surface parent has a rank.
+        let rank = |p: &Parent| p.rank.expect("a surface parent has a rank");
         Unoccluded {
-            sender: px.rank,
-            receiver: py.rank,
+            sender: rank(px),
+            receiver: rank(py),
             x,
             y,
             k,
@@ -99,7 +101,7 @@ impl Kernel {
         let x = self.scene.group_point(gx, ux);
         let y = self.scene.group_point(gy, uy);
         let g = self.geometry(gx, x, gy, y);
-        if g == 0.0 || !self.visible_brute_force_groups(x, gx, y, gy) {
+        if g == 0.0 || !self.visible_brute_force_groups(x, Some(gx), y, Some(gy)) {
             return 0.0;
         }
         self.parents[gy].reflectance * g
@@ -209,7 +211,7 @@ mod tests {
         let l = scene.total_length();
         let mut total = 0.0;
         for &e in scene.surface_edges() {
-            let edge = scene.edges()[e];
+            let edge = scene.edge(e);
             let rho = edge.reflectance;
             let (t0, t1) = scene.edge_param_range(e).unwrap();
             let mut cuts = vec![0.0, 1.0];
@@ -247,13 +249,14 @@ mod tests {
         assert_close!(kernel.k(0.125, 0.375), 0.5 / (2.0 * 2f64.sqrt()), 1e-15);
         assert_eq!(kernel.k(0.1, 0.2), 0.0, "same edge");
         let e = kernel.eval(0.125, 0.625);
-        assert_eq!((e.x.edge, e.y.edge, e.visible), (0, 2, true));
+        let id = crate::EdgeId::new;
+        assert_eq!((e.x.edge, e.y.edge, e.visible), (id(0), id(2), true));
         assert_close!(e.geometry, 0.5, 1e-15);
         assert_eq!(e.k, kernel.k(0.125, 0.625));
         // Emitter floor sends with E' = 1; the ceiling with the 1 % floor.
-        assert_eq!(kernel.source_weight(0), 1.0);
-        assert_eq!(kernel.source_weight(2), 0.01);
-        assert_eq!(kernel.source_weight(99), 0.0);
+        assert_eq!(kernel.source_weight(id(0)), 1.0);
+        assert_eq!(kernel.source_weight(id(2)), 0.01);
+        assert_eq!(kernel.source_weight(id(99)), 0.0);
         assert_close!(e.zeta, 0.25, 1e-15);
         assert_close!(kernel.zeta(0.625, 0.125), 0.01 * 0.25, 1e-15);
     }
@@ -268,8 +271,8 @@ mod tests {
         let scene = Scene::new(edges).unwrap();
         let kernel = Kernel::new(scene.clone());
         let ((a0, a1), (b0, b1)) = (
-            scene.edge_param_range(4).unwrap(),
-            scene.edge_param_range(5).unwrap(),
+            scene.edge_param_range(crate::EdgeId::new(4)).unwrap(),
+            scene.edge_param_range(crate::EdgeId::new(5)).unwrap(),
         );
         let mut r = rng(8);
         for _ in 0..2000 {
@@ -373,7 +376,7 @@ mod tests {
         for name in ["fig3", "box", "maze", "corners"] {
             let kernel = Kernel::new(bundled(name));
             let scene = kernel.scene();
-            let rho = |s: f64| scene.edges()[scene.point(s).edge].reflectance;
+            let rho = |s: f64| scene.edge(scene.point(s).edge).reflectance;
             for _ in 0..5000 {
                 let (s, t): (f64, f64) = (r.random_range(0.0..1.0), r.random_range(0.0..1.0));
                 let (rs, rt) = (rho(s), rho(t));

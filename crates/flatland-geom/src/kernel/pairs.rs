@@ -1,10 +1,11 @@
-//! Each pair of parent surface edges' shaft (classified on first use), class, visibility, events.
+//! Each pair of parent surface edges' shaft (classified on first use), class, occluders, events.
 
 use std::ops::Deref;
 
 use super::cache::ShaftRef;
-use super::{Kernel, PairClass, PairVisibility};
+use super::{Kernel, PairClass};
 use crate::visibility::{PairEvents, Shaft, Side, classify};
+use crate::{EdgeId, SurfaceRank};
 
 /// The [`PairEvents`] of a pair, as [`Kernel::visibility_events`] lends them: read them
 /// through `Deref`. They stay valid however the kernel's cache changes meanwhile.
@@ -55,7 +56,7 @@ impl Kernel {
     /// # Panics
     /// If a rank is `>= surface_parents()`.
     #[must_use]
-    pub fn pair_class(&self, a: usize, b: usize) -> PairClass {
+    pub fn pair_class(&self, a: SurfaceRank, b: SurfaceRank) -> PairClass {
         if a == b {
             return PairClass::Zero;
         }
@@ -78,7 +79,7 @@ impl Kernel {
     /// # Panics
     /// If a rank is `>= surface_parents()`.
     #[must_use]
-    pub fn visibility_events(&self, a: usize, b: usize) -> Option<PairEventsRef<'_>> {
+    pub fn visibility_events(&self, a: SurfaceRank, b: SurfaceRank) -> Option<PairEventsRef<'_>> {
         if a == b {
             return None;
         }
@@ -94,34 +95,33 @@ impl Kernel {
         })
     }
 
-    /// How visibility between surface edges `ex` and `ey` is decided: the shaft classification
-    /// the kernel keeps per pair of parent edges (for facing rays). `None` if either is a
-    /// blocker or out of range.
+    /// The occluders a ray between the parent surface edges of ranks `a` and `b` is tested
+    /// against where [`Kernel::pair_class`] is [`PairClass::Varies`] (each named by its first
+    /// piece, in the order the shaft test found them); empty for every other class, whose
+    /// visibility needs no ray. Symmetric. No ray is cast.
+    ///
+    /// # Panics
+    /// If a rank is `>= surface_parents()`.
     #[must_use]
-    pub fn pair_visibility(&self, ex: usize, ey: usize) -> Option<PairVisibility> {
-        let (gx, gy) = (self.group_or_none(ex), self.group_or_none(ey));
-        let (px, py) = (self.parents.get(gx)?, self.parents.get(gy)?);
-        if px.rank == usize::MAX || py.rank == usize::MAX {
-            return None;
+    pub fn pair_occluders(&self, a: SurfaceRank, b: SurfaceRank) -> Vec<EdgeId> {
+        if a == b {
+            return Vec::new();
         }
-        if gx == gy {
-            return Some(PairVisibility::SameEdge);
+        match &*self.shaft_of_ranks(a, b) {
+            Shaft::Candidates(c) if c.interior.is_none() => c
+                .occluders
+                .iter()
+                .map(|&g| EdgeId::new(self.scene.groups()[g as usize].first))
+                .collect(),
+            _ => Vec::new(),
         }
-        let edge = |g: u32| self.scene.groups()[g as usize].first;
-        Some(match &*self.shaft_of_ranks(px.rank, py.rank) {
-            Shaft::NoFacing => PairVisibility::NeverFacing,
-            Shaft::Clear => PairVisibility::Clear,
-            Shaft::Blocked(g) => PairVisibility::Blocked(edge(*g)),
-            Shaft::Candidates(c) => match c.interior {
-                Some(true) => PairVisibility::Clear,
-                Some(false) => PairVisibility::Blocked(edge(c.occluders[0])),
-                None => PairVisibility::Rays(c.occluders.iter().map(|&g| edge(g)).collect()),
-            },
-        })
     }
 
-    fn classify_ranks(&self, r0: usize, r1: usize) -> Shaft {
-        let (g0, g1) = (self.surface_parents[r0], self.surface_parents[r1]);
+    fn classify_ranks(&self, r0: SurfaceRank, r1: SurfaceRank) -> Shaft {
+        let (g0, g1) = (
+            self.surface_parents[r0.index()],
+            self.surface_parents[r1.index()],
+        );
         classify(&self.segments, &self.bvh, self.side(g0), self.side(g1))
     }
 
@@ -135,24 +135,23 @@ impl Kernel {
     }
 
     /// The shaft of two distinct surface ranks, classified on first use.
-    fn shaft_of_ranks(&self, a: usize, b: usize) -> ShaftRef<'_> {
+    fn shaft_of_ranks(&self, a: SurfaceRank, b: SurfaceRank) -> ShaftRef<'_> {
         let (r0, r1) = (a.min(b), a.max(b));
-        self.shafts.get(r0, r1, || self.classify_ranks(r0, r1))
+        self.shafts
+            .get(r0.index(), r1.index(), || self.classify_ranks(r0, r1))
     }
 
     /// The shaft of two distinct surface parents from the dense table, classified on first
     /// use; `None` for a blocker, the same parent, or a scene too large for the table.
     #[inline(always)]
     pub(super) fn shaft(&self, gx: usize, gy: usize) -> Option<&Shaft> {
-        if gx == gy || gx == usize::MAX || gy == usize::MAX {
+        if gx == gy {
             return None;
         }
-        let (rx, ry) = (self.parents[gx].rank, self.parents[gy].rank);
-        if rx == usize::MAX || ry == usize::MAX {
-            return None;
-        }
+        let (rx, ry) = (self.parents[gx].rank?, self.parents[gy].rank?);
         let (r0, r1) = if rx < ry { (rx, ry) } else { (ry, rx) };
-        self.shafts.dense(r0, r1, || self.classify_ranks(r0, r1))
+        self.shafts
+            .dense(r0.index(), r1.index(), || self.classify_ranks(r0, r1))
     }
 }
 
@@ -194,8 +193,19 @@ mod tests {
             let mut edges = vec![floor, ceiling];
             edges.extend(extra);
             let kernel = Kernel::new(Scene::new(edges).unwrap());
-            assert_eq!(kernel.pair_class(0, 1), PairClass::Varies);
-            let e = kernel.visibility_events(0, 1).unwrap().into_owned();
+            let (floor, ceiling) = (SurfaceRank::new(0), SurfaceRank::new(1));
+            assert_eq!(kernel.pair_class(floor, ceiling), PairClass::Varies);
+            let occluders = kernel.pair_occluders(floor, ceiling);
+            assert_eq!(occluders, vec![EdgeId::new(2)], "the blocker");
+            assert_eq!(
+                occluders,
+                kernel.pair_occluders(ceiling, floor),
+                "symmetric"
+            );
+            let e = kernel
+                .visibility_events(floor, ceiling)
+                .unwrap()
+                .into_owned();
             assert_eq!(e.sub_pair(v(0.3, 0.0), v(0.7, 1.0)), 0, "no sub-pairs");
             e.points(0).to_vec()
         };
@@ -242,13 +252,14 @@ mod tests {
                 interior: Some(true),
             }))
         );
-        assert_eq!(kernel.pair_class(0, 2), PairClass::Visible);
-        assert!(!kernel.visible(v(1.0, 0.0), 0, v(1.0, 1.0), 2));
-        assert!(kernel.visible(v(0.5, 0.0), 0, v(0.25, 1.0), 2));
-        assert_eq!(kernel.pair_visibility(0, 2), Some(PairVisibility::Clear));
-        assert_eq!(kernel.pair_visibility(0, 1), Some(PairVisibility::Clear));
-        assert_eq!(kernel.pair_visibility(0, 0), Some(PairVisibility::SameEdge));
-        assert_eq!(kernel.pair_visibility(0, 9), None);
+        let (id, rank) = (EdgeId::new, SurfaceRank::new);
+        assert_eq!(kernel.pair_class(rank(0), rank(2)), PairClass::Visible);
+        assert!(kernel.pair_occluders(rank(0), rank(2)).is_empty(), "no ray");
+        assert!(!kernel.visible(v(1.0, 0.0), id(0), v(1.0, 1.0), id(2)));
+        assert!(kernel.visible(v(0.5, 0.0), id(0), v(0.25, 1.0), id(2)));
+        assert_eq!(kernel.pair_class(rank(0), rank(1)), PairClass::Visible);
+        assert_eq!(kernel.pair_class(rank(0), rank(0)), PairClass::Zero);
+        assert!(kernel.pair_occluders(rank(0), rank(0)).is_empty());
         // Subdivision does not multiply the shaft table: it is per parent edge.
         let fine = Kernel::new(bundled("fig3").subdivide(1000).unwrap());
         assert_eq!(fine.shafts.dense_cells(), 36);
@@ -267,9 +278,10 @@ mod tests {
             let mut r = rng(seed ^ 0xe7e);
             for _ in 0..50 {
                 let (a, b) = (r.random_range(0..n), r.random_range(0..n));
+                let (a, b) = (SurfaceRank::new(a), SurfaceRank::new(b));
                 // Where an occluder lies on the line of one of the two edges, rounding of x or
                 // y decides whether a ray touches it (see `visible_brute_force`): skip.
-                let (ga, gb) = (kernel.surface_parents[a], kernel.surface_parents[b]);
+                let (ga, gb) = (kernel.surface_parents[a.index()], kernel.surface_parents[b.index()]);
                 let on_line = |g: usize, e: &crate::Edge| {
                     let l = kernel.segments[g];
                     use crate::visibility::orient;
@@ -285,6 +297,7 @@ mod tests {
                 let events = kernel.visibility_events(a, b);
                 prop_assert_eq!(class == PairClass::Varies, events.is_some(), "{:?} {:?}", class, events);
                 prop_assert_eq!(class, kernel.pair_class(b, a), "symmetric");
+                prop_assert_eq!(class == PairClass::Varies, !kernel.pair_occluders(a, b).is_empty());
                 let mut seen: Vec<((DVec2, DVec2), bool)> = Vec::new();
                 for _ in 0..200 {
                     let (s, t) = (r.random_range(0.0..1.0), r.random_range(0.0..1.0));
@@ -322,18 +335,24 @@ mod tests {
         }
     }
 
+    /// The visibility seen so far in each face of each pair.
+    type Faces = HashMap<(SurfaceRank, SurfaceRank, RayFace), bool>;
+
     /// What the pair structure says of one facing ray, checked against brute force: `Hidden`
     /// rays are blocked, `Visible` ones visible, and on a `Varies` pair every ray of one face
     /// ([`PairEvents::face`]) has the same `V` (`faces` holds the `V` seen per face so far).
     /// Returns what is wrong, if anything.
     fn check_ray(
         kernel: &Kernel,
-        (a, b): (usize, usize),
+        (a, b): (SurfaceRank, SurfaceRank),
         (x, y): (DVec2, DVec2),
-        faces: &mut HashMap<(usize, usize, RayFace), bool>,
+        faces: &mut Faces,
     ) -> Option<String> {
-        let (ga, gb) = (kernel.surface_parents[a], kernel.surface_parents[b]);
-        let truth = kernel.visible_brute_force_groups(x, ga, y, gb);
+        let (ga, gb) = (
+            kernel.surface_parents[a.index()],
+            kernel.surface_parents[b.index()],
+        );
+        let truth = kernel.visible_brute_force_groups(x, Some(ga), y, Some(gb));
         let wrong = |what: &str| Some(format!("pair {a} {b}, {x} → {y} (V = {truth}): {what}"));
         match kernel.pair_class(a, b) {
             PairClass::Zero => wrong("class Zero"),
@@ -364,7 +383,7 @@ mod tests {
         kernel: &Kernel,
         seed: u64,
         samples: usize,
-        faces: &mut HashMap<(usize, usize, RayFace), bool>,
+        faces: &mut Faces,
     ) -> Vec<String> {
         let scene = kernel.scene();
         let mut r = rng(seed);
@@ -401,7 +420,7 @@ mod tests {
                     stretch.u
                 ));
             }
-            if facing(kernel, g, kernel.surface_parents[b], x2, u.y) {
+            if facing(kernel, g, kernel.surface_parents[b.index()], x2, u.y) {
                 wrong.extend(check_ray(kernel, (a, b), (x2, u.y), faces));
             }
         }
@@ -414,7 +433,7 @@ mod tests {
     fn check_rays_through_end_points(
         kernel: &Kernel,
         seed: u64,
-        faces: &mut HashMap<(usize, usize, RayFace), bool>,
+        faces: &mut Faces,
     ) -> (usize, Vec<String>) {
         let ends: Vec<DVec2> = kernel
             .scene()
@@ -424,9 +443,12 @@ mod tests {
             .collect();
         let mut r = rng(seed);
         let (mut rays, mut wrong) = (0, Vec::new());
-        let n = kernel.surface_parents();
-        for (a, b) in (0..n).flat_map(|a| (0..n).map(move |b| (a, b))) {
-            let (ga, gb) = (kernel.surface_parents[a], kernel.surface_parents[b]);
+        let ranks = || kernel.surface_ranks();
+        for (a, b) in ranks().flat_map(|a| ranks().map(move |b| (a, b))) {
+            let (ga, gb) = (
+                kernel.surface_parents[a.index()],
+                kernel.surface_parents[b.index()],
+            );
             let ([pa, pb], [qa, qb]) = (
                 kernel.surface_parent(a).into(),
                 kernel.surface_parent(b).into(),

@@ -70,6 +70,6 @@ mod tests {
         )
         .unwrap();
         assert_eq!(kernel.params().emission_floor, 0.5);
-        assert_eq!(kernel.source_weight(3), 0.5);
+        assert_eq!(kernel.source_weight(crate::EdgeId::new(3)), 0.5);
     }
 }

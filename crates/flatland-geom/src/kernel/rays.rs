@@ -5,12 +5,13 @@ use std::cmp::Ordering;
 use glam::DVec2;
 
 use super::{Hit, Kernel};
+use crate::EdgeId;
 use crate::visibility::{Contact, Ray, orient, wins_tie};
 
 impl Kernel {
     /// The first edge the ray `origin + λ·direction`, `λ > 0`, meets, or `None` if it leaves
     /// the scene. `skip` (the edge the ray leaves from) and the other pieces of its parent edge
-    /// are never met; an out-of-range index skips nothing. Also `None` for a zero or
+    /// are never met; an edge not in the scene skips nothing. Also `None` for a zero or
     /// non-finite `direction` or `origin`.
     ///
     /// The rule is visibility's ([crate docs](crate#visibility)): edges are closed, so a ray
@@ -29,7 +30,7 @@ impl Kernel {
     /// Every edge occludes, blockers too; what a hit means (front or back, reflect or absorb)
     /// is the caller's: `direction · normal < 0` is a hit on the front.
     #[must_use]
-    pub fn first_hit(&self, origin: DVec2, direction: DVec2, skip: Option<usize>) -> Option<Hit> {
+    pub fn first_hit(&self, origin: DVec2, direction: DVec2, skip: Option<EdgeId>) -> Option<Hit> {
         let (ray, skip) = self.ray(origin, direction, skip)?;
         let (group, contact) = self.bvh.first_hit(&ray, skip, self.judge(&ray, skip))?;
         Some(self.hit(&ray, group, &contact))
@@ -38,12 +39,11 @@ impl Kernel {
     /// For a parent the ray meets: `None` if the meeting does not count (wholly on or behind
     /// the line of `skip`, which the ray leaves into its front), else whether it is a surface
     /// whose front faces the origin (which wins a tie at one point).
-    fn judge(&self, ray: &Ray, skip: usize) -> impl Fn(usize) -> Option<bool> + '_ {
-        let leaving = self
-            .segments
-            .get(skip)
+    fn judge(&self, ray: &Ray, skip: Option<usize>) -> impl Fn(usize) -> Option<bool> + '_ {
+        let leaving = skip
+            .map(|g| self.segments[g])
             .filter(|s| orient(s.a, s.b, ray.f) > 0.0);
-        let (o, leaving) = (ray.o, leaving.copied());
+        let o = ray.o;
         move |group: usize| {
             let s = self.segments[group];
             if let Some(own) = leaving
@@ -52,7 +52,7 @@ impl Kernel {
             {
                 return None;
             }
-            Some(self.parents[group].rank != usize::MAX && orient(s.a, s.b, o) > 0.0)
+            Some(self.parents[group].rank.is_some() && orient(s.a, s.b, o) > 0.0)
         }
     }
 
@@ -63,13 +63,13 @@ impl Kernel {
         &self,
         origin: DVec2,
         direction: DVec2,
-        skip: Option<usize>,
+        skip: Option<EdgeId>,
     ) -> Option<Hit> {
         let (ray, skip) = self.ray(origin, direction, skip)?;
         let judge = self.judge(&ray, skip);
         let mut best: Option<(usize, Contact)> = None;
         for (group, s) in self.segments.iter().enumerate() {
-            if group == skip {
+            if Some(group) == skip {
                 continue;
             }
             let Some(contact) = ray.contact(s.a, s.b) else {
@@ -90,13 +90,18 @@ impl Kernel {
         best.map(|(group, contact)| self.hit(&ray, group, &contact))
     }
 
-    /// The ray as a segment to beyond the scene, and the parent group it skips.
-    fn ray(&self, origin: DVec2, direction: DVec2, skip: Option<usize>) -> Option<(Ray, usize)> {
+    /// The ray as a segment to beyond the scene, and the parent group it skips, if any.
+    fn ray(
+        &self,
+        origin: DVec2,
+        direction: DVec2,
+        skip: Option<EdgeId>,
+    ) -> Option<(Ray, Option<usize>)> {
         if !origin.is_finite() {
             return None;
         }
         let far = self.bvh.far_point(origin, direction)?;
-        let skip = skip.map_or(usize::MAX, |edge| self.group_or_none(edge));
+        let skip = skip.and_then(|edge| self.group(edge));
         Some((Ray { o: origin, f: far }, skip))
     }
 
@@ -108,7 +113,7 @@ impl Kernel {
         let pieces = parent.count as f64;
         let k = ((u * pieces) as usize).min(parent.count - 1);
         Hit {
-            edge: parent.first + k,
+            edge: EdgeId::new(parent.first + k),
             distance: (point - ray.o).length(),
             point,
             u: (u * pieces - k as f64).clamp(0.0, 1.0),
@@ -128,7 +133,13 @@ mod tests {
         DVec2::new(x, y)
     }
 
+    fn id(i: usize) -> EdgeId {
+        EdgeId::new(i)
+    }
+
+    /// The first hit leaving edge `skip` (an index), checked against brute force.
     fn hit(kernel: &Kernel, o: DVec2, d: DVec2, skip: Option<usize>) -> Option<Hit> {
+        let skip = skip.map(id);
         let h = kernel.first_hit(o, d, skip);
         assert_eq!(h, kernel.first_hit_brute_force(o, d, skip), "brute force");
         h
@@ -141,20 +152,23 @@ mod tests {
         let up = hit(&boxk, v(0.5, 0.0), v(0.0, 1.0), Some(0)).unwrap();
         assert_eq!(
             (up.edge, up.point, up.u, up.distance),
-            (2, v(0.5, 1.0), 0.5, 1.0)
+            (id(2), v(0.5, 1.0), 0.5, 1.0)
         );
         // Exactly into the corner (1, 1) of the right wall (edge 1) and the ceiling (edge 2):
         // the first listed.
         let corner = hit(&boxk, v(0.5, 0.5), v(1.0, 1.0), None).unwrap();
-        assert_eq!((corner.edge, corner.point, corner.u), (1, v(1.0, 1.0), 1.0));
+        assert_eq!(
+            (corner.edge, corner.point, corner.u),
+            (id(1), v(1.0, 1.0), 1.0)
+        );
         // From the corner (0, 0) the left wall touching it does not count.
         assert_eq!(
             hit(&boxk, v(0.0, 0.0), v(1.0, 1.0), Some(0)).unwrap().edge,
-            1
+            id(1)
         );
         // Leaving a corner along the floor runs along it: met at once.
         let along = hit(&boxk, v(0.0, 0.0), v(1.0, 0.0), Some(3)).unwrap();
-        assert_eq!((along.edge, along.distance, along.u), (0, 0.0, 0.0));
+        assert_eq!((along.edge, along.distance, along.u), (id(0), 0.0, 0.0));
         assert_eq!(boxk.first_hit(v(0.5, 0.5), DVec2::ZERO, None), None);
         assert_eq!(boxk.first_hit(v(f64::NAN, 0.5), v(1.0, 0.0), None), None);
 
@@ -163,9 +177,12 @@ mod tests {
         let kernel = Kernel::new(Scene::new(vec![floor, blocker]).unwrap());
         // Through the blocker's end point: met there. Along it: met at its first point.
         let tip = hit(&kernel, v(1.0, 0.0), v(0.0, 1.0), Some(0)).unwrap();
-        assert_eq!((tip.edge, tip.point, tip.distance), (1, v(1.0, 1.0), 1.0));
+        assert_eq!(
+            (tip.edge, tip.point, tip.distance),
+            (id(1), v(1.0, 1.0), 1.0)
+        );
         let run = hit(&kernel, v(3.0, 1.0), v(-1.0, 0.0), None).unwrap();
-        assert_eq!((run.edge, run.point, run.u), (1, v(1.5, 1.0), 1.0));
+        assert_eq!((run.edge, run.point, run.u), (id(1), v(1.5, 1.0), 1.0));
         // Upwards past the blocker: nothing, the scene is open.
         assert_eq!(hit(&kernel, v(0.5, 0.0), v(0.0, 1.0), Some(0)), None);
     }
@@ -176,15 +193,15 @@ mod tests {
         // The ceiling is edges 8..12, each a quarter from (1, 1) to (0, 1): x = 0.3 is 0.7 of
         // the way, in the third piece, 0.8 along it.
         let h = hit(&fine, v(0.3, 0.0), v(0.0, 1.0), Some(1)).unwrap();
-        assert_eq!(h.edge, 10);
+        assert_eq!(h.edge, id(10));
         assert!((h.u - 0.8).abs() < 1e-12 && (h.point - v(0.3, 1.0)).length() < 1e-15);
-        let p = fine.scene().edges()[h.edge].point_at(h.u);
+        let p = fine.scene().edge(h.edge).point_at(h.u);
         assert!((p - h.point).length() < 1e-15);
         // From the floor's first piece along the floor: its other pieces are skipped too.
         let along = hit(&fine, v(0.1, 0.0), v(1.0, 0.0), Some(0)).unwrap();
         assert_eq!(
             (along.edge, along.point),
-            (4, v(1.0, 0.0)),
+            (id(4), v(1.0, 0.0)),
             "the right wall's corner"
         );
     }
@@ -210,10 +227,14 @@ mod tests {
                     let n = edges[face].normal();
                     let d = n * angle.cos() + n.perp() * angle.sin();
                     let h = hit(&kernel, edges[face].point_at(u), d, Some(face)).unwrap();
-                    assert!(h.edge < 4, "from face {face}: stopped on edge {}", h.edge);
+                    assert!(
+                        h.edge < id(4),
+                        "from face {face}: stopped on edge {}",
+                        h.edge
+                    );
                     // Back along the same line from the wall it reached: the face it left.
-                    let back = hit(&kernel, h.point, -d, Some(h.edge)).unwrap();
-                    assert_eq!(back.edge, face, "from {:?} towards the wall", h.point);
+                    let back = hit(&kernel, h.point, -d, Some(h.edge.index())).unwrap();
+                    assert_eq!(back.edge, id(face), "from {:?} towards the wall", h.point);
                 }
             }
         }
@@ -240,7 +261,7 @@ mod tests {
                     } else {
                         r.random_range(0.0..=1.0)
                     };
-                    (edges[from].point_at(u), Some(from))
+                    (edges[from].point_at(u), Some(id(from)))
                 } else {
                     (v(r.random_range(-1.5..1.5), r.random_range(-1.5..1.5)), None)
                 };
@@ -254,7 +275,7 @@ mod tests {
                 let slow = kernel.first_hit_brute_force(o, d, skip);
                 prop_assert_eq!(fast, slow, "o {:?} d {:?} skip {:?}", o, d, skip);
                 if let Some(h) = fast {
-                    let e = edges[h.edge];
+                    let e = scene.edge(h.edge);
                     prop_assert!((e.point_at(h.u) - h.point).length() <= 1e-9 * (1.0 + e.length()));
                     prop_assert!(((h.point - o).length() - h.distance).abs() <= 1e-12);
                 }

@@ -1,8 +1,9 @@
-//! The kernel's query results: a sample, a ray's hit, a pair's class and visibility, `k` unoccluded.
+//! The kernel's query results: a sample, a ray's hit, a pair's class, `k` unoccluded.
 
 use glam::DVec2;
 
 use crate::scene::SurfacePoint;
+use crate::{EdgeId, SurfaceRank};
 
 /// Everything [`Kernel::eval`](crate::Kernel::eval) knows about one `(s, t)`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -24,9 +25,8 @@ pub struct KernelSample {
 /// Where a ray first meets an edge ([`Kernel::first_hit`](crate::Kernel::first_hit)).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
-    /// The edge met, an index into [`Scene::edges`](crate::Scene::edges) (of a subdivided
-    /// edge, the piece).
-    pub edge: usize,
+    /// The edge met (of a subdivided edge, the piece).
+    pub edge: EdgeId,
     /// The distance from the ray's origin to `point`.
     pub distance: f64,
     /// The point met: on the edge up to rounding, and exactly an end point where the ray
@@ -36,35 +36,21 @@ pub struct Hit {
     pub u: f64,
 }
 
-/// How the visibility of a pair of surface edges is decided (see
-/// [`Kernel::pair_visibility`](crate::Kernel::pair_visibility)). Occluders are named by edge
-/// index (the first piece of a subdivided parent).
-#[derive(Clone, Debug, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum PairVisibility {
-    /// Two pieces of one edge (or the same edge): `k = 0`.
-    SameEdge,
-    /// The edges never face each other: `k = 0`, no ray.
-    NeverFacing,
-    /// No occluder cuts a facing ray between interior points of the edges: `V = 1`, no ray.
-    /// (A ray from an end point may still be checked: one running along a wall that touches
-    /// the pair's corner is blocked by the grazing rule.)
-    Clear,
-    /// This edge cuts every facing ray between interior points of the two edges: `V = 0`.
-    Blocked(usize),
-    /// Rays are needed, against these occluders only.
-    Rays(Vec<usize>),
-}
-
 /// How visibility behaves over all facing rays between interior points of two parent surface
-/// edges, known from geometry alone (see [`Kernel::pair_class`](crate::Kernel::pair_class)).
+/// edges, known from geometry alone (see [`Kernel::pair_class`](crate::Kernel::pair_class)):
+/// the kernel's one classification of a pair, from the shaft it keeps per pair. What a
+/// `Varies` pair needs besides is asked of the kernel: the occluders its rays are tested
+/// against ([`Kernel::pair_occluders`](crate::Kernel::pair_occluders)) and where its
+/// visibility changes ([`Kernel::visibility_events`](crate::Kernel::visibility_events)).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PairClass {
     /// The same parent edge, or edges that never face each other: `k = 0`.
     Zero,
-    /// Every such ray is visible: `V = 1`.
+    /// No occluder cuts a facing ray between interior points of the edges: `V = 1`, no ray.
+    /// (A ray from an end point may still be checked: one running along a wall that touches
+    /// the pair's corner is blocked by the grazing rule.)
     Visible,
-    /// Every such ray is blocked: `V = 0`.
+    /// Every such ray is blocked: `V = 0`, no ray.
     Hidden,
     /// Some rays are blocked and some are not; the boundaries are the curves of the pair's
     /// [`Kernel::visibility_events`](crate::Kernel::visibility_events).
@@ -76,9 +62,9 @@ pub enum PairClass {
 pub struct Unoccluded {
     /// Rank of the sender's parent surface edge (its place among the parent surface edges in
     /// parameter order; pieces of one subdivided edge share it).
-    pub sender: usize,
+    pub sender: SurfaceRank,
     /// Rank of the receiver's parent surface edge.
-    pub receiver: usize,
+    pub receiver: SurfaceRank,
     /// The sender point `x = point(s)`.
     pub x: DVec2,
     /// The receiver point `y = point(t)`.

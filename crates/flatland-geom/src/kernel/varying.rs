@@ -13,6 +13,7 @@
 use glam::DVec2;
 
 use super::{Kernel, PairClass};
+use crate::SurfaceRank;
 use crate::visibility::{Hull, cuts_bundle, orient};
 
 /// What [`Kernel::varying_pairs`] found, and the work it took.
@@ -20,7 +21,7 @@ use crate::visibility::{Hull, cuts_bundle, orient};
 pub struct VaryingPairs {
     /// The pairs of surface ranks `(a, b)`, `a < b`, whose [`Kernel::pair_class`] is
     /// [`PairClass::Varies`], in increasing order.
-    pub pairs: Vec<(usize, usize)>,
+    pub pairs: Vec<(SurfaceRank, SurfaceRank)>,
     /// Pairs of surface edges classified one by one (the others were settled in bundles).
     pub classified: usize,
     /// Bundles of pairs tested at once.
@@ -59,7 +60,7 @@ struct Cluster {
 
 /// The clusters of a scene's surface edges, `clusters[0]` all of them.
 struct Tree {
-    ranks: Vec<usize>,
+    ranks: Vec<SurfaceRank>,
     clusters: Vec<Cluster>,
 }
 
@@ -88,7 +89,7 @@ impl Kernel {
 
 impl Tree {
     fn new(kernel: &Kernel) -> Tree {
-        let mut ranks: Vec<usize> = (0..kernel.surface_parents()).collect();
+        let mut ranks: Vec<SurfaceRank> = kernel.surface_ranks().collect();
         let mut clusters = Vec::with_capacity(2 * ranks.len());
         split(kernel, &mut ranks, 0, &mut clusters);
         Tree { ranks, clusters }
@@ -203,7 +204,12 @@ impl Tree {
 /// Appends the cluster of `ranks` (which start at `first` in the tree's order) and those below
 /// it, halving at the median of the edges' midpoints along the longer side of their bounding
 /// box; returns its index.
-fn split(kernel: &Kernel, ranks: &mut [usize], first: usize, clusters: &mut Vec<Cluster>) -> usize {
+fn split(
+    kernel: &Kernel,
+    ranks: &mut [SurfaceRank],
+    first: usize,
+    clusters: &mut Vec<Cluster>,
+) -> usize {
     let index = clusters.len();
     let (a, b) = kernel.surface_parent(ranks[0]);
     clusters.push(Cluster {
@@ -215,7 +221,7 @@ fn split(kernel: &Kernel, ranks: &mut [usize], first: usize, clusters: &mut Vec<
     if ranks.len() == 1 {
         return index;
     }
-    let middle = |r: usize| {
+    let middle = |r: SurfaceRank| {
         let (a, b) = kernel.surface_parent(r);
         (a + b) * 0.5
     };
@@ -246,10 +252,15 @@ mod tests {
     use flatland_testkit::rooms;
 
     /// What a loop over all pairs finds.
-    fn every_pair(kernel: &Kernel) -> Vec<(usize, usize)> {
-        let n = kernel.surface_parents();
-        (0..n)
-            .flat_map(|a| (a + 1..n).map(move |b| (a, b)))
+    fn every_pair(kernel: &Kernel) -> Vec<(SurfaceRank, SurfaceRank)> {
+        kernel
+            .surface_ranks()
+            .flat_map(|a| {
+                kernel
+                    .surface_ranks()
+                    .filter(move |&b| b > a)
+                    .map(move |b| (a, b))
+            })
             .filter(|&(a, b)| kernel.pair_class(a, b) == PairClass::Varies)
             .collect()
     }

@@ -3,21 +3,25 @@
 use glam::DVec2;
 
 use super::Kernel;
+use crate::EdgeId;
 use crate::visibility::{Segment, Shaft, open_segment_hits, orient};
 
 impl Kernel {
     /// `V(x, y)` for `x` on edge `ex` and `y` on edge `ey` (see [`crate::visibility`'s rule in
     /// the crate docs](crate#visibility)): the open segment meets no edge other than `ex`, `ey`
-    /// and the pieces of their parent edges. Symmetric. An out-of-range index excludes nothing.
+    /// and the pieces of their parent edges. Symmetric. An edge not in the scene excludes
+    /// nothing.
     ///
     /// `x` should lie on `ex` and `y` on `ey` (as [`Scene::point`](crate::Scene::point) gives
     /// them, up to rounding): the cached shaft of the two edges is used only then; other points
     /// get a plain BVH ray.
     #[must_use]
-    pub fn visible(&self, x: DVec2, ex: usize, y: DVec2, ey: usize) -> bool {
-        let gx = self.group_or_none(ex);
-        let gy = self.group_or_none(ey);
-        if self.roughly_on(x, gx) && self.roughly_on(y, gy) {
+    pub fn visible(&self, x: DVec2, ex: EdgeId, y: DVec2, ey: EdgeId) -> bool {
+        let (gx, gy) = (self.group(ex), self.group(ey));
+        if let (Some(gx), Some(gy)) = (gx, gy)
+            && self.roughly_on(x, gx)
+            && self.roughly_on(y, gy)
+        {
             self.visible_parents(x, gx, y, gy)
         } else {
             !self.bvh.any_hit(x, y, gx, gy)
@@ -31,19 +35,21 @@ impl Kernel {
     /// (a coincident, overlapping edge), or a ray passes within rounding of a piece's end point in
     /// a subdivided scene (pieces are rounded copies of their parent).
     #[must_use]
-    pub fn visible_brute_force(&self, x: DVec2, ex: usize, y: DVec2, ey: usize) -> bool {
-        self.visible_brute_force_groups(x, self.group_or_none(ex), y, self.group_or_none(ey))
+    pub fn visible_brute_force(&self, x: DVec2, ex: EdgeId, y: DVec2, ey: EdgeId) -> bool {
+        self.visible_brute_force_groups(x, self.group(ex), y, self.group(ey))
     }
 
+    /// [`Kernel::visible_brute_force`] from `x` on parent `gx` to `y` on parent `gy` (`None`:
+    /// on no parent, excluding nothing).
     pub(super) fn visible_brute_force_groups(
         &self,
         x: DVec2,
-        gx: usize,
+        gx: Option<usize>,
         y: DVec2,
-        gy: usize,
+        gy: Option<usize>,
     ) -> bool {
         !self.scene.edges().iter().enumerate().any(|(i, e)| {
-            let g = self.scene.group_of(i);
+            let g = Some(self.scene.group_of(i));
             g != gx && g != gy && open_segment_hits(x, y, e.a, e.b)
         })
     }
@@ -56,27 +62,17 @@ impl Kernel {
         p != s.a && p != s.b
     }
 
-    /// Whether `p` is within rounding of parent `g` (false for `usize::MAX`): a loose check,
-    /// only to route points that are clearly elsewhere away from the shaft cache.
+    /// Whether `p` is within rounding of parent `g`: a loose check, only to route points that
+    /// are clearly elsewhere away from the shaft cache.
     fn roughly_on(&self, p: DVec2, g: usize) -> bool {
-        let Some(parent) = self.parents.get(g) else {
-            return false;
-        };
+        let parent = &self.parents[g];
         let (d, w) = (parent.d, p - parent.a);
         let len2 = d.length_squared();
         let u = w.dot(d) / len2;
         (-1e-9..=1.0 + 1e-9).contains(&u) && d.perp_dot(w).abs() <= 1e-9 * len2
     }
 
-    pub(super) fn group_or_none(&self, edge: usize) -> usize {
-        if edge < self.scene.edges().len() {
-            self.scene.group_of(edge)
-        } else {
-            usize::MAX
-        }
-    }
-
-    /// `V` between parents `gx`, `gy` (`usize::MAX` = none).
+    /// `V` between `x` on parent `gx` and `y` on parent `gy`.
     #[inline(always)]
     pub(super) fn visible_parents(&self, x: DVec2, gx: usize, y: DVec2, gy: usize) -> bool {
         if let Some(shaft) = self.shaft(gx, gy) {
@@ -98,18 +94,14 @@ impl Kernel {
                         }),
                         _ => !self.any_hit_facing(x, gx, y, gy),
                     },
-                    Shaft::NoFacing => !self.bvh.any_hit(x, y, gx, gy),
+                    Shaft::NoFacing => !self.bvh.any_hit(x, y, Some(gx), Some(gy)),
                 };
             }
         }
-        let facing = gx < self.parents.len()
-            && gy < self.parents.len()
-            && self.faces(gx, y)
-            && self.faces(gy, x);
-        if facing {
+        if self.faces(gx, y) && self.faces(gy, x) {
             !self.any_hit_facing(x, gx, y, gy)
         } else {
-            !self.bvh.any_hit(x, y, gx, gy)
+            !self.bvh.any_hit(x, y, Some(gx), Some(gy))
         }
     }
 
@@ -156,6 +148,10 @@ mod tests {
         DVec2::new(x, y)
     }
 
+    fn id(i: usize) -> EdgeId {
+        EdgeId::new(i)
+    }
+
     #[test]
     fn rays_graze_by_the_documented_rule() {
         let floor = Edge::surface(v(0.0, 0.0), v(2.0, 0.0), 0.5);
@@ -164,9 +160,13 @@ mod tests {
         let touching = Edge::blocker(v(1.5, 1.0), v(1.5, 1.5));
         let kernel = Kernel::new(Scene::new(vec![floor, ceiling, blocker, touching]).unwrap());
         let vis = |x: DVec2, y: DVec2| {
-            let a = kernel.visible(x, 0, y, 1);
-            assert_eq!(a, kernel.visible(y, 1, x, 0), "symmetry");
-            assert_eq!(a, kernel.visible_brute_force(x, 0, y, 1), "brute force");
+            let a = kernel.visible(x, id(0), y, id(1));
+            assert_eq!(a, kernel.visible(y, id(1), x, id(0)), "symmetry");
+            assert_eq!(
+                a,
+                kernel.visible_brute_force(x, id(0), y, id(1)),
+                "brute force"
+            );
             a
         };
         // Exactly through the blocker's end point (1, 1): blocked.
@@ -185,18 +185,18 @@ mod tests {
             ])
             .unwrap(),
         );
-        assert!(!kernel2.visible(v(0.5, 1.0), 0, v(3.0, 1.0), 1));
-        assert!(!kernel2.visible_brute_force(v(0.5, 1.0), 0, v(3.0, 1.0), 1));
+        assert!(!kernel2.visible(v(0.5, 1.0), id(0), v(3.0, 1.0), id(1)));
+        assert!(!kernel2.visible_brute_force(v(0.5, 1.0), id(0), v(3.0, 1.0), id(1)));
         // Points off their edges still get the exact answer (plain ray, no shaft).
-        assert!(!kernel.visible(v(0.5, 1.0), 0, v(3.0, 1.0), 1));
+        assert!(!kernel.visible(v(0.5, 1.0), id(0), v(3.0, 1.0), id(1)));
         // End points never block: a ray from the floor ending at the blocker's end point sees it.
         let kernel3 = Kernel::new(Scene::new(vec![floor, blocker]).unwrap());
-        assert!(kernel3.visible(v(1.0, 0.0), 0, v(1.0, 1.0), 1));
+        assert!(kernel3.visible(v(1.0, 0.0), id(0), v(1.0, 1.0), id(1)));
         // Adjacent walls touching the sender at a corner do not block it.
         let boxk = Kernel::new(unit_box());
-        assert!(boxk.visible(v(0.5, 0.0), 0, v(0.0, 0.5), 3));
+        assert!(boxk.visible(v(0.5, 0.0), id(0), v(0.0, 0.5), id(3)));
         assert!(
-            boxk.visible(v(0.0, 0.0), 0, v(1.0, 1.0), 2),
+            boxk.visible(v(0.0, 0.0), id(0), v(1.0, 1.0), id(2)),
             "diagonal corner to corner"
         );
     }
@@ -219,6 +219,7 @@ mod tests {
                     edges[e].point_at(u)
                 };
                 let (x, y) = (on(ex), on(ey));
+                let (ex, ey) = (id(ex), id(ey));
                 let fast = kernel.visible(x, ex, y, ey);
                 prop_assert_eq!(fast, kernel.visible(y, ey, x, ex), "symmetry");
                 prop_assert_eq!(fast, kernel.visible_brute_force(x, ex, y, ey), "x {:?} e{} y {:?} e{}", x, ex, y, ey);
@@ -249,7 +250,7 @@ mod tests {
             }
             let scene = Scene::new(edges).unwrap();
             let kernel = Kernel::new(scene.clone());
-            let range = |e: usize| scene.edge_param_range(e).unwrap();
+            let range = |e: usize| scene.edge_param_range(id(e)).unwrap();
             let at = |(s0, s1): (f64, f64), u: f64| s0 + (s1 - s0) * u;
             let (left, right) = (range(4), range(5));
             let (left_wall, right_wall) = (range(3), range(1));

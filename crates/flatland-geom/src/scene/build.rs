@@ -1,7 +1,7 @@
 //! Building a [`Scene`]: every edge validated, the parent groups and the parameterization's tables.
 
 use super::{Edge, Group, Role, Scene};
-use crate::GeomError;
+use crate::{EdgeId, GeomError, SurfaceRank};
 
 impl Scene {
     /// Validates `edges` and builds the scene. Errors name the first offending edge and the rule.
@@ -33,7 +33,7 @@ impl Scene {
             let rank = (parent.role == Role::Surface).then(|| {
                 surface_groups.push(groups.len());
                 cum.push(cum.last().copied().unwrap_or(0.0) + parent.length());
-                surface_groups.len() - 1
+                SurfaceRank::new(surface_groups.len() - 1)
             });
             group_of.extend(std::iter::repeat_n(groups.len(), count));
             groups.push(Group {
@@ -53,6 +53,7 @@ impl Scene {
         // each is below 1.4e154 and no realistic edge count can sum past f64::MAX.
         let surface_edges = (0..edges.len())
             .filter(|&i| edges[i].role == Role::Surface)
+            .map(EdgeId::new)
             .collect();
         let inv_length = surface_groups
             .iter()

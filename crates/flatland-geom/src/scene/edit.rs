@@ -2,7 +2,7 @@
 
 use super::param::lerp;
 use super::{Edge, Scene};
-use crate::GeomError;
+use crate::{EdgeId, GeomError};
 
 impl Scene {
     /// Splits every surface edge into `m` equal edges (blockers stay as they are).
@@ -50,7 +50,8 @@ impl Scene {
 
     /// The scene with edge `index` replaced by `edge` (validated). If `index` was a piece of a
     /// subdivided edge, that parent's pieces become independent edges.
-    pub fn with_edge(&self, index: usize, edge: Edge) -> Result<Scene, GeomError> {
+    pub fn with_edge(&self, index: EdgeId, edge: Edge) -> Result<Scene, GeomError> {
+        let index = index.index();
         if index >= self.edges.len() {
             return Err(GeomError::EdgeIndex {
                 index,
@@ -99,7 +100,7 @@ mod tests {
             let s: f64 = r.random_range(0.0..1.0);
             let (p, q) = (scene.point(s), fine.point(s));
             assert_eq!((p.position, p.normal), (q.position, q.normal), "s = {s}");
-            let piece = fine.edges()[q.edge];
+            let piece = fine.edge(q.edge);
             assert!(
                 piece.a.distance(q.position) + q.position.distance(piece.b)
                     <= piece.length() + 1e-12
@@ -108,12 +109,17 @@ mod tests {
             assert_close!(back, s, 1e-14);
         }
         // Every piece knows its parent's run; an edge never subdivided is its own run.
-        let first = fine.surface_edges()[0];
-        assert_eq!(fine.parent_pieces(first), Some(first..first + 1000));
-        assert_eq!(fine.parent_pieces(first + 999), Some(first..first + 1000));
+        let id = EdgeId::new;
+        let first = fine.surface_edges()[0].index();
+        let run = Some(id(first)..id(first + 1000));
+        assert_eq!(fine.parent_pieces(id(first)), run);
+        assert_eq!(fine.parent_pieces(id(first + 999)), run);
         let blocker = fine.edges().len() - 1;
-        assert_eq!(fine.parent_pieces(blocker), Some(blocker..blocker + 1));
-        assert_eq!(fine.parent_pieces(fine.edges().len()), None);
+        assert_eq!(
+            fine.parent_pieces(id(blocker)),
+            Some(id(blocker)..id(blocker + 1))
+        );
+        assert_eq!(fine.parent_pieces(id(fine.edges().len())), None);
         // Subdividing twice is the same as once with the product.
         let twice = scene.subdivide(10).unwrap().subdivide(100).unwrap();
         assert_eq!(twice.edges().len(), fine.edges().len());
@@ -130,17 +136,17 @@ mod tests {
     fn with_edge_replaces_and_validates() {
         let scene = unit_box();
         let moved = scene
-            .with_edge(1, Edge::surface(v(1.0, 0.0), v(1.2, 1.0), 0.5))
+            .with_edge(EdgeId::new(1), Edge::surface(v(1.0, 0.0), v(1.2, 1.0), 0.5))
             .unwrap();
         assert_eq!(moved.edges()[1].b, v(1.2, 1.0));
         assert_ne!(moved.fingerprint(), scene.fingerprint());
         let err = scene
-            .with_edge(2, Edge::surface(v(1.0, 1.0), v(1.0, 1.0), 0.5))
+            .with_edge(EdgeId::new(2), Edge::surface(v(1.0, 1.0), v(1.0, 1.0), 0.5))
             .unwrap_err();
         assert!(err.to_string().starts_with("edge 2: zero length"), "{err}");
         assert!(
             scene
-                .with_edge(9, scene.edges()[0])
+                .with_edge(EdgeId::new(9), scene.edges()[0])
                 .unwrap_err()
                 .to_string()
                 .contains("index 9")
@@ -150,7 +156,7 @@ mod tests {
         let e = fine.edges()[5];
         let moved = fine
             .with_edge(
-                5,
+                EdgeId::new(5),
                 Edge {
                     b: e.b + v(0.1, 0.0),
                     ..e

@@ -3,12 +3,13 @@
 use glam::DVec2;
 
 use super::{Group, Scene};
+use crate::{EdgeId, SurfaceRank};
 
 /// A point of the parameterization: which edge, where, and that edge's front normal.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SurfacePoint {
-    /// Index into [`Scene::edges`].
-    pub edge: usize,
+    /// The edge (of a subdivided edge, the piece).
+    pub edge: EdgeId,
     /// The point.
     pub position: DVec2,
     /// Front normal of the edge (of its parent edge for a piece made by [`Scene::subdivide`]).
@@ -17,21 +18,30 @@ pub struct SurfacePoint {
 
 impl Scene {
     /// The edges cut from the same parent edge as `edge` by [`Scene::subdivide`], as a range of
-    /// consecutive indices (`edge..edge + 1` for an edge that was never subdivided); `None` for
-    /// a bad index. The parent runs from `edges()[range.start].a` to `edges()[range.end - 1].b`
-    /// and has the material of every piece: a solver that meshes or occludes with whole
-    /// edges uses this, so a subdivided scene costs what the original does.
+    /// consecutive edges (`edge..edge + 1` for an edge that was never subdivided); `None` for
+    /// an edge not in the scene. The parent runs from the `a` of the range's start to the `b`
+    /// of its last edge and has the material of every piece: a solver that meshes or occludes
+    /// with whole edges uses this, so a subdivided scene costs what the original does.
     #[must_use]
-    pub fn parent_pieces(&self, edge: usize) -> Option<std::ops::Range<usize>> {
-        let g = &self.groups[*self.group_of.get(edge)?];
-        Some(g.first..g.first + g.count)
+    pub fn parent_pieces(&self, edge: EdgeId) -> Option<std::ops::Range<EdgeId>> {
+        let g = &self.groups[*self.group_of.get(edge.index())?];
+        Some(EdgeId::new(g.first)..EdgeId::new(g.first + g.count))
     }
 
-    /// The parameter interval `[s0, s1)` of a surface edge, `None` for a blocker or a bad index.
+    /// The rank of `edge`'s parent among the parent surface edges, `None` for a blocker or an
+    /// edge not in the scene.
     #[must_use]
-    pub fn edge_param_range(&self, edge: usize) -> Option<(f64, f64)> {
+    pub fn surface_rank(&self, edge: EdgeId) -> Option<SurfaceRank> {
+        self.groups[*self.group_of.get(edge.index())?].rank
+    }
+
+    /// The parameter interval `[s0, s1)` of a surface edge, `None` for a blocker or an edge not
+    /// in the scene.
+    #[must_use]
+    pub fn edge_param_range(&self, edge: EdgeId) -> Option<(f64, f64)> {
+        let edge = edge.index();
         let g = &self.groups[*self.group_of.get(edge)?];
-        let rank = g.rank?;
+        let rank = g.rank?.index();
         let k = (edge - g.first) as f64;
         let n = g.count as f64;
         let l = self.total_length;
@@ -64,11 +74,12 @@ impl Scene {
 
     /// The parameter `s` of the point of surface edge `edge` nearest to `p` (orthogonal
     /// projection, clamped to the edge): the inverse of [`Scene::point`]. `None` for a blocker,
-    /// a bad index or a non-finite `p`.
+    /// an edge not in the scene or a non-finite `p`.
     #[must_use]
-    pub fn param_of(&self, edge: usize, p: DVec2) -> Option<f64> {
+    pub fn param_of(&self, edge: EdgeId, p: DVec2) -> Option<f64> {
+        let edge = edge.index();
         let g = &self.groups[*self.group_of.get(edge)?];
-        let rank = g.rank?;
+        let rank = g.rank?.index();
         if !p.is_finite() {
             return None;
         }
@@ -85,7 +96,8 @@ impl Scene {
     /// surface edges laid end to end, pieces of a subdivided edge together); `None` past the
     /// last rank.
     #[must_use]
-    pub fn parent_param_range(&self, rank: usize) -> Option<(f64, f64)> {
+    pub fn parent_param_range(&self, rank: SurfaceRank) -> Option<(f64, f64)> {
+        let rank = rank.index();
         if rank + 1 >= self.cum.len() {
             return None;
         }
@@ -145,7 +157,7 @@ impl Scene {
 
     /// The piece of group `g` containing parameter `u`.
     #[inline]
-    pub(crate) fn piece(&self, g: usize, u: f64) -> usize {
+    pub(crate) fn piece(&self, g: usize, u: f64) -> EdgeId {
         piece_of(&self.groups[g], u)
     }
 }
@@ -159,8 +171,8 @@ pub(super) fn lerp(a: DVec2, b: DVec2, u: f64) -> DVec2 {
 }
 
 #[inline]
-fn piece_of(g: &Group, u: f64) -> usize {
-    g.first + ((u * g.count as f64) as usize).min(g.count - 1)
+fn piece_of(g: &Group, u: f64) -> EdgeId {
+    EdgeId::new(g.first + ((u * g.count as f64) as usize).min(g.count - 1))
 }
 
 /// `s` modulo 1 in `[0, 1)`; non-finite gives 0.
@@ -204,19 +216,25 @@ mod tests {
         edges.insert(1, Edge::blocker(v(0.5, 0.5), v(1.5, 0.5)));
         let scene = Scene::new(edges).unwrap();
         assert_eq!(scene.total_length(), 6.0);
-        assert_eq!(scene.surface_edges(), &[0, 2, 3, 4]);
+        let id = EdgeId::new;
+        assert_eq!(scene.surface_edges(), &[id(0), id(2), id(3), id(4)]);
         let p = scene.point(1.0 / 6.0);
         assert_eq!(
             (p.edge, p.position, p.normal),
-            (0, v(1.0, 0.0), v(0.0, 1.0))
+            (id(0), v(1.0, 0.0), v(0.0, 1.0))
         );
         let p = scene.point(2.5 / 6.0);
-        assert_eq!((p.edge, p.position), (2, v(2.0, 0.5)));
-        assert_eq!(scene.edge_param_range(1), None);
-        assert_eq!(scene.edge_param_range(0), Some((0.0, 2.0 / 6.0)));
-        assert_eq!(scene.edge_param_range(4), Some((5.0 / 6.0, 1.0)));
-        assert_eq!(scene.param_of(1, v(1.0, 0.5)), None);
-        assert_eq!(scene.param_of(99, v(1.0, 0.5)), None);
+        assert_eq!((p.edge, p.position), (id(2), v(2.0, 0.5)));
+        assert_eq!(scene.edge_param_range(id(1)), None);
+        assert_eq!(scene.edge_param_range(id(0)), Some((0.0, 2.0 / 6.0)));
+        assert_eq!(scene.edge_param_range(id(4)), Some((5.0 / 6.0, 1.0)));
+        assert_eq!(scene.param_of(id(1), v(1.0, 0.5)), None);
+        assert_eq!(scene.param_of(id(99), v(1.0, 0.5)), None);
+        let rank = |i| Some(SurfaceRank::new(i));
+        assert_eq!(scene.surface_rank(id(0)), rank(0));
+        assert_eq!(scene.surface_rank(id(1)), None, "a blocker");
+        assert_eq!(scene.surface_rank(id(4)), rank(3));
+        assert_eq!(scene.surface_rank(id(99)), None);
     }
 
     #[test]
@@ -227,7 +245,7 @@ mod tests {
         assert_eq!(scene.point(f64::NAN), scene.point(0.0));
         assert_eq!(scene.point(f64::INFINITY), scene.point(0.0));
         let end = scene.point(-1e-300);
-        assert_eq!(end.edge, 3);
+        assert_eq!(end.edge, EdgeId::new(3));
         assert!(end.position.distance(v(0.0, 0.0)) < 1e-12);
     }
 
@@ -268,7 +286,11 @@ mod tests {
                 let n = scene.surface_groups.len();
                 let expected = scene.cum[1..n].partition_point(|&c| c <= arc);
                 let (g, u) = scene.locate(s);
-                assert_eq!(scene.groups[g].rank, Some(expected), "s = {s}");
+                assert_eq!(
+                    scene.groups[g].rank,
+                    Some(SurfaceRank::new(expected)),
+                    "s = {s}"
+                );
                 assert!((0.0..=1.0).contains(&u));
             }
         }
@@ -279,7 +301,7 @@ mod tests {
         fn point_stays_on_its_edge(s in -2.0f64..2.0, m in 1usize..50) {
             let scene = bundled("corners").subdivide(m).unwrap();
             let p = scene.point(s);
-            let e = scene.edges()[p.edge];
+            let e = *scene.edge(p.edge);
             prop_assert_eq!(e.role, Role::Surface);
             let slack = 1e-12 * (1.0 + e.length());
             prop_assert!(e.a.distance(p.position) + p.position.distance(e.b) <= e.length() + slack);

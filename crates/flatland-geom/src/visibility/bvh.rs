@@ -143,8 +143,16 @@ impl Bvh {
         false
     }
 
-    /// Whether the open segment `(x, y)` meets any segment except `skip_a` and `skip_b`.
-    pub(crate) fn any_hit(&self, x: DVec2, y: DVec2, skip_a: usize, skip_b: usize) -> bool {
+    /// Whether the open segment `(x, y)` meets any segment except `skip_a` and `skip_b` (each
+    /// skips nothing where it is `None`).
+    pub(crate) fn any_hit(
+        &self,
+        x: DVec2,
+        y: DVec2,
+        skip_a: Option<usize>,
+        skip_b: Option<usize>,
+    ) -> bool {
+        let (skip_a, skip_b) = (skip_index(skip_a), skip_index(skip_b));
         let ray = RayBox::new(self.to_frame(x), self.to_frame(y));
         self.any(
             |node| ray.may_meet(node) & !node.skipped(skip_a, skip_b),
@@ -156,8 +164,8 @@ impl Bvh {
         )
     }
 
-    /// [`Bvh::any_hit`], but a segment the open segment meets does not count when `ignore`
-    /// accepts it (asked only then, so a costly rule costs little).
+    /// [`Bvh::any_hit`] skipping two segments, but a segment the open segment meets does not
+    /// count when `ignore` accepts it (asked only then, so a costly rule costs little).
     pub(crate) fn any_hit_unless(
         &self,
         x: DVec2,
@@ -177,7 +185,7 @@ impl Bvh {
         )
     }
 
-    /// The first segment except `skip` the ray meets, and where ([`Ray::contact`]): the
+    /// The first segment except `skip` (if any) the ray meets, and where ([`Ray::contact`]): the
     /// contact first along the ray, of several at one point one that `judge` says faces the
     /// origin, then the lowest segment index, so the answer is the linear scan's whatever the
     /// tree. `judge(i)` is asked only of a segment the ray meets: `None` if that meeting does
@@ -186,12 +194,13 @@ impl Bvh {
     pub(crate) fn first_hit(
         &self,
         ray: &Ray,
-        skip: usize,
+        skip: Option<usize>,
         judge: impl Fn(usize) -> Option<bool>,
     ) -> Option<(usize, Contact)> {
         if self.nodes.is_empty() {
             return None;
         }
+        let skip = skip_index(skip);
         let (o, f) = (self.to_frame(ray.o), self.to_frame(ray.f));
         let (boxes, along) = (RayBox::new(o, f), Along::new(o, f));
         let mut best: Option<(usize, Contact)> = None;
@@ -357,6 +366,13 @@ impl Bvh {
         out.dedup();
         out
     }
+}
+
+/// `skip` as the index the tree's tests compare with: for none, `usize::MAX`, which no segment
+/// has (a plain index keeps the four-wide node test ([`Wide::skipped`]) one comparison a lane).
+#[inline]
+fn skip_index(skip: Option<usize>) -> usize {
+    skip.unwrap_or(usize::MAX)
 }
 
 /// Of two segments met at one point, whether `i` (facing the origin or not) comes before `b`:
@@ -562,7 +578,7 @@ mod tests {
                     .iter()
                     .enumerate()
                     .any(|(i, s)| i != skip && open_segment_hits(x, y, s.a, s.b));
-                assert_eq!(bvh.any_hit(x, y, skip, skip), linear);
+                assert_eq!(bvh.any_hit(x, y, Some(skip), Some(skip)), linear);
             }
             let (lo, hi) = (v(-0.2, -0.2), v(0.3, 0.1));
             let boxed: Vec<u32> = (0..n as u32)
@@ -597,7 +613,9 @@ mod tests {
                     .iter()
                     .enumerate()
                     .any(|(i, s)| i != skip_a && i != skip_b && open_segment_hits(x, y, s.a, s.b));
-                prop_assert_eq!(bvh.any_hit(x, y, skip_a, skip_b), linear, "{:?} {:?}", x, y);
+                // `n` stands for no skip.
+                let some = |k: usize| (k < n).then_some(k);
+                prop_assert_eq!(bvh.any_hit(x, y, some(skip_a), some(skip_b)), linear, "{:?} {:?}", x, y);
             }
         }
 
@@ -679,6 +697,7 @@ mod tests {
                         linear = Some((i, c));
                     }
                 }
+                let skip = (skip < n).then_some(skip);
                 prop_assert_eq!(bvh.first_hit(&ray, skip, judge), linear, "{:?}", ray);
             }
         }

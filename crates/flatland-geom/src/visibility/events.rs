@@ -406,6 +406,7 @@ mod tests {
             let mut r = rng(seed ^ 0x5e9d);
             for _ in 0..40 {
                 let (a, b) = (r.random_range(0..n), r.random_range(0..n));
+                let (a, b) = (crate::SurfaceRank::new(a), crate::SurfaceRank::new(b));
                 let Some(events) = kernel.visibility_events(a, b) else { continue };
                 let (qa, qb) = kernel.surface_parent(b);
                 let y = qa + (qb - qa) * r.random_range(0.0..1.0);

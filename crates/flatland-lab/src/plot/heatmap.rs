@@ -3,7 +3,7 @@
 //! on both axes; a colour bar with values; a title.
 
 use anyhow::{Result, anyhow};
-use flatland_geom::Scene;
+use flatland_geom::{EdgeId, Scene};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
@@ -124,7 +124,7 @@ fn draw_labels(root: &Area<'_>, map: &Heatmap<'_>, side: u32) -> DrawResult {
 
     // Surface edge boundaries (parameter starts) and where each edge's label goes.
     let surfaces = map.scene.surface_edges();
-    let ranges: Vec<(usize, f64, f64)> = surfaces
+    let ranges: Vec<(EdgeId, f64, f64)> = surfaces
         .iter()
         .filter_map(|&e| map.scene.edge_param_range(e).map(|(a, b)| (e, a, b)))
         .collect();

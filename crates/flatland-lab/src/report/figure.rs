@@ -142,7 +142,7 @@ fn geometry(scene: &Scene, label: &str) -> Result<Vec<u8>> {
                 .color(&BLUE)
                 .pos(Pos::new(HPos::Center, VPos::Center));
             for &e in surfaces {
-                let edge = scene.edges()[e];
+                let edge = scene.edge(e);
                 let at = (edge.a + edge.b) * 0.5 + edge.normal() * 0.06 * span;
                 chart
                     .draw_series([Text::new(e.to_string(), (at.x, at.y), style.clone())])

@@ -7,7 +7,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use flatland_geom::{DVec2, Edge, Kernel, Role, Scene};
+use flatland_geom::{DVec2, Edge, EdgeId, Kernel, Role, Scene};
 use flatland_solve::Reference;
 use kernel_fit::{Fit, FitParams, StopReason};
 use rand::RngExt;
@@ -188,8 +188,9 @@ pub fn geometry_cases(suite: &mut Suite) {
             let kernel = Kernel::new(scene.clone());
             let mut pairs = random_pairs(10_000, 21);
             // Half of the senders on the tiny edges themselves.
-            let tiny: Vec<usize> = (0..scene.edges().len())
-                .filter(|&i| scene.edges()[i].length() < 1e-6)
+            let tiny: Vec<EdgeId> = (0..scene.edges().len())
+                .map(EdgeId::new)
+                .filter(|&i| scene.edge(i).length() < 1e-6)
                 .filter_map(|i| scene.edge_param_range(i).map(|_| i))
                 .collect();
             let mut r = rng(22);

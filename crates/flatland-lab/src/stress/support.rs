@@ -171,8 +171,8 @@ pub fn check_kernel(row: &mut Row, kernel: &Kernel, pairs: &[[f64; 2]]) {
             asymmetric += 1;
         }
         let (rx, ry) = (
-            scene.edges()[a.x.edge].reflectance,
-            scene.edges()[a.y.edge].reflectance,
+            scene.edge(a.x.edge).reflectance,
+            scene.edge(a.y.edge).reflectance,
         );
         if rx > 0.0 && ry > 0.0 {
             let (p, q) = (a.k / ry, b.k / rx);
@@ -198,7 +198,7 @@ pub fn row_integral(kernel: &Kernel, s: f64, per_edge: usize) -> f64 {
     let x = scene.point(s);
     let mut sum = 0.0;
     for &e in scene.surface_edges() {
-        let edge = scene.edges()[e];
+        let edge = scene.edge(e);
         let (ua, ub) = (edge.a - x.position, edge.b - x.position);
         let span = ua.perp_dot(ub).atan2(ua.dot(ub));
         if span == 0.0 || !span.is_finite() || ua.length() == 0.0 {
@@ -225,7 +225,7 @@ pub fn row_integral(kernel: &Kernel, s: f64, per_edge: usize) -> f64 {
             let y = scene.point(t);
             let r = y.position - x.position;
             let cos_y = (y.normal.dot(r) / r.length()).abs();
-            sum += k / scene.edges()[y.edge].reflectance * r.length() / cos_y * step.abs();
+            sum += k / scene.edge(y.edge).reflectance * r.length() / cos_y * step.abs();
         }
     }
     sum

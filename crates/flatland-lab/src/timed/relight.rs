@@ -10,7 +10,7 @@ use anyhow::{Context as _, Result};
 use flatland_baselines::{
     LightTracer, Lighting, TraceBudget, TraceParams, run_clustered, run_hr_at_budget,
 };
-use flatland_geom::{Kernel, Scene};
+use flatland_geom::{EdgeId, Kernel, Scene};
 use flatland_solve::{
     ExactReference, Mesh, Representation, SolveErrors, SolveParams, TransferOperator, solve_errors,
     solve_linear,
@@ -40,17 +40,17 @@ pub struct Relit {
 /// non-emitting surface edge glowing beside the emitters, the others each emitter's emission
 /// times a factor in [0, 2], or off (at least one stays on).
 pub fn lightings(scene: &Scene, count: usize, seed: u64) -> Vec<Relit> {
-    let edges = scene.edges();
+    let edge = |i: EdgeId| scene.edge(i);
     let surfaces = scene.surface_edges();
-    let emitters: Vec<usize> = surfaces
+    let emitters: Vec<EdgeId> = surfaces
         .iter()
         .copied()
-        .filter(|&i| edges[i].emission > 0.0)
+        .filter(|&i| edge(i).emission > 0.0)
         .collect();
-    let dark: Vec<usize> = surfaces
+    let dark: Vec<EdgeId> = surfaces
         .iter()
         .copied()
-        .filter(|&i| edges[i].emission == 0.0 && edges[i].reflectance > 0.0)
+        .filter(|&i| edge(i).emission == 0.0 && edge(i).reflectance > 0.0)
         .collect();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut out = vec![Relit {
@@ -62,7 +62,7 @@ pub fn lightings(scene: &Scene, count: usize, seed: u64) -> Vec<Relit> {
         if glow {
             let wall = dark[rng.random_range(0..dark.len())];
             let mean =
-                emitters.iter().map(|&i| edges[i].emission).sum::<f64>() / emitters.len() as f64;
+                emitters.iter().map(|&i| edge(i).emission).sum::<f64>() / emitters.len() as f64;
             out.push(Relit {
                 lighting: Lighting::default().with_emission(wall, mean),
                 description: format!("edge {wall} glowing at {mean:.3}"),
@@ -78,12 +78,12 @@ pub fn lightings(scene: &Scene, count: usize, seed: u64) -> Vec<Relit> {
                 2.0 * rng.random::<f64>()
             };
             on += usize::from(factor > 0.0);
-            lighting = lighting.with_emission(i, factor * edges[i].emission);
+            lighting = lighting.with_emission(i, factor * edge(i).emission);
         }
         if on == 0
             && let Some(&first) = emitters.first()
         {
-            lighting = lighting.with_emission(first, edges[first].emission);
+            lighting = lighting.with_emission(first, edge(first).emission);
         }
         out.push(Relit {
             lighting,
@@ -101,7 +101,7 @@ fn relit_scene(scene: &Scene, mesh: &Mesh, lighting: &Lighting) -> Result<Scene>
         for piece in pieces {
             let mut e = scene.edges()[piece];
             e.emission = edge;
-            scene = scene.with_edge(piece, e)?;
+            scene = scene.with_edge(EdgeId::new(piece), e)?;
         }
     }
     Ok(scene)
@@ -119,7 +119,7 @@ fn overridden(mesh: &Mesh, lighting: &Lighting) -> Vec<(f64, Vec<usize>)> {
         .overrides()
         .iter()
         .filter_map(|&(edge, emission)| {
-            let m = *mesh_edge_of.get(&edge)?;
+            let m = *mesh_edge_of.get(&edge.index())?;
             Some((emission, mesh.edges()[m].pieces.clone().collect()))
         })
         .collect()
@@ -135,7 +135,7 @@ pub fn emission(mesh: &Mesh, lighting: &Lighting) -> Vec<f64> {
         .flat_map(|(m, edge)| edge.pieces.clone().map(move |p| (p, m)))
         .collect();
     for &(edge, emission) in lighting.overrides() {
-        if let Some(&m) = mesh_edge_of.get(&edge) {
+        if let Some(&m) = mesh_edge_of.get(&edge.index()) {
             for i in mesh.edges()[m].elements.clone() {
                 e[i] = emission;
             }
@@ -479,7 +479,7 @@ mod tests {
         assert_eq!(relits.len(), LIGHTINGS);
         assert!(relits[0].lighting.overrides().is_empty());
         let (wall, glow) = relits[LIGHTINGS - 1].lighting.overrides()[0];
-        assert!(scene.edges()[wall].emission == 0.0 && glow > 0.0);
+        assert!(scene.edge(wall).emission == 0.0 && glow > 0.0);
         assert_eq!(lightings(&scene, LIGHTINGS, 1), relits, "seeded");
         for r in &relits[1..LIGHTINGS - 1] {
             assert!(

@@ -187,7 +187,11 @@ fn edge_labels(painter: &Painter, frame: &PlotFrame, scene: &Scene, color: Color
     let mut ranges: Vec<(usize, f64, f64)> = scene
         .surface_edges()
         .iter()
-        .filter_map(|&e| scene.edge_param_range(e).map(|(s0, s1)| (e, s0, s1)))
+        .filter_map(|&e| {
+            scene
+                .edge_param_range(e)
+                .map(|(s0, s1)| (e.index(), s0, s1))
+        })
         .collect();
     ranges.sort_by(|a, b| (b.2 - b.1).total_cmp(&(a.2 - a.1)));
     let label_w = |e: usize| DIGIT_W * (e.max(1).ilog10() + 1) as f32;

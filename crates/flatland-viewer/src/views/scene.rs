@@ -2,7 +2,7 @@
 //! the `(s, t)` under the pointer, and the parameter of the surface point under it.
 
 use egui::{Align2, Color32, FontId, Painter, Pos2, Rect, Sense, Shape, Stroke, pos2, vec2};
-use flatland_geom::{DVec2, GeomError, Scene};
+use flatland_geom::{DVec2, EdgeId, GeomError, Scene};
 
 use super::edges::{LEGEND, LIT_LEGEND, LitPaint, colour_bar, draw_edges, scene_area};
 use super::widgets::{View, legend, panel_frame};
@@ -35,7 +35,7 @@ pub fn moved_scene(scene: &Scene, from: DVec2, to: DVec2) -> Result<Scene, GeomE
             moved.b = to;
         }
         if moved != *e {
-            out = out.with_edge(i, moved)?;
+            out = out.with_edge(EdgeId::new(i), moved)?;
         }
     }
     Ok(out)
@@ -268,7 +268,7 @@ fn draw_ray(painter: &Painter, view: &View, rect: Rect, world: &World, s: f64, t
 fn mark_hovered_surface(painter: &Painter, view: &View, scene: &Scene, q: Pos2) -> Option<f64> {
     let mut best: Option<(f64, f32, Pos2)> = None;
     for &i in scene.surface_edges() {
-        let e = &scene.edges()[i];
+        let e = scene.edge(i);
         let (a, b) = (view.screen(e.a), view.screen(e.b));
         let ab = b - a;
         let u = ((q - a).dot(ab) / ab.length_sq().max(1e-6)).clamp(0.0, 1.0);

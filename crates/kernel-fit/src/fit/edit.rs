@@ -65,7 +65,7 @@ impl Fit {
 
 #[cfg(test)]
 mod tests {
-    use flatland_geom::DVec2;
+    use flatland_geom::{DVec2, EdgeId};
     use rand::RngExt;
 
     use super::super::test_support::*;
@@ -103,7 +103,7 @@ mod tests {
             } else {
                 edge.b += shift;
             }
-            let Ok(edited) = scene.with_edge(e, edge) else {
+            let Ok(edited) = scene.with_edge(EdgeId::new(e), edge) else {
                 refused += 1; // an edit the scene refuses (a zero-length edge, say)
                 continue;
             };
@@ -141,7 +141,8 @@ mod tests {
             let mut moved = scene.edges()[blocker];
             moved.a.x += 0.8;
             moved.b.x += 0.8;
-            let new_kernel = Arc::new(Kernel::new(scene.with_edge(blocker, moved).unwrap()));
+            let moved = scene.with_edge(EdgeId::new(blocker), moved).unwrap();
+            let new_kernel = Arc::new(Kernel::new(moved));
             let reference = Arc::new(Reference::new(&new_kernel, 64, 2048, 1));
             let cells_before = fit.network().len();
             fit.set_kernel(Arc::clone(&new_kernel), Arc::clone(&reference));

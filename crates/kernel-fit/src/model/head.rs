@@ -4,7 +4,7 @@
 
 use std::sync::Arc;
 
-use flatland_geom::{Kernel, KernelParams, PairClass};
+use flatland_geom::{EdgeId, Kernel, KernelParams, PairClass};
 use flatland_solve::InputFrame;
 use rayon::prelude::*;
 use sgcs::{CellId, Network};
@@ -152,7 +152,7 @@ impl ModelHead {
 /// `E'` per edge of `kernel`'s scene.
 fn emission(kernel: &Kernel) -> Vec<f64> {
     (0..kernel.scene().edges().len())
-        .map(|e| kernel.source_weight(e))
+        .map(|e| kernel.source_weight(EdgeId::new(e)))
         .collect()
 }
 
@@ -205,8 +205,8 @@ impl VisibilityHead {
             return cells * 4;
         }
         let mut events = 0;
-        for a in 0..n {
-            for b in 0..n {
+        for a in self.kernel.surface_ranks() {
+            for b in self.kernel.surface_ranks() {
                 if let Some(e) = self.kernel.visibility_events(a, b) {
                     events += (0..4).map(|k| e.points(k).len()).sum::<usize>();
                 }

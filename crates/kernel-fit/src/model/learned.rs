@@ -279,7 +279,7 @@ impl Representation for LearnedKernel {
             ModelHead::Zeta => self.network.predict1(&self.input(s, t)) * self.output_scale,
             ModelHead::FactoredEmission { emission } => {
                 let kappa = self.network.predict1(&self.input(s, t)) * self.output_scale;
-                kappa * emission[self.scene.point(s).edge]
+                kappa * emission[self.scene.point(s).edge.index()]
             }
         }
     }

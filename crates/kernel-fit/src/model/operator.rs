@@ -11,7 +11,7 @@
 //! ([`make_physical`]): where `Ṽ` passes light a face hides (a face no cell has visited), the
 //! unoccluded transfers of surfaces behind each other would add up past the half-plane.
 
-use flatland_geom::{Kernel, PairClass};
+use flatland_geom::{Kernel, PairClass, SurfaceRank};
 use flatland_solve::{
     DenseOperator, Mesh, Receiver, Sender, SolveError, Stop, check_scene, make_physical,
     point_to_segment, receiver, sender,
@@ -28,7 +28,7 @@ pub(crate) fn visibility_operator(
     check_scene(kernel, mesh)?;
     let (edges, elements) = (mesh.edges(), mesh.elements());
     // The rank of each mesh edge's parent surface edge.
-    let rank: Vec<usize> = edges
+    let rank: Vec<SurfaceRank> = edges
         .iter()
         .map(|e| kernel.unoccluded((e.s[0] + e.s[1]) / 2.0, 0.0).sender)
         .collect();
