@@ -12,10 +12,10 @@ use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use flatland_geom::{Kernel, generate};
+use flatland_light::{LightFit, LightParams};
 use flatland_solve::{
     DEFAULT_ERROR_BOUND, ExactReference, SolveParams, elements_for_error, never, solve,
 };
-use kernel_fit::{LightFit, LightParams};
 
 fn scaling(c: &mut Criterion) {
     for edges in [100, 1_000, 10_000] {

@@ -12,11 +12,12 @@ use flatland_baselines::{
     run_hr_at_budget, run_uniform,
 };
 use flatland_geom::{Kernel, Scene, write_atomic};
+use flatland_light::{LightError, LightFit, LightParams, LightStop};
 use flatland_solve::{
     Comparison, DEFAULT_ERROR_BOUND, Discretization, ErrorEstimate, ExactMethod, ExactReference,
     Mesh, Representation, SolveError, SolveParams, Stop, elements_for_error, solve_against,
 };
-use kernel_fit::{Fit, FitError, LightFit, LightParams, LightStop, ModelFile};
+use kernel_fit::{Fit, ModelFile};
 
 use super::SceneArgs;
 use flatland_lab::interrupt;
@@ -397,9 +398,9 @@ fn learn(kernel: &Kernel, mesh: &Mesh, args: &Args, stop: &Stop) -> Result<(Ligh
     params
         .check()
         .map_err(|e| anyhow::anyhow!("--tolerance: {e}"))?;
-    let interrupted = |e: FitError| -> anyhow::Error {
+    let interrupted = |e: LightError| -> anyhow::Error {
         match e {
-            FitError::Interrupted => interrupt::stopped().into(),
+            LightError::Interrupted => interrupt::stopped().into(),
             other => other.into(),
         }
     };

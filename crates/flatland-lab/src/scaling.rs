@@ -337,7 +337,7 @@ fn one(cx: &Context<'_>, method: Contender, equal_time: f64) -> TimedRow {
     let setting = setting_of(method, cx.scorer, cx.kernel.scene().edges().len());
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match method {
         Contender::Default => cx
-            .light(kernel_fit::LightParams::default().tolerance)
+            .light(flatland_light::LightParams::default().tolerance)
             .map(|r| r.0),
         Contender::Exact => cx.exact(cx.scorer.mesh().len()),
         Contender::Hr => cx.baseline(Contender::Hr, HR_BASIS, 1),
@@ -369,7 +369,7 @@ const HR_BASIS: usize = 400;
 /// What `method` is run at, for its row's setting.
 fn setting_of(method: Contender, scorer: &Scorer, edges: usize) -> Setting {
     match method {
-        Contender::Default => Setting::Tolerance(kernel_fit::LightParams::default().tolerance),
+        Contender::Default => Setting::Tolerance(flatland_light::LightParams::default().tolerance),
         Contender::Exact => Setting::Elements(scorer.mesh().len()),
         Contender::Tracer => Setting::Photons(0),
         Contender::Clustered => Setting::Budget(CLUSTERED_LINKS_PER_EDGE * edges),

@@ -1,6 +1,6 @@
 //! The flatland viewer: watch a learner of a Flatland radiosity kernel at work over the
 //! `(s, t)` plot of that kernel, live — by default the light-driven learner
-//! ([`kernel_fit::LightFit`]: rounds of solving the scene and learning the faces the most
+//! ([`flatland_light::LightFit`]: rounds of solving the scene and learning the faces the most
 //! light flows through), or the cells of a supervised growing cell structures network — and
 //! scrub back through the run afterwards.
 //!
@@ -50,7 +50,7 @@
 //! grows at the pace of cells per second: on `fig3` the θ-driven learner is exact after 17 000
 //! steps, which a fast machine runs before the window has drawn a useful frame.
 //!
-//! Training runs on its own thread, which owns the [`kernel_fit::LightFit`] or the
+//! Training runs on its own thread, which owns the [`flatland_light::LightFit`] or the
 //! [`kernel_fit::Fit`]; the UI sends commands
 //! and takes published snapshots without ever waiting for the learner. Textures are rebuilt
 //! only when the data behind them changes, and what is drawn over the plots is rastered at the

@@ -14,7 +14,7 @@ use crate::scenes::SceneChoice;
 /// Key of the settings in eframe's storage.
 pub const SETTINGS_KEY: &str = "flatland-viewer-settings";
 
-/// Which learner runs: the light-driven loop ([`kernel_fit::LightFit`], what `flatland solve`
+/// Which learner runs: the light-driven loop ([`flatland_light::LightFit`], what `flatland solve`
 /// runs by default) or a network ([`kernel_fit::Fit`], with [`Settings::preset`]'s parameters).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub enum LearnerChoice {

@@ -1,4 +1,4 @@
-//! The learner's thread and the UI's end of it. The thread owns the [`kernel_fit::LightFit`] or
+//! The learner's thread and the UI's end of it. The thread owns the [`flatland_light::LightFit`] or
 //! the [`kernel_fit::Fit`]; the UI
 //! talks to it with [`Command`]s and reads what it publishes from a [`Mailbox`] with
 //! `try_lock`, so a frame never waits for training. Each publication also wakes whoever waits
@@ -48,7 +48,7 @@ pub enum Command {
         /// The fit's parameters (of the network learners; the light-driven one keeps them
         /// for when the user switches back).
         params: FitParams,
-        /// Run the light-driven learner ([`kernel_fit::LightFit`]) instead of the network.
+        /// Run the light-driven learner ([`flatland_light::LightFit`]) instead of the network.
         light: bool,
     },
     /// New live parameters for the running fit (what else changes needs a new fit: `Reset`).

@@ -67,7 +67,6 @@
 
 mod error;
 mod fit;
-mod light;
 pub mod limits;
 mod model;
 mod params;
@@ -78,7 +77,6 @@ mod visibility;
 
 pub use error::FitError;
 pub use fit::{CellSnapshot, Fit, HistoryPoint, INPUT_DIM, LearnedKernel, Snapshot};
-pub use light::{LightFit, LightParams, LightStop, ProbeCell, Round};
 pub use limits::REFERENCE_SEED;
 pub use model::{MODEL_FORMAT, MODEL_VERSION, ModelFile, fingerprint_hex};
 pub use params::{

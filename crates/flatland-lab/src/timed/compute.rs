@@ -9,11 +9,11 @@ use flatland_baselines::{
     run_uniform, trace,
 };
 use flatland_geom::Kernel;
+use flatland_light::{LightFit, LightParams, LightStop};
 use flatland_solve::{
     DenseOperator, ExactMethod, Mesh, Representation, SolveParams, SparseOperator, Stop,
     TransferOperator, exact_operator, solve_errors, solve_operator, sweep_operator,
 };
-use kernel_fit::{LightFit, LightParams, LightStop};
 
 use super::{Contender, Scorer, Setting, TimedPlan, TimedRow};
 use crate::bench::{BenchRow, learner_row, paper_rows};

@@ -5,7 +5,7 @@ use crate::LabError;
 /// A method of the timed bench.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Contender {
-    /// The light-driven learner ([`kernel_fit::LightFit`]), swept by tolerance.
+    /// The light-driven learner ([`flatland_light::LightFit`]), swept by tolerance.
     Default,
     /// The θ-driven learner `flatland fit` trains, swept by cells.
     FirstShot,

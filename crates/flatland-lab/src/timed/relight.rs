@@ -460,7 +460,7 @@ pub fn relight(
     )
     .context("the exact solves of the lightings")?;
     exact.extend(others);
-    let tolerance = kernel_fit::LightParams::default().tolerance;
+    let tolerance = flatland_light::LightParams::default().tolerance;
     Ok(relight_all(&cx, tolerance, sweep, &relits, &exact))
 }
 

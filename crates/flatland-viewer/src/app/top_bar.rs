@@ -2,8 +2,9 @@
 //! message line under it (busy work, errors, notes, why the fit stopped).
 
 use egui::{Color32, DragValue, RichText};
+use flatland_light::LightStop;
 use flatland_solve::Errors;
-use kernel_fit::{FitParams, LightStop, Preset, StopReason};
+use kernel_fit::{FitParams, Preset, StopReason};
 
 use super::ViewerApp;
 use crate::worker::{LightRounds, Lit, Status};

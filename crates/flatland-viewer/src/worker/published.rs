@@ -5,8 +5,9 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use flatland_geom::{Kernel, Scene};
+use flatland_light::LightStop;
 use flatland_solve::Reference;
-use kernel_fit::{FitParams, FitSummary, HistoryPoint, LearnedKernel, LightStop, StopReason};
+use kernel_fit::{FitParams, FitSummary, HistoryPoint, LearnedKernel, StopReason};
 
 use crate::lit::{LitPoint, LitSetup, LitSolve};
 use crate::prefix::Prefix;

@@ -1,4 +1,4 @@
-//! The light-driven learner ([`kernel_fit::LightFit`], docs/ALGORITHM.md §4a) on the learner's
+//! The light-driven learner ([`flatland_light::LightFit`], docs/ALGORITHM.md §4a) on the learner's
 //! thread: rounds on the lit view's mesh, each published with its lit `B`, its estimated and
 //! measured error, and its new cells revealed over time.
 //!
@@ -13,8 +13,9 @@
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+use flatland_light::{LightFit, LightParams, LightStop};
 use flatland_solve::{Representation, solve_errors};
-use kernel_fit::{FitParams, LightFit, LightParams, LightStop};
+use kernel_fit::FitParams;
 use rayon::prelude::*;
 
 use super::Learner;

@@ -10,7 +10,7 @@ use flatland_solve::{Mesh, SolveParams, Stop, Sweep, TransferOperator, solve_lin
 use super::probes::{ProbeCell, Probes};
 use super::rows::Rows;
 use super::{LightParams, LightStop, Round, borrow, probe};
-use crate::FitError;
+use crate::LightError;
 
 /// Relative residual of a round's solve: the ranking and the estimate need a few digits of B,
 /// not ten; the round that stops polishes its B to the solve's own tolerance.
@@ -18,8 +18,8 @@ const ROUND_TOLERANCE: f64 = 1e-7;
 /// Relative residual of the estimate's solve: the estimate is a figure of one or two digits.
 const ESTIMATE_TOLERANCE: f64 = 1e-3;
 
-/// A light-driven fit of one scene on one mesh (see the module docs of `light` and
-/// docs/ALGORITHM.md §4a): [`LightFit::round`] or [`LightFit::run`], then read the solved
+/// A light-driven fit of one scene on one mesh (see the crate docs and docs/ALGORITHM.md
+/// §4a): [`LightFit::round`] or [`LightFit::run`], then read the solved
 /// radiosity, the estimated error and the cells, or solve with it as a
 /// [`Representation`](flatland_solve::Representation).
 ///
@@ -27,14 +27,14 @@ const ESTIMATE_TOLERANCE: f64 = 1e-3;
 /// use std::sync::Arc;
 /// use flatland_geom::{Kernel, generate};
 /// use flatland_solve::{Mesh, never};
-/// use kernel_fit::{LightFit, LightParams};
+/// use flatland_light::{LightFit, LightParams};
 ///
 /// let kernel = Arc::new(Kernel::new(generate::floor_plan(80, 1).unwrap()));
 /// let mesh = Mesh::new(&kernel, Mesh::default_elements(kernel.scene())).unwrap();
 /// let mut fit = LightFit::new(kernel, mesh, LightParams::default(), &never).unwrap();
 /// let stopped = fit.run(&never, |_| {}).unwrap();
 /// let last = fit.history().last().unwrap();
-/// assert!(last.estimated_error <= 0.01 || stopped != kernel_fit::LightStop::Tolerance);
+/// assert!(last.estimated_error <= 0.01 || stopped != flatland_light::LightStop::Tolerance);
 /// assert!(fit.radiosity().iter().all(|&b| b >= 0.0));
 /// ```
 #[derive(Clone)]
@@ -62,7 +62,7 @@ impl LightFit {
         mesh: Mesh,
         params: LightParams,
         _stop: &Stop,
-    ) -> Result<LightFit, FitError> {
+    ) -> Result<LightFit, LightError> {
         params.check()?;
         let sweep = Sweep::new(&kernel, &mesh)?;
         Ok(LightFit {
@@ -85,7 +85,7 @@ impl LightFit {
     /// unless the estimate meets the tolerance or a budget ran out, probe the gaps the most
     /// uncertain light flows through. `Some` once it has stopped; later calls return the same
     /// reason and do nothing.
-    pub fn round(&mut self, stop: &Stop) -> Result<Option<LightStop>, FitError> {
+    pub fn round(&mut self, stop: &Stop) -> Result<Option<LightStop>, LightError> {
         if self.stopped.is_some() {
             return Ok(self.stopped);
         }
@@ -122,7 +122,7 @@ impl LightFit {
         &mut self,
         stop: &Stop,
         mut on_round: impl FnMut(&LightFit),
-    ) -> Result<LightStop, FitError> {
+    ) -> Result<LightStop, LightError> {
         loop {
             let stopped = self.round(stop)?;
             on_round(self);
@@ -133,7 +133,7 @@ impl LightFit {
     }
 
     /// The probes of the first round and every row they bracket.
-    fn first_probes(&mut self, stop: &Stop) -> Result<(), FitError> {
+    fn first_probes(&mut self, stop: &Stop) -> Result<(), LightError> {
         let first = self.probes.first();
         let rows = Arc::make_mut(&mut self.rows);
         probe(
@@ -165,7 +165,7 @@ impl LightFit {
     /// The relative L2 error of `B − E` the rows' doubt leaves: each row's uncertain light
     /// `doubt`, carried through the bounces by `(I − K)⁻¹`, over `‖B − E‖` (element lengths
     /// as weights).
-    fn estimate(&self, doubt: &[f64], stop: &Stop) -> Result<f64, FitError> {
+    fn estimate(&self, doubt: &[f64], stop: &Stop) -> Result<f64, LightError> {
         if doubt.iter().all(|&d| d == 0.0) {
             return Ok(0.0);
         }
@@ -193,7 +193,12 @@ impl LightFit {
 
     /// Probes the middle of the gaps the most uncertain power flows through, and rebuilds
     /// the rows of those gaps.
-    fn refine(&mut self, doubt: &[f64], estimated_error: f64, stop: &Stop) -> Result<(), FitError> {
+    fn refine(
+        &mut self,
+        doubt: &[f64],
+        estimated_error: f64,
+        stop: &Stop,
+    ) -> Result<(), LightError> {
         let elements = self.mesh.elements();
         let mut gaps: Vec<(f64, usize, usize)> = self
             .probes
@@ -244,7 +249,7 @@ impl LightFit {
 
     /// Changes the stop rules (tolerance, budgets) of a fit that may be running; a fit that
     /// had stopped goes on if the new ones ask for more.
-    pub fn set_params(&mut self, params: LightParams) -> Result<(), FitError> {
+    pub fn set_params(&mut self, params: LightParams) -> Result<(), LightError> {
         params.check()?;
         self.params = params;
         if self.stopped != Some(LightStop::Exact) {

@@ -1,13 +1,15 @@
-//! Learning driven by the light that flows: the default learner alternates solving and learning
-//! until the lit scene meets a tolerance (docs/ALGORITHM.md §4a).
+//! Learning driven by the light that flows: the default learner of `flatland solve`, which
+//! alternates solving and learning until the lit scene meets a tolerance (docs/ALGORITHM.md §4a).
+//! It needs the scene's geometry and the solver (`flatland_geom`, `flatland_solve`), not the
+//! network of `kernel-fit`: its cells are probes along the surfaces, grown in one dimension.
 //!
 //! The paper weights what is learned by the first shot `E'` only; its future work is to couple
 //! the learner to the energy transfer. Here the coupling is the loop itself. On a mesh of the
 //! scene the learner's cells are **probes**: the exact view of one receiver element's midpoint
 //! (what it sees, by the visibility sweep), kept as positions along the surfaces it sees so
-//! that the elements between two probes of a section can borrow both views ([`Probes`]).
+//! that the elements between two probes of a section can borrow both views (module `probes`).
 //! Their rows blend the two, exact where the views agree, and carry a *doubt* where they
-//! disagree ([`Rows`]). Each **round**:
+//! disagree (module `rows`). Each **round**:
 //!
 //! 1. solves `B = E + K B` with the current operator (warm-started from the last round's B);
 //! 2. estimates the error of `B − E` the doubt leaves — each row's uncertain light
@@ -22,8 +24,29 @@
 //! the gaps whose views disagree about that door rise in the ranking: the loop follows the
 //! bounces, not just the lamps. A probe costs one sweep (about `log n` plus what the point
 //! sees), a borrowed row a closed form per stretch seen, so nothing is quadratic in the edges.
+//!
+//! ```
+//! use std::sync::Arc;
+//! use flatland_geom::{Kernel, generate};
+//! use flatland_light::{LightFit, LightParams, LightStop};
+//! use flatland_solve::{Mesh, never};
+//!
+//! // A generated floor plan of about 80 edges, meshed as `flatland solve` meshes it.
+//! let kernel = Arc::new(Kernel::new(generate::floor_plan(80, 1)?));
+//! let mesh = Mesh::new(&kernel, Mesh::default_elements(kernel.scene()))?;
+//! let mut fit = LightFit::new(kernel, mesh, LightParams::default(), &never)?;
+//! let stopped = fit.run(&never, |_| {})?;
+//! // It stops at the default tolerance (1 % of B − E, as it estimates it) or has no doubt left.
+//! assert!(matches!(stopped, LightStop::Tolerance | LightStop::Exact));
+//! assert!(fit.estimated_error().unwrap() <= 0.01);
+//! assert!(fit.radiosity().iter().all(|&b| b >= 0.0));
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+#![deny(missing_docs)]
 
 mod driver;
+mod error;
 mod probes;
 mod represent;
 mod rows;
@@ -32,9 +55,9 @@ use flatland_solve::{Mesh, ProbeBuffers, SeenSpan, Stop, Sweep};
 use rayon::prelude::*;
 
 pub use driver::LightFit;
+pub use error::LightError;
 pub use probes::ProbeCell;
 
-use crate::FitError;
 use probes::{Bracket, Probes};
 use rows::{Entry, Rows};
 
@@ -66,9 +89,9 @@ impl Default for LightParams {
 
 impl LightParams {
     /// Checks every field; the error names it and its valid range.
-    pub fn check(&self) -> Result<(), FitError> {
+    pub fn check(&self) -> Result<(), LightError> {
         let bad = |name: &'static str, value: String, valid: &'static str| {
-            Err(FitError::InvalidParameter { name, value, valid })
+            Err(LightError::InvalidParameter { name, value, valid })
         };
         if !(self.tolerance > 0.0 && self.tolerance < 1.0) {
             return bad("tolerance", self.tolerance.to_string(), "in (0, 1)");
@@ -122,12 +145,12 @@ fn probe(
     probes: &mut Probes,
     rows: &mut Rows,
     stop: &Stop,
-) -> Result<(), FitError> {
+) -> Result<(), LightError> {
     let seen: Vec<Probed> = elements
         .par_iter()
         .map_init(ProbeBuffers::default, |buffers, &i| {
             if stop() {
-                return Err(FitError::Interrupted);
+                return Err(LightError::Interrupted);
             }
             let (mut row, mut spans) = (Vec::new(), Vec::new());
             sweep.probe(mesh, i, buffers, &mut row, &mut spans);
@@ -152,7 +175,7 @@ fn borrow(
     probes: &Probes,
     rows: &mut Rows,
     stop: &Stop,
-) -> Result<(), FitError> {
+) -> Result<(), LightError> {
     let built: Vec<Option<Vec<Entry>>> = elements
         .par_iter()
         .with_min_len(16)
@@ -160,7 +183,7 @@ fn borrow(
             || (Vec::new(), Vec::new()),
             |(left, right), &i| {
                 if stop() {
-                    return Err(FitError::Interrupted);
+                    return Err(LightError::Interrupted);
                 }
                 Ok(match probes.bracket(mesh, i) {
                     // Its own probe set its exact row.
