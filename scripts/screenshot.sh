@@ -33,8 +33,13 @@ if ! command -v xvfb-run >/dev/null || ! command -v import >/dev/null; then
         || { apt-get update >/dev/null && apt-get install -y --no-install-recommends xvfb xauth imagemagick >/dev/null; }
 fi
 
-nice -n 10 cargo build --release -p flatland-viewer --example viewer
-BIN="${CARGO_TARGET_DIR:-target}/release/examples/viewer"
+# VIEWER_BIN=path runs that viewer binary instead of building one (to compare two builds).
+if [ -n "${VIEWER_BIN:-}" ]; then
+    BIN="$VIEWER_BIN"
+else
+    nice -n 10 cargo build --release -p flatland-viewer --example viewer
+    BIN="${CARGO_TARGET_DIR:-target}/release/examples/viewer"
+fi
 mkdir -p "$(dirname "$OUT")"
 LOG="$(mktemp)"
 RUNTIME_DIR="$(mktemp -d)"

@@ -21,7 +21,9 @@ pub struct Series {
 
 const WIDTH: u32 = 900;
 const HEIGHT: u32 = 600;
-const PALETTE: [RGBColor; 8] = [
+/// Twelve distinct colours: a scaling plot has two scenes × five methods, and a colour that
+/// came round again would make two curves one.
+const PALETTE: [RGBColor; 12] = [
     RGBColor(31, 119, 180),
     RGBColor(255, 127, 14),
     RGBColor(44, 160, 44),
@@ -30,6 +32,10 @@ const PALETTE: [RGBColor; 8] = [
     RGBColor(140, 86, 75),
     RGBColor(227, 119, 194),
     RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
+    RGBColor(0, 0, 0),
+    RGBColor(174, 199, 232),
 ];
 
 /// Registers the one font every picture uses (once per process; later calls do nothing).

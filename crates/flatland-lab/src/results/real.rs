@@ -190,11 +190,19 @@ pub fn summary(doc: &mut String, real: &Real) -> Result<()> {
     Ok(())
 }
 
+/// Two errors printed with the fewest digits (four at least) that tell them apart, so a
+/// sentence never says one beats the other at equal numbers; "nothing" for no row.
+fn distinguished(a: Option<f64>, b: Option<f64>) -> (String, String) {
+    let text =
+        |e: Option<f64>, digits: usize| e.map_or("nothing".to_owned(), |e| format!("{e:.digits$}"));
+    let digits = (4..=8).find(|&d| text(a, d) != text(b, d)).unwrap_or(8);
+    (text(a, digits), text(b, digits))
+}
+
 /// Sentences computed from the rows: where the exact solve beats the learner, whether the
 /// learner's curve lies at or below HR's, and relighting.
 fn verdicts(real: &Real) -> Vec<String> {
     let mut lines = Vec::new();
-    let text = |e: Option<f64>| e.map_or("nothing".to_owned(), |e| format!("{e:.4}"));
     for s in &real.scenes {
         let mut exact_wins = Vec::new();
         for t in WITHIN_SECONDS {
@@ -203,7 +211,8 @@ fn verdicts(real: &Real) -> Vec<String> {
                 best_within(&s.rows, Contender::Exact, t),
             );
             if x.is_some_and(|x| d.is_none_or(|d| x < d)) {
-                exact_wins.push(format!("{t} s: exact {} against {}", text(x), text(d)));
+                let (x, d) = distinguished(x, d);
+                exact_wins.push(format!("{t} s: exact {x} against {d}"));
             }
         }
         if exact_wins.is_empty() {
@@ -334,6 +343,18 @@ pub fn sections(doc: &mut String, real: &Real) -> Result<()> {
 mod tests {
     use super::*;
     use crate::timed::Setting;
+
+    #[test]
+    fn errors_that_differ_are_printed_so_they_differ() {
+        let pair = |a, b| distinguished(Some(a), Some(b));
+        assert_eq!(pair(0.0021, 0.0048), ("0.0021".into(), "0.0048".into()));
+        assert_eq!(pair(0.00402, 0.00404), ("0.00402".into(), "0.00404".into()));
+        assert_eq!(pair(0.5, 0.5), ("0.50000000".into(), "0.50000000".into()));
+        assert_eq!(
+            distinguished(Some(0.1), None),
+            ("0.1000".into(), "nothing".into())
+        );
+    }
 
     fn row(method: Contender, total_s: f64, error: f64) -> TimedRow {
         let mut r = TimedRow::new(method, Setting::Budget(1), 1);
