@@ -12,9 +12,10 @@
 #
 # docs/viewer.png is `scripts/screenshot.sh 12 docs/viewer.png`: the default launch (the floor
 # plan, 20 cells per second). The growth check is `scripts/screenshot.sh 6,12 /tmp/growth.png`;
-# the large-scene frame rate `scripts/screenshot.sh 40 /tmp/big.png --scene floorplan-1000
-# --cells 6400 --growth max`. With xdotool installed the pointer is parked on the controls
-# panel, so no hover readout covers the plots.
+# the large-scene frame rate `scripts/screenshot.sh 4 /tmp/big.png --scene floorplan-1000`
+# (while it learns: once the learner stops, the window draws no more frames). With xdotool
+# installed the pointer is parked on the top bar's status text, so no hover readout or tooltip
+# covers the picture.
 #
 # Needs: xvfb-run, Xvfb and ImageMagick's `import` and `compare` (apt-get install -y
 # --no-install-recommends xvfb imagemagick) and Mesa's GL (libgl1-mesa-dri, libegl-mesa0;
@@ -58,7 +59,7 @@ env -u WAYLAND_DISPLAY XDG_RUNTIME_DIR="$RUNTIME_DIR" \
         "$bin" --fresh --fps-log "$@" 2>"$log" &
         pid=$!
         start=$(date +%s%N)
-        if command -v xdotool >/dev/null; then xdotool mousemove 130 790 || true; fi
+        if command -v xdotool >/dev/null; then xdotool mousemove 1100 12 || true; fi
         read -r -a ts <<<"$times"; read -r -a ns <<<"$names"
         for i in "${!ts[@]}"; do
             wait_ms=$(( ${ts[$i]} * 1000 - ($(date +%s%N) - start) / 1000000 ))
