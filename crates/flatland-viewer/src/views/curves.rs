@@ -146,10 +146,19 @@ pub fn curves(ui: &mut egui::Ui, history: &[HistoryPoint], lit: Option<&Lit>) {
         error_plot(&mut cols[0], "err-steps", &|pt| pt.steps as f64, &|pt| {
             pt.steps as f64
         });
-        cols[1].label("rel. L2 vs rays cast");
-        error_plot(&mut cols[1], "err-rays", &|pt| pt.rays as f64, &|pt| {
-            pt.rays as f64
-        });
+        // The light-driven learner casts no ray (its probes sweep whole views): its cost is
+        // its probes, so its errors are plotted against them.
+        if rounds {
+            cols[1].label("rel. L2 vs probes");
+            error_plot(&mut cols[1], "err-rays", &|pt| pt.rays as f64, &|pt| {
+                pt.cells as f64
+            });
+        } else {
+            cols[1].label("rel. L2 vs rays cast");
+            error_plot(&mut cols[1], "err-rays", &|pt| pt.rays as f64, &|pt| {
+                pt.rays as f64
+            });
+        }
         if let Some(lit) = lit {
             cols[3].label("B(s): learned vs exact");
             b_curves(&mut cols[3], lit, h);
