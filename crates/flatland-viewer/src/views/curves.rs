@@ -163,33 +163,49 @@ pub fn curves(ui: &mut egui::Ui, history: &[HistoryPoint], lit: Option<&Lit>) {
             cols[3].label("B(s): learned vs exact");
             b_curves(&mut cols[3], lit, h);
         }
-        cols[2].label(if rounds {
-            "cells vs rounds"
-        } else {
-            "cells and samples vs steps"
-        });
-        Plot::new("counts")
-            .height(h)
-            .include_y(0.0)
-            .legend(Legend::default())
-            .allow_scroll(false)
-            .allow_zoom(false)
-            .allow_drag(false)
-            .show(&mut cols[2], |p| {
-                p.line(curve("cells", series(&|h| [h.steps as f64, h.cells as f64])).width(2.5));
-                if rounds {
-                    p.line(
-                        curve("cells", lit_series(&|h| [h.steps as f64, h.cells as f64]))
-                            .width(2.5),
-                    );
-                }
-                p.line(
-                    curve(
-                        "samples / 20",
-                        series(&|h| [h.steps as f64, h.samples as f64 / 20.0]),
-                    )
-                    .style(LineStyle::dashed_dense()),
-                );
-            });
+        counts(&mut cols[2], history, lit_history, rounds, h);
     });
+}
+
+/// Cells and samples against steps; for the light-driven learner (`rounds`), its cells against
+/// rounds.
+fn counts(
+    ui: &mut egui::Ui,
+    history: &[HistoryPoint],
+    lit_history: &[LitPoint],
+    rounds: bool,
+    height: f32,
+) {
+    ui.label(if rounds {
+        "cells vs rounds"
+    } else {
+        "cells and samples vs steps"
+    });
+    let series = |f: &dyn Fn(&HistoryPoint) -> [f64; 2]| -> PlotPoints<'static> {
+        history.iter().map(f).collect()
+    };
+    Plot::new("counts")
+        .height(height)
+        .include_y(0.0)
+        .legend(Legend::default())
+        .allow_scroll(false)
+        .allow_zoom(false)
+        .allow_drag(false)
+        .show(ui, |p| {
+            p.line(curve("cells", series(&|h| [h.steps as f64, h.cells as f64])).width(2.5));
+            if rounds {
+                let cells: PlotPoints<'static> = lit_history
+                    .iter()
+                    .map(|h| [h.steps as f64, h.cells as f64])
+                    .collect();
+                p.line(curve("cells", cells).width(2.5));
+            }
+            p.line(
+                curve(
+                    "samples / 20",
+                    series(&|h| [h.steps as f64, h.samples as f64 / 20.0]),
+                )
+                .style(LineStyle::dashed_dense()),
+            );
+        });
 }
