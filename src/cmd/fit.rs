@@ -171,6 +171,13 @@ pub fn run(args: &Args) -> Result<()> {
             params.validate()?;
             let reference = Arc::new(flatland_lab::reference(&kernel, args.res, &params));
             interrupt::check()?;
+            // Listing the pairs whose visibility varies takes a minute on a floor plan of 10⁴
+            // edges, and does not yet look at Ctrl-C: say what is happening.
+            eprintln!(
+                "fit of {label}: setting up the sampler over {} surface edges (Ctrl-C is \
+                 honoured once it is set up)",
+                kernel.scene().surface_edges().len()
+            );
             (Fit::new(Arc::new(kernel), reference, params)?, label)
         }
     };
