@@ -79,6 +79,18 @@ fn b_curves(ui: &mut egui::Ui, lit: &Lit, height: f32) {
         });
 }
 
+/// A plot of `height` with a legend and y from 0, fixed in place (no scroll, zoom or drag):
+/// the curves follow the run, not the pointer.
+fn fixed_plot(id: &str, height: f32) -> Plot<'_> {
+    Plot::new(id)
+        .height(height)
+        .include_y(0.0)
+        .legend(Legend::default())
+        .allow_scroll(false)
+        .allow_zoom(false)
+        .allow_drag(false)
+}
+
 /// A learning curve. Never aggregated into a band: egui_plot fills the span of points that share
 /// a pixel column, which turned a vertical drop (errors falling while the rays stay the same)
 /// into a filled wedge.
@@ -114,28 +126,21 @@ pub fn curves(ui: &mut egui::Ui, history: &[HistoryPoint], lit: Option<&Lit>) {
                       id: &str,
                       x: &dyn Fn(&HistoryPoint) -> f64,
                       lit_x: &dyn Fn(&LitPoint) -> f64| {
-        Plot::new(id)
-            .height(h)
-            .include_y(0.0)
-            .legend(Legend::default())
-            .allow_scroll(false)
-            .allow_zoom(false)
-            .allow_drag(false)
-            .show(ui, |p| {
+        fixed_plot(id, h).show(ui, |p| {
+            p.line(curve(
+                "ζ held out",
+                series(&|pt| [x(pt), pt.rel_l2_heldout]),
+            ));
+            if !lit_history.is_empty() {
                 p.line(curve(
-                    "ζ held out",
-                    series(&|pt| [x(pt), pt.rel_l2_heldout]),
+                    "solved B − E",
+                    lit_series(&|pt| [lit_x(pt), pt.rel_l2_reflected]),
                 ));
-                if !lit_history.is_empty() {
-                    p.line(curve(
-                        "solved B − E",
-                        lit_series(&|pt| [lit_x(pt), pt.rel_l2_reflected]),
-                    ));
-                }
-                if let Some(line) = estimated(lit_x) {
-                    p.line(line);
-                }
-            });
+            }
+            if let Some(line) = estimated(lit_x) {
+                p.line(line);
+            }
+        });
     };
     ui.columns(columns, |cols| {
         cols[0].label(if rounds {
@@ -148,17 +153,13 @@ pub fn curves(ui: &mut egui::Ui, history: &[HistoryPoint], lit: Option<&Lit>) {
         });
         // The light-driven learner casts no ray (its probes sweep whole views): its cost is
         // its probes, so its errors are plotted against them.
-        if rounds {
-            cols[1].label("rel. L2 vs probes");
-            error_plot(&mut cols[1], "err-rays", &|pt| pt.rays as f64, &|pt| {
-                pt.cells as f64
-            });
+        let (label, cost): (_, &dyn Fn(&LitPoint) -> f64) = if rounds {
+            ("rel. L2 vs probes", &|pt| pt.cells as f64)
         } else {
-            cols[1].label("rel. L2 vs rays cast");
-            error_plot(&mut cols[1], "err-rays", &|pt| pt.rays as f64, &|pt| {
-                pt.rays as f64
-            });
-        }
+            ("rel. L2 vs rays cast", &|pt| pt.rays as f64)
+        };
+        cols[1].label(label);
+        error_plot(&mut cols[1], "err-rays", &|pt| pt.rays as f64, cost);
         if let Some(lit) = lit {
             cols[3].label("B(s): learned vs exact");
             b_curves(&mut cols[3], lit, h);
@@ -184,28 +185,21 @@ fn counts(
     let series = |f: &dyn Fn(&HistoryPoint) -> [f64; 2]| -> PlotPoints<'static> {
         history.iter().map(f).collect()
     };
-    Plot::new("counts")
-        .height(height)
-        .include_y(0.0)
-        .legend(Legend::default())
-        .allow_scroll(false)
-        .allow_zoom(false)
-        .allow_drag(false)
-        .show(ui, |p| {
-            p.line(curve("cells", series(&|h| [h.steps as f64, h.cells as f64])).width(2.5));
-            if rounds {
-                let cells: PlotPoints<'static> = lit_history
-                    .iter()
-                    .map(|h| [h.steps as f64, h.cells as f64])
-                    .collect();
-                p.line(curve("cells", cells).width(2.5));
-            }
-            p.line(
-                curve(
-                    "samples / 20",
-                    series(&|h| [h.steps as f64, h.samples as f64 / 20.0]),
-                )
-                .style(LineStyle::dashed_dense()),
-            );
-        });
+    fixed_plot("counts", height).show(ui, |p| {
+        p.line(curve("cells", series(&|h| [h.steps as f64, h.cells as f64])).width(2.5));
+        if rounds {
+            let cells: PlotPoints<'static> = lit_history
+                .iter()
+                .map(|h| [h.steps as f64, h.cells as f64])
+                .collect();
+            p.line(curve("cells", cells).width(2.5));
+        }
+        p.line(
+            curve(
+                "samples / 20",
+                series(&|h| [h.steps as f64, h.samples as f64 / 20.0]),
+            )
+            .style(LineStyle::dashed_dense()),
+        );
+    });
 }

@@ -4,12 +4,12 @@
 //!
 //! Why the cells of a round are revealed over time: a round is a solve and a batch of probes,
 //! and on the default floor plan the loop meets its tolerance in 4 rounds and under 0.2 s —
-//! over before the window has drawn its first frame. Most of its cells come in one round
-//! (about 400 of 430 there), so a round may take [`ROUND_SECONDS`]: at 2 s the whole run was
-//! shown in 3 s and two screenshots at 6 s and 12 s were the same picture. So a round's new cells appear in the
+//! over before the window has drawn its first frame. So a round's new cells appear in the
 //! order they were learned, at the pace of growth asked for but never slower than the whole
 //! round in [`ROUND_SECONDS`] of wall time (rounds double in size, so a fixed pace would make
-//! the last rounds last minutes); the next round runs once they are all shown. The lit scene
+//! the last rounds last minutes); the next round runs once they are all shown. Most cells
+//! come in one round (about 400 of 430 there): at 2 s a round, the whole run was shown in 3 s
+//! and screenshots at 6 s and 12 s were the same picture. The lit scene
 //! changes with each round's solve. With no pace ("max") rounds run as fast as they come.
 
 use std::sync::Arc;
