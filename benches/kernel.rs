@@ -2,7 +2,9 @@
 //! edge of the scene, no culling: 7 edges, then 6001) vs accelerated (shaft cache per parent
 //! edge pair + BVH), single thread vs the rayon batch API (on every core, and in a pool of one
 //! thread: the batch path's cost per sample against the single path's). `scaling/*`: a box room
-//! with 10 to 10 000 random blockers, single and batch.
+//! with 10 to 10 000 random blockers, single and batch. `varying_pairs/*`: listing the pairs
+//! whose visibility varies (what the default network learner samples) on generated plans of
+//! about 1000 and 3000 edges, a new kernel each time (a kernel keeps its list).
 //!
 //! Run: `cargo bench --bench kernel`. Throughput is reported in samples (elements) per second.
 
@@ -107,6 +109,31 @@ fn blocker_scaling(c: &mut Criterion) {
     group.finish();
 }
 
+fn varying_pairs(c: &mut Criterion) {
+    let mut group = c.benchmark_group("varying_pairs");
+    group.sample_size(10);
+    for (name, scene) in [
+        (
+            "floorplan_1000",
+            flatland_geom::generate::floor_plan(1000, 5),
+        ),
+        ("hall_1000", flatland_geom::generate::hall(1000, 6)),
+        (
+            "floorplan_3000",
+            flatland_geom::generate::floor_plan(3000, 5),
+        ),
+    ] {
+        let scene = scene.expect("a generated scene");
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                let kernel = Kernel::new(scene.clone());
+                black_box(kernel.varying_pairs().pairs.len())
+            });
+        });
+    }
+    group.finish();
+}
+
 fn one_thread() -> rayon::ThreadPool {
     rayon::ThreadPoolBuilder::new()
         .num_threads(1)
@@ -121,5 +148,5 @@ fn quick() -> Criterion {
         .measurement_time(Duration::from_secs(2))
 }
 
-criterion_group! { name = benches; config = quick(); targets = kernel_samples, brute_force_pieces, blocker_scaling }
+criterion_group! { name = benches; config = quick(); targets = kernel_samples, brute_force_pieces, blocker_scaling, varying_pairs }
 criterion_main!(benches);

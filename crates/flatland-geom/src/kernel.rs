@@ -10,6 +10,8 @@ mod values;
 mod varying;
 mod visible;
 
+use std::sync::OnceLock;
+
 use glam::DVec2;
 
 use crate::scene::{Role, Scene};
@@ -65,6 +67,8 @@ pub struct Kernel {
     surface_parents: Vec<usize>,
     /// The shafts of the pairs asked about, by ranks.
     shafts: PairCache,
+    /// The pairs whose visibility varies, once listed ([`Kernel::varying_pairs`]).
+    varying: OnceLock<VaryingPairs>,
 }
 
 impl std::fmt::Debug for Kernel {
@@ -129,6 +133,7 @@ impl Kernel {
             bvh,
             surface_parents,
             shafts,
+            varying: OnceLock::new(),
         }
     }
 

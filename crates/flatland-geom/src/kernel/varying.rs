@@ -9,6 +9,14 @@
 //! such pair (in a convex room the walls lie on every hull's boundary), nor does one that a
 //! single edge cuts through (every segment between its two clusters crosses that edge), nor
 //! one whose edges on one side all have the other side behind them (no pair faces).
+//!
+//! The walk costs what its tests cost, so each is made to look at little: the edge that cuts
+//! a bundle is sought by the tree among the edges crossing one short probe between the two
+//! clusters, and the edges that may meet a bundle's interior are passed down as the part of
+//! the parent's list after the first one found inside (a bundle is settled only when none is,
+//! so the search usually stops at that first one).
+
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::DVec2;
 
@@ -44,8 +52,17 @@ const PARALLEL_PAIRS: usize = 1 << 12;
 /// this many pairs of vertices (the test takes one orientation per pair).
 const MAX_CUT_TEST: usize = 1 << 10;
 
+/// A bundle is tested for one edge cutting all of it only while one of its clusters has at
+/// most this many edges: between two large ones a single edge rarely cuts every segment, and
+/// the probe for it is long (on a floor plan of 10⁴ edges this takes a fifth off the walk).
+const MAX_CUT_CLUSTER: usize = 8;
+
 /// A cluster is tested for hiding the other of its bundle while it has at most this many edges.
 const MAX_HIDING_TEST: usize = 4;
+
+/// A single pair is classified at once, rather than first looking for an edge inside its hull,
+/// when more than this many edges may be there (classifying takes the tree's few).
+const MAX_PAIR_SCAN: usize = 64;
 
 /// A cluster of surface edges: a node of a median-split tree over the surface ranks.
 struct Cluster {
@@ -56,6 +73,12 @@ struct Cluster {
     hull: Hull,
     /// Its two halves (`None` for one edge).
     halves: Option<(usize, usize)>,
+}
+
+impl Cluster {
+    fn is_one_edge(&self) -> bool {
+        self.halves.is_none()
+    }
 }
 
 /// The clusters of a scene's surface edges, `clusters[0]` all of them.
@@ -74,16 +97,34 @@ impl Kernel {
     /// room of `n` walls and a box classifies `O(n)` pairs, not `n²` (4096 walls: 8220 pairs,
     /// every one of them varying); a floor plan, where rooms see each other through doors,
     /// about as many as vary (1032 edges: 16 343 for 15 445).
+    ///
+    /// Listed once per kernel and kept (8 bytes a pair).
     #[must_use]
-    pub fn varying_pairs(&self) -> VaryingPairs {
-        if self.surface_parents.is_empty() {
-            return VaryingPairs::default();
-        }
-        let tree = Tree::new(self);
-        let near: Vec<u32> = (0..self.segments.len() as u32).collect();
-        let mut found = tree.walk(self, 0, 0, &near);
-        found.pairs.sort_unstable();
-        found
+    pub fn varying_pairs(&self) -> &VaryingPairs {
+        self.varying_pairs_counting(&AtomicU64::new(0))
+    }
+
+    /// [`Kernel::varying_pairs`], adding to `decided` the pairs of surface edges decided as the
+    /// walk goes (from another thread, `decided / ` [`Kernel::surface_pairs`] is its
+    /// progress). Nothing is added when the pairs were listed before.
+    pub fn varying_pairs_counting(&self, decided: &AtomicU64) -> &VaryingPairs {
+        self.varying.get_or_init(|| {
+            if self.surface_parents.is_empty() {
+                return VaryingPairs::default();
+            }
+            let tree = Tree::new(self);
+            let near: Vec<u32> = (0..self.segments.len() as u32).collect();
+            let mut found = tree.walk(self, 0, 0, &near, decided);
+            found.pairs.sort_unstable();
+            found
+        })
+    }
+
+    /// The unordered pairs of distinct surface parents, `n (n − 1) / 2`.
+    #[must_use]
+    pub fn surface_pairs(&self) -> u64 {
+        let n = self.surface_parents.len() as u64;
+        n * n.saturating_sub(1) / 2
     }
 }
 
@@ -95,12 +136,25 @@ impl Tree {
         Tree { ranks, clusters }
     }
 
+    /// The pairs of bundle `(a, b)` (of cluster `a` with itself when `a == b`).
+    fn pairs(&self, a: usize, b: usize) -> u64 {
+        let (la, lb) = (self.clusters[a].len as u64, self.clusters[b].len as u64);
+        if a == b { la * (la - 1) / 2 } else { la * lb }
+    }
+
     /// The varying pairs between clusters `a` and `b` (within `a` when `a == b`); `near` holds
-    /// every edge that may meet the interior of their hull (those that meet the hull of the
-    /// bundle this one is part of).
-    fn walk(&self, kernel: &Kernel, a: usize, b: usize, near: &[u32]) -> VaryingPairs {
+    /// every edge that may meet the interior of their hull (a tail of the list of the bundle
+    /// this one is part of). The pairs settled are added to `decided`.
+    fn walk(
+        &self,
+        kernel: &Kernel,
+        a: usize,
+        b: usize,
+        near: &[u32],
+        decided: &AtomicU64,
+    ) -> VaryingPairs {
         let (ca, cb) = (&self.clusters[a], &self.clusters[b]);
-        if a == b && ca.halves.is_none() {
+        if a == b && ca.is_one_edge() {
             return VaryingPairs::default(); // an edge with itself: k = 0
         }
         let mut found = VaryingPairs {
@@ -108,6 +162,7 @@ impl Tree {
             ..VaryingPairs::default()
         };
         let Some(near) = self.unsettled(kernel, a, b, near) else {
+            decided.fetch_add(self.pairs(a, b), Ordering::Relaxed);
             return found;
         };
         let parts: Vec<(usize, usize)> = match (ca.halves, cb.halves) {
@@ -121,6 +176,7 @@ impl Tree {
                 if kernel.pair_class(r0, r1) == PairClass::Varies {
                     found.pairs.push((r0.min(r1), r0.max(r1)));
                 }
+                decided.fetch_add(1, Ordering::Relaxed);
                 return found;
             }
             // Halve both clusters where they are of a size, else the larger.
@@ -132,17 +188,38 @@ impl Tree {
             (Some((l, r)), _) => vec![(l, b), (r, b)],
         };
         let parallel = ca.len * cb.len >= PARALLEL_PAIRS;
-        found.merge(self.walk_parts(kernel, &parts, &near, parallel))
+        found.merge(self.walk_parts(kernel, &parts, near, parallel, decided))
     }
 
-    /// The edges that meet the interior of the hull of bundle `(a, b)` (of those in `near`),
-    /// or `None` when geometry settles every pair in it: no pair faces, one edge cuts all of
-    /// them (every pair is hidden or never faces), or no edge meets the hull's interior (every
-    /// pair is clear or never faces).
-    fn unsettled(&self, kernel: &Kernel, a: usize, b: usize, near: &[u32]) -> Option<Vec<u32>> {
+    /// The tail of `near` from the first edge that meets the interior of the hull of bundle
+    /// `(a, b)` (every later edge that does is in it), or `None` when geometry settles every
+    /// pair in it: no pair faces, one edge cuts all of them (every pair is hidden or never
+    /// faces), or no edge meets the hull's interior (every pair is clear or never faces).
+    fn unsettled<'n>(
+        &self,
+        kernel: &Kernel,
+        a: usize,
+        b: usize,
+        near: &'n [u32],
+    ) -> Option<&'n [u32]> {
         let (ca, cb) = (&self.clusters[a], &self.clusters[b]);
         if a != b && (self.hides(kernel, ca, &cb.hull) || self.hides(kernel, cb, &ca.hull)) {
             return None;
+        }
+        // An edge that cuts the bundle crosses every segment from one cluster to the other, so
+        // the tree finds the few worth the full test along the shortest between two vertices.
+        if a != b
+            && ca.hull.points().len() * cb.hull.points().len() <= MAX_CUT_TEST
+            && ca.len.min(cb.len) <= MAX_CUT_CLUSTER
+        {
+            let (u, v) = closest_vertices(&ca.hull, &cb.hull);
+            let cut = |_, s| cuts_bundle(&ca.hull, &cb.hull, s);
+            if kernel.bvh.any_hit_where(u, v, cut) {
+                return None;
+            }
+        }
+        if ca.is_one_edge() && cb.is_one_edge() && near.len() > MAX_PAIR_SCAN {
+            return Some(near);
         }
         let joint;
         let hull = if a == b {
@@ -151,19 +228,12 @@ impl Tree {
             joint = ca.hull.join(&cb.hull);
             &joint
         };
-        let try_cut = a != b && ca.hull.points().len() * cb.hull.points().len() <= MAX_CUT_TEST;
-        let mut inside = Vec::new();
-        for &i in near {
-            let s = kernel.segments[i as usize];
-            // An edge that cuts the bundle meets its interior.
-            if hull.meets_interior(s) {
-                if try_cut && cuts_bundle(&ca.hull, &cb.hull, s) {
-                    return None;
-                }
-                inside.push(i);
-            }
-        }
-        (!inside.is_empty()).then_some(inside)
+        // Every edge before the first inside is outside the parent's hull too, which holds
+        // this one's: its children need not look at them again.
+        let first = near
+            .iter()
+            .position(|&i| hull.meets_interior(kernel.segments[i as usize]))?;
+        Some(&near[first..])
     }
 
     /// Whether every edge of the (small) cluster `c` has all of `hull` on or behind its line,
@@ -183,22 +253,39 @@ impl Tree {
         parts: &[(usize, usize)],
         near: &[u32],
         parallel: bool,
+        decided: &AtomicU64,
     ) -> VaryingPairs {
         match parts {
             [] => VaryingPairs::default(),
-            [(a, b)] => self.walk(kernel, *a, *b, near),
+            [(a, b)] => self.walk(kernel, *a, *b, near, decided),
             [(a, b), rest @ ..] if parallel => {
                 let (first, others) = rayon::join(
-                    || self.walk(kernel, *a, *b, near),
-                    || self.walk_parts(kernel, rest, near, parallel),
+                    || self.walk(kernel, *a, *b, near, decided),
+                    || self.walk_parts(kernel, rest, near, parallel, decided),
                 );
                 first.merge(others)
             }
             [(a, b), rest @ ..] => self
-                .walk(kernel, *a, *b, near)
-                .merge(self.walk_parts(kernel, rest, near, parallel)),
+                .walk(kernel, *a, *b, near, decided)
+                .merge(self.walk_parts(kernel, rest, near, parallel, decided)),
         }
     }
+}
+
+/// The vertices of `a` and of `b` nearest each other: the ends of the shortest probe for an
+/// edge that cuts the bundle between them (a short probe meets few boxes of the tree).
+fn closest_vertices(a: &Hull, b: &Hull) -> (DVec2, DVec2) {
+    let mut best = (a.points()[0], b.points()[0]);
+    let mut nearest = f64::INFINITY;
+    for &u in a.points() {
+        for &v in b.points() {
+            let d = u.distance_squared(v);
+            if d < nearest {
+                (best, nearest) = ((u, v), d);
+            }
+        }
+    }
+    best
 }
 
 /// Appends the cluster of `ranks` (which start at `first` in the tree's order) and those below
@@ -285,6 +372,31 @@ mod tests {
     }
 
     #[test]
+    fn the_walk_decides_every_pair_once_and_lists_once() {
+        for name in ["floorplan", "maze", "fig3"] {
+            let kernel = Kernel::new(bundled(name));
+            let decided = AtomicU64::new(0);
+            let first = kernel.varying_pairs_counting(&decided).clone();
+            assert_eq!(
+                decided.load(Ordering::Relaxed),
+                kernel.surface_pairs(),
+                "{name}"
+            );
+            // The second call returns the kept list and counts nothing.
+            assert_eq!(kernel.varying_pairs_counting(&decided), &first, "{name}");
+            assert_eq!(
+                decided.load(Ordering::Relaxed),
+                kernel.surface_pairs(),
+                "{name}"
+            );
+        }
+        let kernel = Kernel::new(convex_room(96));
+        let decided = AtomicU64::new(0);
+        kernel.varying_pairs_counting(&decided);
+        assert_eq!(decided.into_inner(), 96 * 95 / 2);
+    }
+
+    #[test]
     fn the_walk_finds_what_every_pair_finds_on_random_scenes() {
         for seed in 0..3000 {
             let kernel = Kernel::new(random_scene(seed, seed % 2 == 0));
@@ -317,11 +429,11 @@ mod tests {
     /// walls, not with the pairs of walls (n² / 2 = 2 million at 2048 walls).
     #[test]
     fn a_convex_room_classifies_pairs_in_proportion_to_its_walls() {
-        let (small, large) = (convex_room(256), convex_room(2048));
         let (small, large) = (
-            Kernel::new(small).varying_pairs(),
-            Kernel::new(large).varying_pairs(),
+            Kernel::new(convex_room(256)),
+            Kernel::new(convex_room(2048)),
         );
+        let (small, large) = (small.varying_pairs(), large.varying_pairs());
         // Eight times the walls: about eight times the varying pairs and the work.
         let ratio = large.classified as f64 / small.classified as f64;
         assert!(

@@ -185,6 +185,24 @@ impl Bvh {
         )
     }
 
+    /// Whether a segment the open segment `(x, y)` meets satisfies `rule` (given its index and
+    /// the segment; asked only of those it meets, so a costly rule costs little).
+    pub(crate) fn any_hit_where(
+        &self,
+        x: DVec2,
+        y: DVec2,
+        rule: impl Fn(usize, Segment) -> bool,
+    ) -> bool {
+        let ray = RayBox::new(self.to_frame(x), self.to_frame(y));
+        self.any(
+            |node| ray.may_meet(node),
+            |k| {
+                let s = self.ordered[k];
+                open_segment_hits(x, y, s.a, s.b) && rule(self.items[k] as usize, s)
+            },
+        )
+    }
+
     /// The first segment except `skip` (if any) the ray meets, and where ([`Ray::contact`]): the
     /// contact first along the ray, of several at one point one that `judge` says faces the
     /// origin, then the lowest segment index, so the answer is the linear scan's whatever the
@@ -579,6 +597,9 @@ mod tests {
                     .enumerate()
                     .any(|(i, s)| i != skip && open_segment_hits(x, y, s.a, s.b));
                 assert_eq!(bvh.any_hit(x, y, Some(skip), Some(skip)), linear);
+                // A rule that only the `skip`-th segment passes: found exactly when it is hit.
+                let hit_skip = open_segment_hits(x, y, segments[skip].a, segments[skip].b);
+                assert_eq!(bvh.any_hit_where(x, y, |i, _| i == skip), hit_skip);
             }
             let (lo, hi) = (v(-0.2, -0.2), v(0.3, 0.1));
             let boxed: Vec<u32> = (0..n as u32)
