@@ -4,6 +4,7 @@
 
 use flatland_geom::{Kernel, PairClass, Unoccluded};
 use rand::{Rng, RngExt};
+use rayon::prelude::*;
 
 /// Draws `(s, t)` where visibility varies: a share `importance` from a proposal that follows
 /// the clipped square of the unoccluded target `g = min(ζ_unoccluded / c, 1)²`, the rest
@@ -64,6 +65,12 @@ const TILES: usize = 8;
 /// The most tiles the importance proposal keeps (16 bytes each): a scene with more than
 /// `MAX_TILES / TILES²` varying pairs (16 384) gets fewer tiles per pair.
 const MAX_TILES: usize = 1 << 20;
+/// The most points all tiles' estimates take together (each an unoccluded ζ): 256 a pair up
+/// to 131 072 listed pairs (a floor plan of 3000 edges), fewer above, where 256 took seconds.
+const MAX_TILE_POINTS: usize = 1 << 25;
+/// Listed pairs whose tiles are estimated together (their points drawn, then evaluated on
+/// every thread): at most 256 points each, 16 MB of draws.
+const TILE_CHUNK: usize = 1 << 12;
 /// Points per side of a tile estimating `g` (a jittered 2 × 2 grid) at [`TILES`] per side;
 /// fewer tiles have more points each.
 const TILE_POINTS: usize = 2;
@@ -144,33 +151,49 @@ impl Sampler {
         let tiles = self.side();
         // A pair's estimate rests on as many points however many tiles it has: too few in a
         // tile bias the normaliser (its share in V and its g come from the same points).
-        let points = (TILE_POINTS * TILES).div_ceil(tiles);
+        let points = (TILE_POINTS * TILES)
+            .div_ceil(tiles)
+            .min(budget_points_per_side(self.pairs.len() * tiles * tiles));
+        let per_tile = points * points;
         let (mut cumulative, mut weighted) = (0.0, 0.0);
         // The listed area outside V; subtracted from the whole, so that a scene where ζ > 0 on
         // every listed pair normalises exactly as the whole area does.
         let mut outside = 0.0;
         let mut previous = 0.0;
-        for k in 0..self.pairs.len() {
-            let (a, b, end) = self.pairs[k];
-            let pair_area = end - previous;
-            previous = end;
-            let (ra, rb) = (self.ranges[a as usize], self.ranges[b as usize]);
-            let (ws, wt) = ((ra.1 - ra.0) / tiles as f64, (rb.1 - rb.0) / tiles as f64);
-            for i in 0..tiles {
-                for j in 0..tiles {
+        // A floor plan of 10⁴ edges lists 6·10⁵ ordered pairs, 256 points each: the points
+        // are drawn in order (the same stream as one loop) and evaluated on every thread.
+        for chunk in self.pairs.chunks(TILE_CHUNK) {
+            let jitter: Vec<[f64; 2]> = (0..chunk.len() * tiles * tiles * per_tile)
+                .map(|_| [rng.random::<f64>(), rng.random::<f64>()])
+                .collect();
+            let ranges = &self.ranges;
+            let clip = self.clip;
+            let estimates: Vec<(f64, f64)> = jitter
+                .par_chunks(per_tile)
+                .enumerate()
+                .map(|(tile, jitter)| {
+                    let (k, rest) = (tile / (tiles * tiles), tile % (tiles * tiles));
+                    let (i, j) = ((rest / tiles) as f64, (rest % tiles) as f64);
+                    let (a, b, _) = chunk[k];
+                    let (ra, rb) = (ranges[a as usize], ranges[b as usize]);
+                    let (ws, wt) = ((ra.1 - ra.0) / tiles as f64, (rb.1 - rb.0) / tiles as f64);
                     let (mut sum, mut inside) = (0.0, 0);
-                    for p in 0..points * points {
-                        let u = ((p / points) as f64 + rng.random::<f64>()) / points as f64;
-                        let v = ((p % points) as f64 + rng.random::<f64>()) / points as f64;
+                    for (p, [ju, jv]) in jitter.iter().enumerate() {
+                        let u = ((p / points) as f64 + ju) / points as f64;
+                        let v = ((p % points) as f64 + jv) / points as f64;
                         let z = kernel
-                            .unoccluded(ra.0 + ws * (i as f64 + u), rb.0 + wt * (j as f64 + v))
+                            .unoccluded(ra.0 + ws * (i + u), rb.0 + wt * (j + v))
                             .zeta;
-                        sum += g(z, self.clip);
+                        sum += g(z, clip);
                         inside += usize::from(z > 0.0);
                     }
-                    let estimate = sum / (points * points) as f64;
-                    let area = pair_area / (tiles * tiles) as f64;
-                    let share = inside as f64 / (points * points) as f64;
+                    (sum / per_tile as f64, inside as f64 / per_tile as f64)
+                })
+                .collect();
+            for (&(_, _, end), tiles_of_pair) in chunk.iter().zip(estimates.chunks(tiles * tiles)) {
+                let area = (end - previous) / (tiles * tiles) as f64;
+                previous = end;
+                for &(estimate, share) in tiles_of_pair {
                     cumulative += area * estimate;
                     weighted += area * estimate * share;
                     outside += area * (1.0 - share);
@@ -321,6 +344,15 @@ fn default_tiles() -> usize {
     TILES
 }
 
+/// Points per side of each of `tiles` tiles within [`MAX_TILE_POINTS`] in all, at least
+/// [`TILE_POINTS`].
+fn budget_points_per_side(tiles: usize) -> usize {
+    ((MAX_TILE_POINTS / tiles.max(1)) as f64)
+        .sqrt()
+        .floor()
+        .max(TILE_POINTS as f64) as usize
+}
+
 /// `min(z / c, 1)²`.
 fn g(z: f64, c: f64) -> f64 {
     (z / c).min(1.0).powi(2)
@@ -332,6 +364,26 @@ mod tests {
     use flatland_testkit::rooms;
 
     use super::*;
+
+    #[test]
+    fn the_tiles_points_keep_within_their_budget_and_no_fewer_than_a_grid_each() {
+        // Up to 2¹⁷ listed pairs every pair keeps its 16 × 16 points.
+        for pairs in [1, 100, 16_384, 131_072] {
+            let tiles = tiles_per_side(pairs, MAX_TILES);
+            let side = (TILE_POINTS * TILES).div_ceil(tiles);
+            assert!(
+                budget_points_per_side(pairs * tiles * tiles) >= side,
+                "{pairs} pairs"
+            );
+        }
+        for pairs in [131_073, 618_744, 10_000_000] {
+            let tiles = pairs * tiles_per_side(pairs, MAX_TILES).pow(2);
+            let side = budget_points_per_side(tiles);
+            assert!(side < TILE_POINTS * TILES, "{pairs} pairs: {side}");
+            assert!(side >= TILE_POINTS, "{pairs} pairs: {side}");
+            assert!(tiles * side * side <= MAX_TILE_POINTS.max(tiles * TILE_POINTS.pow(2)));
+        }
+    }
 
     /// A function of `(s, t)`.
     type Function = fn(f64, f64) -> f64;
