@@ -32,7 +32,7 @@ use crate::scenes;
 use crate::scenes::SceneChoice;
 use crate::settings::{SETTINGS_KEY, Settings};
 use crate::timeline::{Moment, Timeline};
-use crate::views::{Hover, SceneDrag};
+use crate::views::{EdgesTexture, Hover, SceneDrag};
 use crate::worker::{Approx, Command, KernelGrid, LitState, Status, WorkerHandle, World};
 
 pub use top_bar::stop_text;
@@ -114,6 +114,9 @@ pub struct ViewerApp {
     hover: Hover,
     drag: Option<SceneDrag>,
     textures: heatmaps::Textures,
+    /// The lines of the scene view and of the scene lit by the exact kernel.
+    scene_edges: EdgesTexture,
+    exact_edges: EdgesTexture,
     fps: fps::FpsMeter,
     export: export::Exports,
 }
@@ -214,6 +217,8 @@ impl ViewerApp {
             hover: Hover::default(),
             drag: None,
             textures: heatmaps::Textures::default(),
+            scene_edges: EdgesTexture::default(),
+            exact_edges: EdgesTexture::default(),
             fps: fps::FpsMeter::default(),
             export: export::Exports::new(),
             settings,

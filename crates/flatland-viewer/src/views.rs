@@ -1,12 +1,14 @@
 //! Drawing: functions of what they show plus a little interaction state; nothing here trains
 //! or waits. The `(s, t)` plots in [`plot`] with the cells' overlay rastered in [`overlay`],
-//! the scene view in [`scene`], a scene's edges and the lit scene in [`edges`], the learning
+//! the scene view in [`scene`], a scene's edges and the lit scene in [`edges`] (their lines
+//! rastered once per change in [`raster`]), the learning
 //! curves in [`curves`], the small pieces they share in [`widgets`].
 
 mod curves;
 mod edges;
 mod overlay;
 mod plot;
+mod raster;
 mod scene;
 mod widgets;
 
@@ -17,6 +19,7 @@ pub use curves::curves;
 pub use edges::{LitPaint, lit_view};
 pub use overlay::{Marks, NEW_FOR, boundaries_image, overlay_image};
 pub use plot::{Overlay, PlotFrame, kernel_plot};
+pub use raster::EdgesTexture;
 pub use scene::{SceneFrame, moved_scene, scene_view};
 pub use widgets::{placeholder, readout_box};
 

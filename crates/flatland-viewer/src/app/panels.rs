@@ -199,6 +199,7 @@ impl ViewerApp {
             &scene,
             &self.hover,
             &mut self.drag,
+            &mut self.scene_edges,
         );
         self.hover.scene_s = scene_out.hovered_s;
         if let Some((from, to)) = scene_out.moved {
@@ -210,7 +211,7 @@ impl ViewerApp {
     }
 
     /// The scene lit by the exact kernel, or why it is not there yet.
-    fn exact_panel(&self, ui: &mut egui::Ui, rect: Rect, shown: &Shown, lit: Option<&Lit>) {
+    fn exact_panel(&mut self, ui: &mut egui::Ui, rect: Rect, shown: &Shown, lit: Option<&Lit>) {
         let title = "lit by the exact kernel";
         if let Some(l) = lit {
             let paint = LitPaint {
@@ -218,7 +219,14 @@ impl ViewerApp {
                 b: &l.setup.exact,
                 top: l.setup.top,
             };
-            views::lit_view(ui, rect, title, &shown.world.scene, &paint);
+            views::lit_view(
+                ui,
+                rect,
+                title,
+                &shown.world.scene,
+                &paint,
+                &mut self.exact_edges,
+            );
             return;
         }
         let why = match (&self.lit, shown.live) {

@@ -8,6 +8,7 @@ use egui::{Align2, Color32, FontId, Painter, Rect, Sense, Stroke, pos2, vec2};
 use flatland_geom::{Role, Scene};
 use flatland_solve::Mesh;
 
+use super::raster::{EdgesTexture, Pen};
 use super::widgets::{View, gradient, legend, panel_frame, short};
 use super::{BLOCKER, EMITTER, LIT_BLOCKER, SURFACE, TITLE_H};
 use crate::colormap::colour;
@@ -63,24 +64,57 @@ pub(super) fn scene_area(rect: Rect, lit: bool) -> Rect {
 
 /// Every edge of `scene`: by role, or (with `lit`) each element in the colour of its B,
 /// emitters marked with a sun on their front side; front-side ticks and surface indices where
-/// there is room for them.
+/// there is room for them. The lines go to `pen`, the indices to `painter`.
 pub(super) fn draw_edges(
+    pen: &mut impl Pen,
     painter: &Painter,
     view: &View,
     scene: &Scene,
     lit: Option<&LitPaint<'_>>,
     weak: Color32,
 ) {
+    draw_lines(pen, view, scene, lit);
+    draw_labels(painter, view, scene, lit.is_some(), weak);
+}
+
+/// [`draw_edges`] with the lines rastered into `texture` over `rect`, again only when the
+/// scene, `lit` or the panel changed.
+pub(super) fn draw_edges_once(
+    texture: &mut EdgesTexture,
+    painter: &Painter,
+    rect: Rect,
+    view: &View,
+    scene: &Scene,
+    lit: Option<&LitPaint<'_>>,
+    weak: Color32,
+) {
+    let lit_key = lit.map_or(0, |l| {
+        fingerprint(l.b.iter().map(|b| b.to_bits()).chain([l.top.to_bits()]))
+    });
+    let rect_key = fingerprint([rect.min.x, rect.min.y].map(|v| u64::from(v.to_bits())));
+    texture.paint(
+        painter,
+        rect,
+        [scene_fingerprint(scene), lit_key, rect_key],
+        |canvas| {
+            draw_lines(canvas, view, scene, lit);
+        },
+    );
+    draw_labels(painter, view, scene, lit.is_some(), weak);
+}
+
+/// The lines of [`draw_edges`]: lit elements, edges, front-side ticks, emitters' suns.
+fn draw_lines(pen: &mut impl Pen, view: &View, scene: &Scene, lit: Option<&LitPaint<'_>>) {
     if let Some(lit) = lit {
         for (el, &b) in lit.mesh.elements().iter().zip(lit.b) {
-            painter.line_segment(
-                [view.screen(el.a), view.screen(el.b)],
+            pen.line(
+                view.screen(el.a),
+                view.screen(el.b),
                 Stroke::new(5.0, lit.color(b)),
             );
         }
     }
-    let mut labels = LabelGrid::default();
-    for (i, e) in scene.edges().iter().enumerate() {
+    for e in scene.edges() {
         let (color, width) = match (e.role, lit.is_some()) {
             (Role::Blocker, false) => (BLOCKER, 3.0),
             (Role::Blocker, true) => (LIT_BLOCKER, 3.0),
@@ -90,30 +124,40 @@ pub(super) fn draw_edges(
         };
         let (a, b) = (view.screen(e.a), view.screen(e.b));
         if width > 0.0 {
-            painter.line_segment([a, b], Stroke::new(width, color));
+            pen.line(a, b, Stroke::new(width, color));
         }
         let length = a.distance(b);
-        let n = e.normal();
-        let n = vec2(n.x as f32, -n.y as f32);
+        let n = screen_normal(e);
         if length >= MIN_TICKED {
             let ticks = ((length / 22.0) as usize).clamp(1, 16);
             let tick = Stroke::new(1.0, color.gamma_multiply(0.8));
             for k in 0..ticks {
                 let p = a + (b - a) * ((k as f32 + 0.5) / ticks as f32);
-                painter.line_segment([p, p + n * 6.0], tick);
+                pen.line(p, p + n * 6.0, tick);
                 if e.two_sided {
-                    painter.line_segment([p, p - n * 6.0], tick);
+                    pen.line(p, p - n * 6.0, tick);
                 }
             }
         }
-        if e.role != Role::Surface {
+        if lit.is_some() && e.role == Role::Surface && e.emission > 0.0 {
+            let sun = a + (b - a) * 0.5 + n * 13.0;
+            pen.disc(sun, 6.0, EMITTER);
+            pen.ring(sun, 6.0, Stroke::new(1.0, Color32::BLACK));
+        }
+    }
+}
+
+/// The surface edges' indices of [`draw_edges`], where they have room (not on a lit
+/// emitter, which has its sun there).
+fn draw_labels(painter: &Painter, view: &View, scene: &Scene, lit: bool, weak: Color32) {
+    let mut labels = LabelGrid::default();
+    for (i, e) in scene.edges().iter().enumerate() {
+        if e.role != Role::Surface || (lit && e.emission > 0.0) {
             continue;
         }
-        let mid = a + (b - a) * 0.5 + n * 13.0;
-        if lit.is_some() && e.emission > 0.0 {
-            painter.circle_filled(mid, 6.0, EMITTER);
-            painter.circle_stroke(mid, 6.0, Stroke::new(1.0, Color32::BLACK));
-        } else if length >= MIN_LABELLED && labels.take(mid) {
+        let (a, b) = (view.screen(e.a), view.screen(e.b));
+        let mid = a + (b - a) * 0.5 + screen_normal(e) * 13.0;
+        if a.distance(b) >= MIN_LABELLED && labels.take(mid) {
             painter.text(
                 mid,
                 Align2::CENTER_CENTER,
@@ -123,6 +167,34 @@ pub(super) fn draw_edges(
             );
         }
     }
+}
+
+/// An edge's front-side normal on screen (y down).
+fn screen_normal(e: &flatland_geom::Edge) -> egui::Vec2 {
+    let n = e.normal();
+    vec2(n.x as f32, -n.y as f32)
+}
+
+/// A hash of `words` (FNV-1a over the words): a texture's key.
+fn fingerprint(words: impl IntoIterator<Item = u64>) -> u64 {
+    words.into_iter().fold(0xcbf2_9ce4_8422_2325, |h, w| {
+        (h ^ w).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
+/// [`fingerprint`] of what a scene's lines depend on: each edge's ends, role, emission and
+/// sides.
+fn scene_fingerprint(scene: &Scene) -> u64 {
+    fingerprint(scene.edges().iter().flat_map(|e| {
+        [
+            e.a.x.to_bits(),
+            e.a.y.to_bits(),
+            e.b.x.to_bits(),
+            e.b.y.to_bits(),
+            e.emission.to_bits(),
+            u64::from(e.role == Role::Blocker) | u64::from(e.two_sided) << 1,
+        ]
+    }))
 }
 
 /// The cells of a coarse screen grid that hold a label already.
@@ -185,14 +257,22 @@ pub(super) fn colour_bar(painter: &Painter, rect: Rect, top: f64, text: Color32)
     );
 }
 
-/// A scene lit by `lit` (not interactive): the exact solution beside the learned one.
-pub fn lit_view(ui: &mut egui::Ui, rect: Rect, title: &str, scene: &Scene, lit: &LitPaint<'_>) {
+/// A scene lit by `lit` (not interactive): the exact solution beside the learned one. Its
+/// lines are rastered into `texture`, again only when the scene, `lit` or the panel changes.
+pub fn lit_view(
+    ui: &mut egui::Ui,
+    rect: Rect,
+    title: &str,
+    scene: &Scene,
+    lit: &LitPaint<'_>,
+    texture: &mut EdgesTexture,
+) {
     let _ = ui.allocate_rect(rect, Sense::hover());
     let painter = ui.painter_at(rect);
     let weak = ui.visuals().weak_text_color();
     panel_frame(&painter, rect, title, ui.visuals().text_color());
     let view = View::of(scene, scene_area(rect, true));
-    draw_edges(&painter, &view, scene, Some(lit), weak);
+    draw_edges_once(texture, &painter, rect, &view, scene, Some(lit), weak);
     colour_bar(&painter, rect, lit.top, weak);
     let _ = legend(&painter, rect, &LIT_LEGEND);
 }

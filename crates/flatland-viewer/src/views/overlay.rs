@@ -11,6 +11,7 @@ use std::time::Duration;
 use egui::{Color32, ColorImage};
 use flatland_geom::Scene;
 
+use super::raster::blend;
 use super::{BOUNDARY, CELL, CRITICAL, FACE_VISIBLE, NET_EDGE, NEW_CELL, SEEN};
 use crate::worker::CellMark;
 
@@ -138,18 +139,6 @@ fn thinned_boundaries(scene: &Scene, side: f32) -> Vec<f64> {
         }
     }
     kept
-}
-
-/// `src` over `dst`, both premultiplied.
-fn blend(dst: Color32, src: Color32) -> Color32 {
-    let k = u16::from(255 - src.a());
-    let mix = |s: u8, d: u8| s.saturating_add(((u16::from(d) * k + 127) / 255) as u8);
-    Color32::from_rgba_premultiplied(
-        mix(src.r(), dst.r()),
-        mix(src.g(), dst.g()),
-        mix(src.b(), dst.b()),
-        mix(src.a(), dst.a()),
-    )
 }
 
 fn draw_line(img: &mut ColorImage, a: [f32; 2], b: [f32; 2], color: Color32) {

@@ -4,7 +4,10 @@
 use egui::{Align2, Color32, FontId, Painter, Pos2, Rect, Sense, Shape, Stroke, pos2, vec2};
 use flatland_geom::{DVec2, EdgeId, GeomError, Scene};
 
-use super::edges::{LEGEND, LIT_LEGEND, LitPaint, colour_bar, draw_edges, scene_area};
+use super::edges::{
+    LEGEND, LIT_LEGEND, LitPaint, colour_bar, draw_edges, draw_edges_once, scene_area,
+};
+use super::raster::EdgesTexture;
 use super::widgets::{View, legend, panel_frame};
 use super::{CRITICAL, Hover, SCENE_MARK, SceneDrag, TITLE_H};
 use crate::worker::World;
@@ -64,6 +67,7 @@ pub fn scene_view(
     scene: &Scene,
     hover: &Hover,
     drag: &mut Option<SceneDrag>,
+    texture: &mut EdgesTexture,
 ) -> SceneOut {
     let rect = frame.rect;
     let response = ui.allocate_rect(rect, Sense::click_and_drag());
@@ -94,7 +98,12 @@ pub fn scene_view(
         None => scene,
     };
 
-    draw_edges(&painter, &view, shown, lit, weak);
+    if drag.is_some() {
+        // The scene changes with every frame of a drag: no texture would be shown twice.
+        draw_edges(&mut &painter, &painter, &view, shown, lit, weak);
+    } else {
+        draw_edges_once(texture, &painter, rect, &view, shown, lit, weak);
+    }
     if let Some(lit) = lit {
         colour_bar(&painter, rect, lit.top, weak);
     }
@@ -326,7 +335,15 @@ mod tests {
                     lit: None,
                     editable: true,
                 };
-                let out = scene_view(ui, &frame, &scene, &Hover::default(), &mut state.0);
+                let mut texture = EdgesTexture::default();
+                let out = scene_view(
+                    ui,
+                    &frame,
+                    &scene,
+                    &Hover::default(),
+                    &mut state.0,
+                    &mut texture,
+                );
                 state.1.extend(out.moved);
             },
             state,
