@@ -159,7 +159,13 @@ fn list_varying_pairs(kernel: &Kernel, label: &str) {
     let bar = super::progress_bar(kernel.surface_pairs(), "pairs of edges decided");
     let decided = AtomicU64::new(0);
     let listed = std::thread::scope(|s| {
-        let walk = s.spawn(|| kernel.varying_pairs_counting(&decided).pairs.len());
+        let waiting = std::thread::current();
+        let (kernel, decided) = (kernel, &decided);
+        let walk = s.spawn(move || {
+            let listed = kernel.varying_pairs_counting(decided).pairs.len();
+            waiting.unpark();
+            listed
+        });
         while !walk.is_finished() {
             bar.set_position(decided.load(Ordering::Relaxed));
             std::thread::park_timeout(Duration::from_millis(100));
@@ -201,6 +207,8 @@ pub fn run(args: &Args) -> Result<()> {
             interrupt::check()?;
             if params.target == Target::Visibility {
                 list_varying_pairs(&kernel, &label);
+                // Its importance tiles take a few seconds on 10⁵ pairs and more.
+                eprintln!("fit of {label}: drawing the first samples and the importance tiles");
             }
             (Fit::new(Arc::new(kernel), reference, params)?, label)
         }
