@@ -111,12 +111,13 @@ pub fn kernel_plot(
         FontId::proportional(13.0),
         ui.visuals().text_color(),
     );
-    painter.rect_filled(plot, 0.0, Color32::BLACK);
     match heatmap {
+        // Opaque: no background under it (the software rasterizer pays for every layer).
         Some(tex) => {
             painter.image(tex, plot, uv(), Color32::WHITE);
         }
         None => {
+            painter.rect_filled(plot, 0.0, Color32::BLACK);
             painter.text(
                 plot.center(),
                 Align2::CENTER_CENTER,
