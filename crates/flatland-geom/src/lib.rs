@@ -43,6 +43,7 @@
 pub mod bundled;
 mod error;
 pub mod generate;
+mod hashing;
 mod ids;
 mod io;
 mod kernel;

@@ -1,10 +1,11 @@
 //! The shafts of pairs of surface edges, classified on first use and kept in bounded memory.
 
 use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
+use std::hash::BuildHasherDefault;
 use std::ops::Deref;
 use std::sync::{Arc, OnceLock, RwLock};
 
+use crate::hashing::{WordHasher, mix};
 use crate::visibility::Shaft;
 
 /// Up to this many surface parents every pair has a cell of its own (n² lazily filled cells,
@@ -37,7 +38,7 @@ pub(super) enum PairCache {
 /// One shard of [`PairCache::Sharded`].
 #[derive(Default)]
 pub(super) struct Shard {
-    map: HashMap<u64, Arc<Shaft>, BuildHasherDefault<PairHasher>>,
+    map: HashMap<u64, Arc<Shaft>, BuildHasherDefault<WordHasher>>,
     bytes: usize,
 }
 
@@ -189,35 +190,6 @@ fn bytes_of(shaft: &Shaft) -> usize {
         _ => 0,
     };
     ENTRY + 2 * size_of::<usize>() + size_of::<Shaft>() + extra
-}
-
-/// SplitMix64's finaliser: spreads pair keys over shards and buckets.
-#[inline]
-fn mix(key: u64) -> u64 {
-    let mut z = key.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
-}
-
-/// The hasher of pair keys (one `u64` each): [`mix`], without SipHash's cost.
-#[derive(Default)]
-pub(super) struct PairHasher(u64);
-
-impl Hasher for PairHasher {
-    fn finish(&self) -> u64 {
-        mix(self.0)
-    }
-
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.0 = (self.0 << 8) | u64::from(b);
-        }
-    }
-
-    fn write_u64(&mut self, key: u64) {
-        self.0 = key;
-    }
 }
 
 #[cfg(test)]

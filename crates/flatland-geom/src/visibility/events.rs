@@ -1,7 +1,7 @@
 //! Where the visibility of a pair of parent edges can change: [`PairEvents`] and its event points.
 
 use std::collections::HashSet;
-use std::hash::{BuildHasherDefault, Hasher};
+use std::hash::BuildHasherDefault;
 
 use glam::DVec2;
 
@@ -10,6 +10,7 @@ use super::predicates::{
     convex_hull, on_closed_segment, orient, proper_crossing, strictly_inside, strictly_opposite,
 };
 use super::side::Side;
+use crate::hashing::WordHasher;
 
 /// Where the visibility between two parent surface edges `P` and `Q` can change.
 ///
@@ -359,7 +360,7 @@ pub(super) fn event_points(
     let mut events: Vec<DVec2> = Vec::new();
     // Points already pushed, by bit pattern (`+ 0.0` folds -0.0 into 0.0, as `==` does): a
     // linear `contains` made the shaft of 10 000 blockers quadratic.
-    let mut seen: HashSet<[u64; 2], BuildHasherDefault<BitsHasher>> = HashSet::default();
+    let mut seen: HashSet<[u64; 2], BuildHasherDefault<WordHasher>> = HashSet::default();
     let mut push = |e: DVec2, events: &mut Vec<DVec2>| {
         if !corner_of_only_one(e) && seen.insert([(e.x + 0.0).to_bits(), (e.y + 0.0).to_bits()]) {
             events.push(e);
@@ -385,34 +386,6 @@ pub(super) fn event_points(
         }
     }
     events
-}
-
-/// The hasher of points' bit patterns in [`event_points`]: a multiply-rotate per word (as
-/// rustc's FxHash), since SipHash's resistance to chosen keys buys nothing here and took a
-/// tenth of listing a floor plan's varying pairs.
-#[derive(Default)]
-struct BitsHasher(u64);
-
-impl Hasher for BitsHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-
-    fn write(&mut self, bytes: &[u8]) {
-        for chunk in bytes.chunks(8) {
-            let mut word = [0; 8];
-            word[..chunk.len()].copy_from_slice(chunk);
-            self.write_u64(u64::from_le_bytes(word));
-        }
-    }
-
-    fn write_u64(&mut self, word: u64) {
-        self.0 = (self.0.rotate_left(5) ^ word).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-    }
-
-    fn write_usize(&mut self, word: usize) {
-        self.write_u64(word as u64);
-    }
 }
 
 #[cfg(test)]

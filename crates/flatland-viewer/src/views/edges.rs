@@ -91,11 +91,10 @@ pub(super) fn draw_edges_once(
     let lit_key = lit.map_or(0, |l| {
         fingerprint(l.b.iter().map(|b| b.to_bits()).chain([l.top.to_bits()]))
     });
-    let rect_key = fingerprint([rect.min.x, rect.min.y].map(|v| u64::from(v.to_bits())));
     texture.paint(
         painter,
         rect,
-        [scene_fingerprint(scene), lit_key, rect_key],
+        [scene_fingerprint(scene), lit_key],
         |canvas| {
             draw_lines(canvas, view, scene, lit);
         },

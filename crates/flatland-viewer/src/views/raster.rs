@@ -56,8 +56,8 @@ impl Canvas {
         ]
     }
 
-    /// Covers the pixels within `reach` pixels of `[x0, x1] × [y0, y1]` whose `coverage` (of
-    /// their centre) is positive with `color`.
+    /// Blends `color` into the pixels of the box `lo`–`hi` (in pixels) by `coverage` of
+    /// their centres, clamped to 1; pixels it gives nothing are left alone.
     fn cover(
         &mut self,
         lo: [f32; 2],
@@ -156,7 +156,7 @@ pub(super) fn blend(dst: Color32, src: Color32) -> Color32 {
 /// the panel's pixels) is asked for.
 #[derive(Default)]
 pub struct EdgesTexture {
-    cached: Option<([u64; 4], TextureHandle)>,
+    cached: Option<([u64; 3], TextureHandle)>,
 }
 
 impl EdgesTexture {
@@ -166,17 +166,12 @@ impl EdgesTexture {
         &mut self,
         painter: &Painter,
         rect: Rect,
-        key: [u64; 3],
+        key: [u64; 2],
         draw: impl FnOnce(&mut Canvas),
     ) {
         let ppp = painter.ctx().pixels_per_point();
         let size = pixel_size(rect, ppp);
-        let key = [
-            key[0],
-            key[1],
-            key[2],
-            (size[0] as u64) << 32 | size[1] as u64,
-        ];
+        let key = [key[0], key[1], (size[0] as u64) << 32 | size[1] as u64];
         let texture = match &mut self.cached {
             Some((k, texture)) if *k == key => texture,
             cached => {
@@ -252,7 +247,7 @@ mod tests {
         let mut texture = EdgesTexture::default();
         let drawn = std::cell::Cell::new(0);
         let paint = |texture: &mut EdgesTexture, rect: Rect, key: u64| {
-            texture.paint(&painter, rect, [key, 0, 0], |c| {
+            texture.paint(&painter, rect, [key, 0], |c| {
                 drawn.set(drawn.get() + 1);
                 c.disc(Pos2::new(5.0, 5.0), 2.0, Color32::WHITE);
             });
