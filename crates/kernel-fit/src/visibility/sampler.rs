@@ -149,8 +149,9 @@ impl Sampler {
     /// `V`, not with its whole area.
     fn build_tiles(&mut self, kernel: &Kernel, rng: &mut impl Rng) {
         let tiles = self.side();
-        // A pair's estimate rests on as many points however many tiles it has: too few in a
-        // tile bias the normaliser (its share in V and its g come from the same points).
+        // A pair's estimate rests on as many points however many tiles it has (too few in a
+        // tile bias the normaliser: its share in V and its g come from the same points), but
+        // above 2¹⁷ listed pairs on fewer, within the budget, which keeps 2 × 2 a tile.
         let points = (TILE_POINTS * TILES)
             .div_ceil(tiles)
             .min(budget_points_per_side(self.pairs.len() * tiles * tiles));
