@@ -15,6 +15,10 @@ pub struct Args {
     /// Open paused instead of learning at once.
     #[arg(long)]
     pub paused: bool,
+    /// The learner: `light` (light-driven rounds, the default), `theta` (the θ-driven network) or
+    /// `paper` (the paper's network). Default: the learner of the last session.
+    #[arg(long, value_name = "NAME", value_parser = parse_learner)]
+    pub learner: Option<flatland_viewer::LearnerName>,
     /// Target cell count of the fit.
     #[arg(long, value_name = "N")]
     pub cells: Option<usize>,
@@ -45,6 +49,11 @@ fn parse_growth(text: &str) -> Result<f64, String> {
     }
 }
 
+/// `light`, `theta` or `paper`.
+fn parse_learner(text: &str) -> Result<flatland_viewer::LearnerName, String> {
+    text.parse()
+}
+
 /// Runs `flatland view`: the viewer when a display is available; otherwise one line saying so,
 /// then the headless fit of the same scene (the window's options do not apply to it).
 pub fn run(args: &Args) -> Result<()> {
@@ -52,6 +61,7 @@ pub fn run(args: &Args) -> Result<()> {
         return Ok(flatland_viewer::run_with(flatland_viewer::Options {
             scene: args.scene.clone(),
             paused: args.paused,
+            learner: args.learner,
             target_cells: args.cells,
             growth: args.growth,
             fresh_settings: args.fresh,
@@ -75,5 +85,15 @@ mod tests {
         for bad in ["0", "-3", "fast", "inf", "NaN"] {
             assert!(parse_growth(bad).is_err(), "{bad}");
         }
+    }
+
+    #[test]
+    fn a_learner_is_named_as_in_the_controls() {
+        use flatland_viewer::LearnerName;
+        assert_eq!(parse_learner("theta"), Ok(LearnerName::Theta));
+        assert_eq!(parse_learner("paper"), Ok(LearnerName::Paper));
+        assert_eq!(parse_learner("light"), Ok(LearnerName::Light));
+        let err = parse_learner("θ").unwrap_err();
+        assert!(err.contains("light, theta or paper"), "{err}");
     }
 }

@@ -1,7 +1,7 @@
 //! Opens the viewer with every option on the command line (used by `scripts/screenshot.sh`):
 //!
 //! `cargo run --release -p flatland-viewer --example viewer -- [--scene FILE] [--paused]
-//! [--cells N] [--growth CELLS_PER_S|max] [--fresh] [--fps-log] [--export-dir DIR]` (it learns
+//! [--learner light|theta|paper] [--cells N] [--growth CELLS_PER_S|max] [--fresh] [--fps-log] [--export-dir DIR]` (it learns
 //! at once unless `--paused`)
 
 use std::path::PathBuf;
@@ -15,6 +15,17 @@ fn main() {
             "--paused" => options.paused = true,
             // Learning at once is the default; kept so older command lines still work.
             "--play" => options.paused = false,
+            "--learner" => match args.next().map(|name| name.parse()) {
+                Some(Ok(name)) => options.learner = Some(name),
+                Some(Err(e)) => {
+                    eprintln!("--learner: {e}");
+                    std::process::exit(2);
+                }
+                None => {
+                    eprintln!("--learner needs a value: light, theta or paper");
+                    std::process::exit(2);
+                }
+            },
             "--cells" => options.target_cells = args.next().and_then(|n| n.parse().ok()),
             "--growth" => {
                 options.growth = args.next().and_then(|g| match g.as_str() {

@@ -24,13 +24,14 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
 
-use egui::{CentralPanel, Panel, ScrollArea};
+use egui::{CentralPanel, Color32, Frame, Panel, ScrollArea};
 use flatland_geom::Scene;
 use kernel_fit::FitParams;
 
+use crate::background::Priority;
 use crate::scenes;
 use crate::scenes::SceneChoice;
-use crate::settings::{SETTINGS_KEY, Settings};
+use crate::settings::{LearnerName, SETTINGS_KEY, Settings};
 use crate::timeline::{Moment, Timeline};
 use crate::views::{EdgesTexture, Hover, SceneDrag};
 use crate::worker::{Approx, Command, KernelGrid, LitState, Status, WorkerHandle, World};
@@ -58,6 +59,8 @@ pub struct Options {
     pub scene: Option<PathBuf>,
     /// Start paused instead of learning at once.
     pub paused: bool,
+    /// Run this learner instead of the remembered one.
+    pub learner: Option<LearnerName>,
     /// Override the target cell count.
     pub target_cells: Option<usize>,
     /// Override the pace of growth, cells per second (infinite: as fast as the machine goes).
@@ -130,7 +133,9 @@ impl ViewerApp {
         } else {
             Settings::load(cc.storage)
         };
-        let mut app = ViewerApp::with_options(cc.egui_ctx.clone(), settings, options);
+        // In a window the learner runs in the background: the window's frames come first.
+        let ctx = cc.egui_ctx.clone();
+        let mut app = ViewerApp::launch(ctx, settings, options, Priority::Background);
         if let Some(note) = note
             && app.message.is_none()
         {
@@ -140,12 +145,21 @@ impl ViewerApp {
     }
 
     /// The app as [`ViewerApp::new`] starts it, from given settings: the options applied, and
-    /// learning at once unless `options.paused`.
-    pub fn with_options(
+    /// learning at once unless `options.paused` (at normal priority: no window waits for it).
+    pub fn with_options(ctx: egui::Context, settings: Settings, options: &Options) -> ViewerApp {
+        ViewerApp::launch(ctx, settings, options, Priority::Normal)
+    }
+
+    /// [`ViewerApp::with_options`] with the learner's threads at `priority`.
+    fn launch(
         ctx: egui::Context,
         mut settings: Settings,
         options: &Options,
+        priority: Priority,
     ) -> ViewerApp {
+        if let Some(name) = options.learner {
+            settings.choose_learner(name);
+        }
         if let Some(cells) = options.target_cells {
             settings.params.target_cells = cells;
         }
@@ -158,7 +172,7 @@ impl ViewerApp {
                 settings.growth = growth.max(f64::MIN_POSITIVE);
             }
         }
-        let mut app = ViewerApp::headless(ctx, settings);
+        let mut app = ViewerApp::start(ctx, settings, priority);
         app.fps.log = options.fps_log;
         if let Some(dir) = &options.export_dir {
             app.export.dir.clone_from(dir);
@@ -171,7 +185,12 @@ impl ViewerApp {
 
     /// The app without eframe (for tests): starts the learner and a fresh fit of the chosen
     /// scene, paused.
-    pub fn headless(ctx: egui::Context, mut settings: Settings) -> ViewerApp {
+    pub fn headless(ctx: egui::Context, settings: Settings) -> ViewerApp {
+        ViewerApp::start(ctx, settings, Priority::Normal)
+    }
+
+    /// [`ViewerApp::headless`] with the learner's threads at `priority`.
+    fn start(ctx: egui::Context, mut settings: Settings, priority: Priority) -> ViewerApp {
         let mut message = None;
         let (scene, label) = match scenes::load(&settings.scene) {
             Ok(found) => found,
@@ -189,7 +208,7 @@ impl ViewerApp {
             settings.choose_preset(settings.preset);
         }
         let repaint_ctx = ctx.clone();
-        let worker = WorkerHandle::spawn(move || repaint_ctx.request_repaint());
+        let worker = WorkerHandle::spawn(priority, move || repaint_ctx.request_repaint());
         let mut app = ViewerApp {
             fit_params: settings.params,
             sent_params: settings.params,
@@ -372,15 +391,25 @@ impl ViewerApp {
         if let Some(path) = dropped.first() {
             self.open_file(path);
         }
-        Panel::top("bar").show(ui, |ui| self.top_bar(ui));
-        Panel::bottom("timeline").show(ui, |ui| self.timeline_bar(ui));
+        // The panels are not filled: the window is cleared to their colour (`clear_color`), and
+        // filling the whole window again costs a software rasterizer as much as a plot.
+        let bare = Frame::side_top_panel(ui.style()).fill(Color32::TRANSPARENT);
+        Panel::top("bar")
+            .frame(bare)
+            .show(ui, |ui| self.top_bar(ui));
+        Panel::bottom("timeline")
+            .frame(bare)
+            .show(ui, |ui| self.timeline_bar(ui));
         Panel::left("controls")
+            .frame(bare)
             .resizable(false)
             .exact_size(262.0)
             .show(ui, |ui| {
                 ScrollArea::vertical().show(ui, |ui| self.controls(ui));
             });
-        CentralPanel::default().show(ui, |ui| self.main_area(ui));
+        CentralPanel::default()
+            .frame(Frame::central_panel(ui.style()).fill(Color32::TRANSPARENT))
+            .show(ui, |ui| self.main_area(ui));
         self.sync_params(ui.ctx());
         if self.running() || self.busy.is_some() || self.cursor.replaying.is_some() {
             ui.ctx().request_repaint_after(Duration::from_millis(16));
@@ -389,6 +418,11 @@ impl ViewerApp {
 }
 
 impl eframe::App for ViewerApp {
+    /// The panels' colour: they are drawn without a fill of their own.
+    fn clear_color(&self, visuals: &egui::Visuals) -> [f32; 4] {
+        visuals.panel_fill.to_normalized_gamma_f32()
+    }
+
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
         if let Some(cpu) = frame.info().cpu_usage {
             self.fps.add_cpu(cpu);

@@ -69,6 +69,7 @@
 #![deny(missing_docs)]
 
 mod app;
+mod background;
 mod colormap;
 pub mod lit;
 mod prefix;
@@ -86,7 +87,7 @@ pub use app::{Options, ViewerApp, stop_text};
 pub use colormap::{colour, grid_image, samples_image, set_color};
 pub use prefix::Prefix;
 pub use scenes::SceneChoice;
-pub use settings::{LearnerChoice, Settings, with_preset};
+pub use settings::{LearnerChoice, LearnerName, Settings, with_preset};
 pub use timeline::{Moment, Timeline};
 pub use worker::{CellMark, Growth, LearnedGrid, LightRounds, Lit, LitState, Status, World};
 
@@ -124,13 +125,14 @@ pub fn display_available() -> bool {
     }
 }
 
-/// Leaves one core to the UI (and the software rasterizer): rayon, which the learner uses for
-/// resampling and reference grids, gets all other cores (at least one). Ignored when the global
-/// pool already exists.
-fn limit_learner_threads() {
-    let cores = std::thread::available_parallelism().map_or(1, std::num::NonZero::get);
+/// The global rayon pool, which the learner uses for resampling and reference grids: all cores,
+/// at the lowest priority (the UI never uses it), so the window keeps its frames and the learner
+/// gets every core the window leaves. Ignored when the global pool already exists.
+fn background_learner_pool() {
     let _ = rayon::ThreadPoolBuilder::new()
-        .num_threads(cores.saturating_sub(1).max(1))
+        .start_handler(|_| {
+            background::Priority::Background.apply_to_this_thread();
+        })
         .build_global();
 }
 
@@ -156,7 +158,7 @@ pub fn run_with(options: Options) -> Result<(), ViewerError> {
             source,
         })?;
     }
-    limit_learner_threads();
+    background_learner_pool();
     let native = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
             .with_title("flatland — SGCS learning the radiosity kernel")

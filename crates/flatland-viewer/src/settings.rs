@@ -25,6 +25,32 @@ pub enum LearnerChoice {
     Network,
 }
 
+/// A learner as the controls offer it, and as `--learner` names it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LearnerName {
+    /// The light-driven loop (`light`).
+    Light,
+    /// The default network, [`Preset::Default`] (`theta`).
+    Theta,
+    /// The paper's network, [`Preset::Paper`] (`paper`).
+    Paper,
+}
+
+impl std::str::FromStr for LearnerName {
+    type Err = String;
+
+    fn from_str(text: &str) -> Result<LearnerName, String> {
+        match text {
+            "light" => Ok(LearnerName::Light),
+            "theta" => Ok(LearnerName::Theta),
+            "paper" => Ok(LearnerName::Paper),
+            _ => Err(format!(
+                "expected a learner: light, theta or paper; got {text:?}"
+            )),
+        }
+    }
+}
+
 /// Everything the viewer remembers between runs (eframe persistence).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
@@ -136,6 +162,22 @@ impl Settings {
         self.learner_defaults = Some(preset.params());
     }
 
+    /// Switches to the learner `name` (a network's with its preset's parameters; target cells,
+    /// seed and budgets kept).
+    pub fn choose_learner(&mut self, name: LearnerName) {
+        match name {
+            LearnerName::Light => self.learner = LearnerChoice::Light,
+            LearnerName::Theta | LearnerName::Paper => {
+                self.learner = LearnerChoice::Network;
+                self.choose_preset(if name == LearnerName::Theta {
+                    Preset::Default
+                } else {
+                    Preset::Paper
+                });
+            }
+        }
+    }
+
     /// Whether the parameters are the preset's (apart from target cells, seed and budgets).
     #[must_use]
     pub fn is_preset(&self) -> bool {
@@ -168,6 +210,38 @@ mod tests {
     use sgcs::Insertion;
 
     use super::*;
+
+    #[test]
+    fn a_learner_by_name_is_the_one_the_controls_would_pick() {
+        let mut settings = Settings::default();
+        settings.params.target_cells = 6400;
+        settings.choose_learner("paper".parse().unwrap());
+        assert_eq!(settings.learner, LearnerChoice::Network);
+        assert_eq!(settings.preset, Preset::Paper);
+        assert_eq!(settings.params.target_cells, 6400, "target cells kept");
+        assert!(settings.is_preset());
+        settings.choose_learner("theta".parse().unwrap());
+        assert_eq!(
+            (settings.learner, settings.preset),
+            (LearnerChoice::Network, Preset::Default)
+        );
+        assert_eq!(
+            settings.params,
+            with_preset(Preset::Default, &settings.params)
+        );
+        settings.choose_learner("light".parse().unwrap());
+        assert_eq!(settings.learner, LearnerChoice::Light);
+        assert_eq!(
+            settings.preset,
+            Preset::Default,
+            "the network's choice is kept for later"
+        );
+        let err = "network".parse::<LearnerName>().unwrap_err();
+        assert!(
+            err.contains("light, theta or paper") && err.contains("\"network\""),
+            "{err}"
+        );
+    }
 
     /// eframe's storage in memory: the same RON encoding as on disk.
     #[derive(Default)]

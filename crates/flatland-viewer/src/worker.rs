@@ -25,6 +25,8 @@ use flatland_solve::Representation;
 use kernel_fit::{FitParams, LearnedKernel, LiveParams};
 use rayon::prelude::*;
 
+use crate::background::Priority;
+
 pub use published::{
     APPROX_RES, Approx, CellMark, Growth, KernelGrid, LearnedGrid, LightRounds, Lit, LitState,
     REFERENCE_RES, Status, World,
@@ -119,14 +121,18 @@ pub struct WorkerHandle {
 }
 
 impl WorkerHandle {
-    /// Starts the thread. `repaint` is called after each publication (the UI's repaint request).
-    pub fn spawn(repaint: impl Fn() + Send + 'static) -> WorkerHandle {
+    /// Starts the thread at `priority` (the threads it starts for the lit scene inherit it).
+    /// `repaint` is called after each publication (the UI's repaint request).
+    pub fn spawn(priority: Priority, repaint: impl Fn() + Send + 'static) -> WorkerHandle {
         let (tx, rx) = mpsc::channel();
         let shared = Arc::new(Shared::default());
         let learner_end = Arc::clone(&shared);
         let thread = std::thread::Builder::new()
             .name("flatland-learner".into())
-            .spawn(move || learner::Learner::new(rx, learner_end, Box::new(repaint)).run())
+            .spawn(move || {
+                priority.apply_to_this_thread();
+                learner::Learner::new(rx, learner_end, Box::new(repaint)).run();
+            })
             .expect("spawning the learner thread");
         WorkerHandle {
             commands: Some(tx),

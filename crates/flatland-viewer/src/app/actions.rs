@@ -10,7 +10,7 @@ use kernel_fit::Preset;
 use super::ViewerApp;
 use crate::scenes;
 use crate::scenes::SceneChoice;
-use crate::settings::LearnerChoice;
+use crate::settings::{LearnerChoice, LearnerName};
 use crate::views::{self, Hover};
 use crate::worker::Command;
 
@@ -59,8 +59,10 @@ impl ViewerApp {
     /// Switches to `preset`'s network learner (target cells and seed kept) and starts a fresh
     /// fit.
     pub fn choose_preset(&mut self, preset: Preset) {
-        self.settings.learner = LearnerChoice::Network;
-        self.settings.choose_preset(preset);
+        self.settings.choose_learner(match preset {
+            Preset::Default => LearnerName::Theta,
+            Preset::Paper => LearnerName::Paper,
+        });
         self.reset();
     }
 

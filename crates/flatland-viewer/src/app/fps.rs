@@ -1,6 +1,6 @@
 //! The app's own frame counter: frames per second over the last second for the top bar and,
 //! with `--fps-log`, a line every two seconds with the frame times (mean, 95th percentile,
-//! worst), the UI thread's time per frame and the learner's speed.
+//! worst), the UI thread's time per frame, the learner's speed and the frames drawn so far.
 
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
@@ -23,12 +23,15 @@ pub(super) struct FpsMeter {
     intervals: Vec<f64>,
     /// Main-thread CPU seconds of the frames since the last log (eframe's `cpu_usage`).
     cpu: (f64, u32),
+    /// Frames since the start (the log's last figure: frames between two lines, exactly).
+    total: u64,
 }
 
 impl FpsMeter {
     /// A frame begins.
     pub(super) fn tick(&mut self) {
         let now = Instant::now();
+        self.total += 1;
         if let Some(last) = self.frames.back() {
             self.intervals.push(now.duration_since(*last).as_secs_f64());
         }
@@ -101,11 +104,12 @@ impl ViewerApp {
         };
         let rate = self.status.as_ref().map_or(0.0, |s| s.steps_per_s);
         eprintln!(
-            "{frames}  steps/s {rate:.0}  steps {}  cells {}  samples {}  edges {}",
+            "{frames}  steps/s {rate:.0}  steps {}  cells {}  samples {}  edges {}  frames {}",
             self.steps(),
             self.cells(),
             self.status.as_ref().map_or(0, |s| s.samples.len()),
             self.scene.edges().len(),
+            self.fps.total,
         );
     }
 }

@@ -83,19 +83,6 @@ impl Pace {
         self.waited = self.waited * keep + w;
     }
 
-    /// How long to rest after training for `trained`: without a pace, half of it, so that the
-    /// learner takes two thirds of its core and the window's software rasterizer, which
-    /// needs both cores near 30 frames/s, the rest (on floorplan-1000 the θ-driven network at
-    /// full speed drew 20–29 frames/s without the rest, 24–37 and mostly 29–33 with it,
-    /// growing a fifth slower); with a pace, none (waiting for credit rests it).
-    pub(super) fn rest_after(&self, trained: Duration) -> Duration {
-        if self.per_s.is_none() {
-            trained / 2
-        } else {
-            Duration::ZERO
-        }
-    }
-
     /// The share of its recent time the learner spent waiting for credit (0 without a pace):
     /// time the lit scene may use.
     pub(super) fn idle_share(&self) -> f64 {
@@ -158,8 +145,9 @@ impl Learner {
             }
             self.pace.record(Duration::ZERO, now.elapsed());
         } else {
+            // No rest at full speed: in a window the learner runs at the lowest priority
+            // (`crate::background`), so it only takes what the window leaves.
             self.pace.record(now.elapsed(), Duration::ZERO);
-            std::thread::sleep(self.pace.rest_after(now.elapsed()));
         }
         if stopped.is_some() {
             self.running = false;
@@ -176,15 +164,6 @@ impl Learner {
 mod tests {
     use super::*;
     use flatland_testkit::assert_close;
-
-    #[test]
-    fn full_speed_rests_a_third_of_the_time_and_a_pace_not_at_all() {
-        let mut pace = Pace::default();
-        let slice = Duration::from_millis(15);
-        assert_eq!(pace.rest_after(slice), Duration::from_micros(7500));
-        pace.set(Some(20.0));
-        assert_eq!(pace.rest_after(slice), Duration::ZERO);
-    }
 
     #[test]
     fn growth_waits_for_credit_at_the_pace_asked_for() {
