@@ -1,11 +1,13 @@
 //! Drawing: functions of what they show plus a little interaction state; nothing here trains
-//! or waits. The `(s, t)` plots in [`plot`] with the cells' overlay rastered in [`overlay`],
+//! or waits. The `(s, t)` plots in [`plot`] with the cells' overlay rastered in [`overlay`]
+//! and their layers composited into one image in [`layers`],
 //! the scene view in [`scene`], a scene's edges and the lit scene in [`edges`] (their lines
 //! rastered once per change in [`raster`]), the learning
 //! curves in [`curves`], the small pieces they share in [`widgets`].
 
 mod curves;
 mod edges;
+mod layers;
 mod overlay;
 mod plot;
 mod raster;
@@ -17,6 +19,7 @@ use flatland_geom::DVec2;
 
 pub use curves::curves;
 pub use edges::{LitPaint, lit_view};
+pub use layers::composite;
 pub use overlay::{Marks, NEW_FOR, boundaries_image, overlay_image};
 pub use plot::{Overlay, PlotFrame, kernel_plot};
 pub use raster::EdgesTexture;

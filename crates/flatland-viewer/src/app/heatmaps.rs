@@ -1,7 +1,9 @@
-//! The textures of the `(s, t)` panels, each re-made only when the data behind it changes:
-//! the exact ζ (at the plot's resolution on screen), the learned ζ̃ and the error of the moment
+//! The images of the `(s, t)` panels, each re-made only when the data behind it changes: the
+//! exact ζ (at the plot's resolution on screen), the learned ζ̃ and the error of the moment
 //! shown, the samples, the cells' overlay and the edges' boundaries (both at the plot's size
 //! in screen pixels), and the one colour scale of the three heatmaps, fitted to the reference.
+//! Each panel's layers are composited on the CPU into one texture ([`views::composite`]), made
+//! again when one of them changes: the GPU draws one image per panel, not one per layer.
 
 use std::sync::Arc;
 
@@ -13,46 +15,70 @@ use crate::colormap::{grid_image, samples_image};
 use crate::views::{self, Marks};
 use crate::worker::{APPROX_RES, REFERENCE_RES};
 
-/// A texture and the key of the data it was made from: re-uploaded only when the key changes.
-struct Cached {
+/// An image kept to be composited, and the key of the data it was made from.
+struct Layer {
     key: [u64; 4],
-    texture: TextureHandle,
+    image: ColorImage,
 }
 
-/// Makes (or keeps) the texture in `slot` for `key`.
-fn cached_texture(
-    ctx: &egui::Context,
-    slot: &mut Option<Cached>,
-    name: &str,
-    key: [u64; 4],
-    make: impl FnOnce() -> ColorImage,
-) -> TextureId {
-    match slot {
-        Some(c) if c.key == key => {}
-        Some(c) => {
-            c.texture.set(make(), TextureOptions::NEAREST);
-            c.key = key;
+/// `slot`'s layer for `key`, made again only when the key changed.
+fn layer(slot: &mut Option<Layer>, key: [u64; 4], make: impl FnOnce() -> ColorImage) -> &Layer {
+    let kept = match slot.take() {
+        Some(l) if l.key == key => l,
+        _ => Layer { key, image: make() },
+    };
+    slot.insert(kept)
+}
+
+/// A panel's texture, composited from layers; made again when a layer's key or the side
+/// changes.
+#[derive(Default)]
+struct Composite {
+    key: Vec<[u64; 4]>,
+    texture: Option<TextureHandle>,
+}
+
+impl Composite {
+    fn get(
+        &mut self,
+        ctx: &egui::Context,
+        name: &str,
+        side: usize,
+        layers: &[&Layer],
+    ) -> TextureId {
+        let key: Vec<[u64; 4]> = std::iter::once([side as u64, 0, 0, 0])
+            .chain(layers.iter().map(|l| l.key))
+            .collect();
+        if self.texture.is_none() || self.key != key {
+            let images: Vec<&ColorImage> = layers.iter().map(|l| &l.image).collect();
+            let image = views::composite(side.max(1), &images);
+            match &mut self.texture {
+                Some(texture) => texture.set(image, TextureOptions::NEAREST),
+                None => {
+                    self.texture = Some(ctx.load_texture(name, image, TextureOptions::NEAREST));
+                }
+            }
+            self.key = key;
         }
-        None => {
-            let texture = ctx.load_texture(name, make(), TextureOptions::NEAREST);
-            *slot = Some(Cached { key, texture });
-        }
+        self.texture
+            .as_ref()
+            .map(TextureHandle::id)
+            .unwrap_or_default()
     }
-    slot.as_ref().map(|c| c.texture.id()).unwrap_or_default()
 }
 
 /// Boundaries rastered for one plot size, and where the drawn ones are.
 #[derive(Default)]
 struct Boundaries {
-    texture: Option<Cached>,
+    layer: Option<Layer>,
     drawn: Vec<f64>,
 }
 
 impl Boundaries {
-    fn get(&mut self, ctx: &egui::Context, shown: &Shown, side: usize) -> (TextureId, &[f64]) {
+    fn get(&mut self, shown: &Shown, side: usize) -> (&Layer, &[f64]) {
         let key = [shown.world.id, side as u64, 0, 0];
         let mut drawn = None;
-        let id = cached_texture(ctx, &mut self.texture, "boundaries", key, || {
+        let layer = layer(&mut self.layer, key, || {
             let (image, at) = views::boundaries_image(side, &shown.world.scene);
             drawn = Some(at);
             image
@@ -60,20 +86,24 @@ impl Boundaries {
         if let Some(at) = drawn {
             self.drawn = at;
         }
-        (id, &self.drawn)
+        (layer, &self.drawn)
     }
 }
 
-/// Every texture of the `(s, t)` panels, kept between frames.
+/// Every image of the `(s, t)` panels, kept between frames.
 #[derive(Default)]
 pub(super) struct Textures {
-    kernel: Option<Cached>,
-    approx: Option<Cached>,
-    error: Option<Cached>,
-    samples: Option<Cached>,
-    overlay: Option<Cached>,
+    kernel: Option<Layer>,
+    approx: Option<Layer>,
+    error: Option<Layer>,
+    samples: Option<Layer>,
+    overlay: Option<Layer>,
     big: Boundaries,
     small: Boundaries,
+    /// What the GPU draws: one texture per panel.
+    kernel_panel: Composite,
+    approx_panel: Composite,
+    error_panel: Composite,
     /// The colour scale and the world and scale kind it was fitted for.
     scale: Option<(u64, bool, Scale)>,
 }
@@ -81,14 +111,13 @@ pub(super) struct Textures {
 /// The textures of one frame's panels, and the heatmaps' colour scale.
 pub(super) struct Heatmaps<'a> {
     pub(super) scale: Scale,
+    /// The exact ζ with the boundaries, the samples (if shown) and the cells over it.
     pub(super) kernel: TextureId,
+    /// The learned ζ̃ and the error, with the boundaries; `None` before the first moment.
     pub(super) approx: Option<TextureId>,
     pub(super) error: Option<TextureId>,
-    pub(super) samples: Option<TextureId>,
-    pub(super) overlay: Option<TextureId>,
-    /// Boundaries for the big plot and where they are; for the small plots.
-    pub(super) boundaries_big: (TextureId, &'a [f64]),
-    pub(super) boundaries_small: TextureId,
+    /// The parameters of the boundaries drawn on the big plot (its axis ticks).
+    pub(super) ticks: &'a [f64],
 }
 
 /// What the panels need drawn, in screen pixels, and how.
@@ -130,17 +159,23 @@ impl Textures {
             None => (world.reference.grid(), REFERENCE_RES),
         };
         let key = [world.id, u64::from(req.log), res as u64, 0];
-        let kernel = cached_texture(ctx, &mut self.kernel, "kernel", key, || {
-            grid_image(values, res, scale)
-        });
+        let kernel = layer(&mut self.kernel, key, || grid_image(values, res, scale));
+        let (big, ticks) = self.big.get(shown, req.sides[0]);
+        let samples = samples(&mut self.samples, shown, req);
+        let overlay = overlay(&mut self.overlay, shown, req);
+        let layers: Vec<&Layer> = [Some(kernel), Some(big), samples, overlay]
+            .into_iter()
+            .flatten()
+            .collect();
+        let kernel = self.kernel_panel.get(ctx, "kernel", req.sides[0], &layers);
         let learned = shown.moment.as_ref().and_then(|m| m.learned.clone());
         let (approx, error) = match learned.filter(|g| g.world == world.id) {
             Some(g) => {
                 let key = [world.id, u64::from(req.log), Arc::as_ptr(&g) as u64, 0];
-                let at = cached_texture(ctx, &mut self.approx, "approx", key, || {
+                let approx = layer(&mut self.approx, key, || {
                     grid_image(&g.values, APPROX_RES, scale)
                 });
-                let et = cached_texture(ctx, &mut self.error, "error", key, || {
+                let error = layer(&mut self.error, key, || {
                     let err: Vec<f64> = g
                         .values
                         .iter()
@@ -149,76 +184,65 @@ impl Textures {
                         .collect();
                     grid_image(&err, APPROX_RES, scale)
                 });
-                (Some(at), Some(et))
+                let (small, _) = self.small.get(shown, req.sides[1]);
+                let side = req.sides[1];
+                (
+                    Some(self.approx_panel.get(ctx, "approx", side, &[approx, small])),
+                    Some(self.error_panel.get(ctx, "error", side, &[error, small])),
+                )
             }
             None => (None, None),
         };
-        let samples = self.samples(ctx, shown, req);
-        let overlay = self.overlay(ctx, shown, req);
-        let boundaries_small = self.small.get(ctx, shown, req.sides[1]).0;
         Heatmaps {
             scale,
             kernel,
             approx,
             error,
-            samples,
-            overlay,
-            boundaries_big: self.big.get(ctx, shown, req.sides[0]),
-            boundaries_small,
+            ticks,
         }
     }
+}
 
-    /// The samples of the moment shown, if they are to be drawn.
-    fn samples(&mut self, ctx: &egui::Context, shown: &Shown, req: &Request) -> Option<TextureId> {
-        let m = shown.moment.as_ref().filter(|_| req.show_samples)?;
-        let samples = &m.status.samples;
-        let key = [
-            shown.world.id,
-            samples.len() as u64,
-            m.status.growth.sets as u64,
-            0,
-        ];
-        Some(cached_texture(
-            ctx,
-            &mut self.samples,
-            "samples",
-            key,
-            || samples_image(samples.as_slice(), 2 * REFERENCE_RES),
-        ))
-    }
+/// The samples of the moment shown, if they are to be drawn.
+fn samples<'s>(slot: &'s mut Option<Layer>, shown: &Shown, req: &Request) -> Option<&'s Layer> {
+    let m = shown.moment.as_ref().filter(|_| req.show_samples)?;
+    let samples = &m.status.samples;
+    let key = [
+        shown.world.id,
+        samples.len() as u64,
+        m.status.growth.sets as u64,
+        0,
+    ];
+    Some(layer(slot, key, || {
+        samples_image(samples.as_slice(), 2 * REFERENCE_RES)
+    }))
+}
 
-    /// The cells and edges of the moment shown, at the big plot's size in pixels.
-    fn overlay(&mut self, ctx: &egui::Context, shown: &Shown, req: &Request) -> Option<TextureId> {
-        let m = shown.moment.as_ref()?;
-        let growth = &m.status.growth;
-        let side = req.sides[0];
-        let flags = u64::from(req.show_cells)
-            | u64::from(req.show_edges) << 1
-            | u64::from(req.px_per_point.to_bits()) << 2;
-        let key = [
-            Arc::as_ptr(growth) as u64,
-            side as u64,
-            flags,
-            shown.new_from as u64,
-        ];
-        Some(cached_texture(
-            ctx,
-            &mut self.overlay,
-            "overlay",
-            key,
-            || {
-                views::overlay_image(
-                    side,
-                    req.px_per_point,
-                    &Marks {
-                        cells: &growth.cells,
-                        edges: &growth.face_edges,
-                        new_from: shown.new_from,
-                        show_cells: req.show_cells,
-                        show_edges: req.show_edges,
-                    },
-                )
+/// The cells and edges of the moment shown, at the big plot's size in pixels.
+fn overlay<'s>(slot: &'s mut Option<Layer>, shown: &Shown, req: &Request) -> Option<&'s Layer> {
+    let m = shown.moment.as_ref()?;
+    let growth = &m.status.growth;
+    let side = req.sides[0];
+    let flags = u64::from(req.show_cells)
+        | u64::from(req.show_edges) << 1
+        | u64::from(req.px_per_point.to_bits()) << 2;
+    let key = [
+        Arc::as_ptr(growth) as u64,
+        side as u64,
+        flags,
+        shown.new_from as u64,
+    ];
+    Some(layer(slot, key, || {
+        views::overlay_image(
+            side,
+            req.px_per_point,
+            &Marks {
+                cells: &growth.cells,
+                edges: &growth.face_edges,
+                new_from: shown.new_from,
+                show_cells: req.show_cells,
+                show_edges: req.show_edges,
             },
-        ))
-    }
+        )
+    }))
 }

@@ -99,18 +99,13 @@ impl ViewerApp {
         let textures = self.textures.of(&ctx, shown, &request);
         kernel_frame.scale = Some(textures.scale);
         let big = views::Overlay {
-            boundaries: Some(textures.boundaries_big),
-            samples: textures.samples,
-            cells: textures.overlay,
+            ticks: textures.ticks,
             face_cells: shown
                 .moment
                 .as_ref()
                 .is_some_and(|m| m.status.growth.light.is_some()),
         };
-        let small = views::Overlay {
-            boundaries: Some((textures.boundaries_small, &[])),
-            ..views::Overlay::default()
-        };
+        let small = views::Overlay::default();
         let learned_title = match shown.moment.as_ref().map(|m| m.status.params.target) {
             Some(kernel_fit::Target::Visibility) => "learned ζ (unoccluded ζ × V)",
             _ => "learned ζ (SGCS)",

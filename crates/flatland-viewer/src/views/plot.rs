@@ -76,21 +76,18 @@ impl PlotFrame {
     }
 }
 
-/// What is drawn over a heatmap, each rastered beforehand (see `overlay`).
+/// What a panel's marks need beyond its image (whose layers are composited beforehand: the
+/// heatmap, the boundaries, the samples and the cells; `app::heatmaps`).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Overlay<'a> {
-    /// The surface edges' boundaries, and the parameters of those drawn (for the axis ticks).
-    pub boundaries: Option<(TextureId, &'a [f64])>,
-    /// The samples, if shown.
-    pub samples: Option<TextureId>,
-    /// The cells and the network's edges within faces.
-    pub cells: Option<TextureId>,
+    /// The parameters of the surface edges' boundaries drawn (for the axis ticks).
+    pub ticks: &'a [f64],
     /// The cells are the light-driven learner's (one per face): the legend says so.
     pub face_cells: bool,
 }
 
-/// One (s, t) panel: heatmap, boundaries, overlays, hover marks. Returns `(s, t)` under the
-/// pointer.
+/// One (s, t) panel: its image (heatmap and overlays), axes, labels, hover marks. Returns
+/// `(s, t)` under the pointer.
 pub fn kernel_plot(
     ui: &mut egui::Ui,
     frame: &PlotFrame,
@@ -127,20 +124,8 @@ pub fn kernel_plot(
             );
         }
     }
-    for tex in [
-        overlay.boundaries.map(|b| b.0),
-        overlay.samples,
-        overlay.cells,
-    ]
-    .into_iter()
-    .flatten()
-    {
-        painter.image(tex, plot, uv(), Color32::WHITE);
-    }
     if frame.big {
-        if let Some((_, ticks)) = overlay.boundaries {
-            axis_ticks(&painter, frame, ticks, weak);
-        }
+        axis_ticks(&painter, frame, overlay.ticks, weak);
         edge_labels(&painter, frame, scene, weak);
         axis_titles(&painter, frame, weak);
         marks_legend(&painter, frame, weak, overlay.face_cells);
