@@ -246,3 +246,60 @@ fn overlay<'s>(slot: &'s mut Option<Layer>, shown: &Shown, req: &Request) -> Opt
         )
     }))
 }
+
+#[cfg(test)]
+mod tests {
+    use egui::Color32;
+    use egui::epaint::ImageData;
+
+    use super::*;
+
+    /// The images uploaded to texture `id` since the last call, each as its first pixel and
+    /// its size.
+    fn uploads(ctx: &egui::Context, id: TextureId) -> Vec<(Color32, [usize; 2])> {
+        let delta = ctx.tex_manager().write().take_delta();
+        delta
+            .set
+            .get(&id)
+            .into_iter()
+            .flatten()
+            .map(|d| match &d.image {
+                ImageData::Color(image) => (image.pixels[0], image.size),
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_panel_is_composited_again_only_when_a_layer_or_its_side_changes() {
+        let ctx = egui::Context::default();
+        let mut panel = Composite::default();
+        let (mut base, mut over) = (None, None);
+        let made = std::cell::Cell::new(0);
+        let filled = |colour: Color32| {
+            made.set(made.get() + 1);
+            ColorImage::filled([2, 2], colour)
+        };
+        let red = layer(&mut base, [1, 0, 0, 0], || filled(Color32::RED));
+        let none = layer(&mut over, [7, 0, 0, 0], || filled(Color32::TRANSPARENT));
+        let id = panel.get(&ctx, "panel", 4, &[red, none]);
+        assert_eq!(uploads(&ctx, id), [(Color32::RED, [4, 4])]);
+        assert_eq!(panel.get(&ctx, "panel", 4, &[red, none]), id);
+        assert_eq!(uploads(&ctx, id), [], "the same layers: kept");
+        let red = layer(&mut base, [1, 0, 0, 0], || filled(Color32::GREEN));
+        assert_eq!(made.get(), 2, "the same key: the layer is not made again");
+        panel.get(&ctx, "panel", 6, &[red]);
+        assert_eq!(
+            uploads(&ctx, id),
+            [(Color32::RED, [6, 6])],
+            "a new side, a layer less"
+        );
+        let blue = layer(&mut base, [2, 0, 0, 0], || filled(Color32::BLUE));
+        panel.get(&ctx, "panel", 6, &[blue]);
+        assert_eq!(
+            uploads(&ctx, id),
+            [(Color32::BLUE, [6, 6])],
+            "a layer's new key"
+        );
+        assert_eq!(made.get(), 3);
+    }
+}
