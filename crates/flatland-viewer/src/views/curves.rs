@@ -80,15 +80,36 @@ fn b_curves(ui: &mut egui::Ui, lit: &Lit, height: f32) {
 }
 
 /// A plot of `height` with a legend and y from 0, fixed in place (no scroll, zoom or drag):
-/// the curves follow the run, not the pointer.
+/// the curves follow the run, not the pointer. Its x axis counts (steps, rays, rounds) in
+/// [`count_label`]s, so a long run's "2000000" does not run into the next plot.
 fn fixed_plot(id: &str, height: f32) -> Plot<'_> {
     Plot::new(id)
         .height(height)
+        .x_axis_formatter(|mark, _| count_label(mark.value, mark.step_size))
         .include_y(0.0)
         .legend(Legend::default())
         .allow_scroll(false)
         .allow_zoom(false)
         .allow_drag(false)
+}
+
+/// A count on an axis whose marks are `step` apart, short: `950`, `12k`, `2.5M`; with as
+/// many decimals (up to 3) as the step needs, so neighbouring marks never read the same.
+fn count_label(v: f64, step: f64) -> String {
+    let (scale, unit) = match v.abs() {
+        a if a >= 1e9 => (1e9, "G"),
+        a if a >= 1e6 => (1e6, "M"),
+        a if a >= 1e4 => (1e3, "k"),
+        _ => (1.0, ""),
+    };
+    let step = (step / scale).abs();
+    let decimals = (0..3)
+        .find(|&d| {
+            let shifted = step * 10f64.powi(d);
+            (shifted - shifted.round()).abs() < 1e-6 * shifted.max(1.0)
+        })
+        .unwrap_or(3) as usize;
+    format!("{:.*}{unit}", decimals, v / scale)
 }
 
 /// A learning curve. Never aggregated into a band: egui_plot fills the span of points that share
@@ -202,4 +223,32 @@ fn counts(
             .style(LineStyle::dashed_dense()),
         );
     });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counts_on_an_axis_are_short_and_tell_neighbouring_marks_apart() {
+        let label = |v: f64, step: f64| count_label(v, step);
+        assert_eq!(label(0.0, 500.0), "0");
+        assert_eq!(label(950.0, 50.0), "950");
+        assert_eq!(label(2500.0, 500.0), "2500");
+        assert_eq!(label(12_000.0, 2000.0), "12k");
+        assert_eq!(label(250_000.0, 50_000.0), "250k");
+        assert_eq!(label(2e6, 1e6), "2M");
+        assert_eq!(label(1.5e6, 5e5), "1.5M");
+        assert_eq!(label(1.25e6, 2.5e5), "1.25M");
+        assert_eq!(label(3e9, 1e9), "3G");
+        assert_eq!(label(-2e6, 1e6), "-2M");
+        // Rounds, zoomed in: fractions of a step.
+        assert_eq!(label(1.5, 0.5), "1.5");
+        assert_eq!(label(1.05, 0.05), "1.05");
+        assert_eq!(
+            label(1.0, 1.0 / 3.0),
+            "1.000",
+            "a step no decimal count fits: 3"
+        );
+    }
 }
