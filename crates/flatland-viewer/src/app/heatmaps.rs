@@ -46,10 +46,8 @@ impl Composite {
         side: usize,
         layers: &[&Layer],
     ) -> TextureId {
-        let key: Vec<[u64; 4]> = std::iter::once([side as u64, 0, 0, 0])
-            .chain(layers.iter().map(|l| l.key))
-            .collect();
-        if self.texture.is_none() || self.key != key {
+        let key = || std::iter::once([side as u64, 0, 0, 0]).chain(layers.iter().map(|l| l.key));
+        if self.texture.is_none() || !self.key.iter().copied().eq(key()) {
             let images: Vec<&ColorImage> = layers.iter().map(|l| &l.image).collect();
             let image = views::composite(side.max(1), &images);
             match &mut self.texture {
@@ -58,7 +56,7 @@ impl Composite {
                     self.texture = Some(ctx.load_texture(name, image, TextureOptions::NEAREST));
                 }
             }
-            self.key = key;
+            self.key = key().collect();
         }
         self.texture
             .as_ref()

@@ -3,6 +3,7 @@
 //! room, so a scene of a thousand edges is drawn as lines, not as a smear of labels.
 
 use std::collections::HashSet;
+use std::hash::{BuildHasher, Hasher};
 
 use egui::{Align2, Color32, FontId, Painter, Rect, Sense, Stroke, pos2, vec2};
 use flatland_geom::{Role, Scene};
@@ -174,11 +175,13 @@ fn screen_normal(e: &flatland_geom::Edge) -> egui::Vec2 {
     vec2(n.x as f32, -n.y as f32)
 }
 
-/// A hash of `words` (FNV-1a over the words): a texture's key.
+/// A hash of `words` (foldhash, fixed seed): a texture's key.
 fn fingerprint(words: impl IntoIterator<Item = u64>) -> u64 {
-    words.into_iter().fold(0xcbf2_9ce4_8422_2325, |h, w| {
-        (h ^ w).wrapping_mul(0x0000_0100_0000_01b3)
-    })
+    let mut hasher = foldhash::fast::FixedState::with_seed(0).build_hasher();
+    for word in words {
+        hasher.write_u64(word);
+    }
+    hasher.finish()
 }
 
 /// [`fingerprint`] of what a scene's lines depend on: each edge's ends, role, emission and
