@@ -1,7 +1,7 @@
 //! Whole fits and single fit steps, as `flatland fit` runs them (the reference grid is built
 //! once, outside the timing):
 //!
-//! - `fit/default_maze_400`: the default learner (visibility only) on `maze` to 400 cells;
+//! - `fit/default_maze_400`: the visibility network (visibility only) on `maze` to 400 cells;
 //! - `fit/default_convex_4096_400`: the same on issue 20's convex room (4096 inward walls
 //!   around a box of 4 blockers, `examples/convex_room.rs`), a new kernel each time (so no
 //!   pair classified in one run is kept for the next): its pairs where visibility varies are

@@ -1,4 +1,4 @@
-//! Cost against scene size: the default learner's fit (`LightFit` to its default tolerance)
+//! Cost against scene size: the light-driven learner's fit (`LightFit` to its default tolerance)
 //! and solve, and the exact solve, on generated floor plans of 10², 10³ and 10⁴ edges, each
 //! on the mesh `flatland solve` chooses (its exact solve's estimated error below 1 %). Read
 //! the ratios between sizes: 10× the edges should cost about 10× (the log–log slope, which

@@ -4,7 +4,7 @@
 //!
 //! - `sgcs_step/paper/*`: the paper's network (`Params::default()`: summed output, NLMS,
 //!   insertion at edge midpoints), ungated;
-//! - `sgcs_step/default/*`: a network configured like the default learner (normalised output,
+//! - `sgcs_step/default/*`: a network configured like the visibility network (normalised output,
 //!   local rule, insertion at the worst sample, error-sum resource), stepped with a region gate
 //!   like kernel-fit's `FaceGate`: the regions are the cells of an arrangement of hyperplanes
 //!   (as a face is the cell of an arrangement of event-point curves), a region's cells are

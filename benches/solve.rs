@@ -50,7 +50,7 @@ fn solves(c: &mut Criterion) {
             b.iter(|| solve(black_box(&uniform), &mesh, &params, &never).expect("solve"))
         });
 
-        // The default learner, as `flatland fit --cells 400` fits it.
+        // The visibility network, as `flatland fit --cells 400` fits it.
         let shared = Arc::new(bundled(name));
         let reference = Arc::new(Reference::new(&shared, 64, 1024, 0));
         let fit_params = FitParams {

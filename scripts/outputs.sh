@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # Writes what the CLI computes on every bundled scene, times and memory stripped, so two builds
 # can be diffed bit for bit (`diff -r A B` after a refactor must print nothing):
-#   fit-SCENE-PRESET.json     flatland fit --json --preset PRESET (both presets)
+#   fit-SCENE-PRESET.json     flatland fit --json --preset PRESET (both networks)
 #   model-SCENE-PRESET.json   the model that fit wrote (--out), its summary's times stripped
 #   solve-SCENE-fit-PRESET.json  flatland solve --json --kernel <that model>
-#   solve-SCENE-KERNEL.json      flatland solve --json --kernel exact | default (the light learner)
+#   solve-SCENE-KERNEL.json      flatland solve --json --kernel exact | light (the light-driven learner)
 # Usage: scripts/outputs.sh OUT_DIR [FLATLAND_BINARY]   (default: this tree's target/release/flatland)
 # Needs jq. Every run is seeded (the commands' default seed), so a difference is a change.
 set -euo pipefail
@@ -30,7 +30,7 @@ run() { # NAME ARGS…: runs the binary, keeps its JSON stripped, its stderr bes
 count=0
 for scene in "$root"/scenes/*.ron; do
   name="$(basename "$scene" .ron)"
-  for preset in default paper; do
+  for preset in visibility paper; do
     model="$models/$name-$preset.json"
     run "fit-$name-$preset" fit --scene "$scene" --preset "$preset" --out "$model"
     run "solve-$name-fit-$preset" solve --scene "$scene" --kernel "$model"
@@ -38,7 +38,7 @@ for scene in "$root"/scenes/*.ron; do
       "$model" >"$out/model-$name-$preset.json"
     count=$((count + 3))
   done
-  for kernel in exact default; do
+  for kernel in exact light; do
     run "solve-$name-$kernel" solve --scene "$scene" --kernel "$kernel"
     count=$((count + 1))
   done

@@ -56,6 +56,19 @@ fn assert_one_line_error(out: &Output, needles: &[&str]) {
     }
 }
 
+/// A value the command line refuses before the command runs (clap's usage error, exit code
+/// 2): the first line names the flag's value and what is wrong, never a panic.
+fn assert_usage_error(out: &Output, needles: &[&str]) {
+    let err = stderr(out);
+    assert_eq!(out.status.code(), Some(2), "stderr: {err}");
+    let first = err.lines().next().unwrap_or_default();
+    assert!(first.starts_with("error: invalid value"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    for needle in needles {
+        assert!(first.contains(needle), "`{needle}` missing from: {err}");
+    }
+}
+
 fn as_str(p: &Path) -> &str {
     p.to_str().unwrap()
 }
@@ -450,7 +463,7 @@ fn solve_builds_every_baseline_and_reads_a_model() {
     // A model from `flatland fit --out`, solved on its own scene.
     let dir = temp_dir("solve-model");
     let model = dir.join("m.json");
-    // (fig3: the default learner has something to learn there; on the box it would have none.)
+    // (fig3: the visibility network has something to learn there; on the box it would have none.)
     let out = flatland(&[
         "fit",
         "--scene",
@@ -500,9 +513,9 @@ fn solve_rejects_bad_arguments_with_one_line_and_writes_nothing() {
         &run(&["--elements", "100000"]),
         &["elements", "at most 8192"],
     );
-    assert_one_line_error(
+    assert_usage_error(
         &run(&["--kernel", "sgsc"]),
-        &["`sgsc`", "exact, default, hr"],
+        &["`sgsc`", "light, visibility, paper"],
     );
     assert_one_line_error(
         &run(&["--kernel", "no/such/model.json"]),
@@ -643,7 +656,7 @@ fn regression_undefined_errors_are_printed_as_undefined() {
         json["rel_l2_grid"].is_null() && json["rel_l2_heldout"].is_null(),
         "{json}"
     );
-    // With light, the same command prints numbers: 0 for the default learner, exact in a room
+    // With light, the same command prints numbers: 0 for the visibility network, exact in a room
     // without occluders, and the paper's network's error.
     write_scene(&scene, &room(1.0));
     let out = flatland(&["fit", "--scene", as_str(&scene), "--cells", "10", "--json"]);
@@ -961,7 +974,7 @@ fn assert_interrupted(s: &Stopped, kept: &str) {
 #[test]
 fn regression_ctrl_c_stops_a_fit_and_says_what_was_kept() {
     let dir = temp_dir("ctrl-c-fit");
-    // The paper's network: 3000 cells take long (the default learner is exact on fig3 within
+    // The paper's network: 3000 cells take long (the visibility network is exact on fig3 within
     // a tenth of a second and would finish before the signal).
     let plain = interrupt_when(
         &dir,
@@ -1000,7 +1013,7 @@ fn regression_ctrl_c_stops_a_fit_and_says_what_was_kept() {
 #[test]
 fn regression_ctrl_c_stops_the_final_refit() {
     let dir = temp_dir("ctrl-c-refit");
-    // At 600 cells the paper's refit takes several seconds (the default learner has none).
+    // At 600 cells the paper's refit takes several seconds (the visibility network has none).
     let stopped = interrupt_when(
         &dir,
         &[
@@ -1125,7 +1138,7 @@ fn learned_fields(json: &serde_json::Value) -> serde_json::Map<String, serde_jso
 fn eval_json_equals_fit_json_on_the_same_model() {
     let dir = temp_dir("eval-equals-fit");
     let fig3 = scene("fig3");
-    for preset in ["default", "paper"] {
+    for preset in ["visibility", "paper"] {
         let model = format!("{preset}.json");
         let fit = fit_json(
             &dir,
@@ -1198,9 +1211,9 @@ fn a_resumed_fit_equals_the_uninterrupted_one() {
 }
 
 /// Combinations a learner would silently ignore are refused before any work, naming both
-/// parameters; the default learner's old name still solves.
+/// parameters; a method's old name is refused with its new one, before any work.
 #[test]
-fn meaningless_parameters_are_refused_and_sgcs_still_names_the_default_learner() {
+fn meaningless_parameters_and_old_method_names_are_refused_naming_what_to_write() {
     let fig3 = scene("fig3");
     for (preset, set, needles) in [
         (
@@ -1209,41 +1222,30 @@ fn meaningless_parameters_are_refused_and_sgcs_still_names_the_default_learner()
             ["`importance`", "`target` = zeta"],
         ),
         (
-            "default",
+            "visibility",
             "target_error=0.1",
             ["`target_error`", "`eval_every`"],
         ),
     ] {
         let mut args = vec!["fit", "--scene", as_str(&fig3), "--preset", preset];
         args.extend(["--set", set]);
-        if preset == "default" {
+        if preset == "visibility" {
             args.extend(["--set", "eval_every=0"]);
         }
         assert_one_line_error(&flatland(&args), &needles);
     }
-    let args = |kernel| {
-        vec![
-            "--scene",
-            as_str(&fig3),
-            "--kernel",
-            kernel,
-            "--basis",
-            "30",
-            "--elements",
-            "64",
-            "--reference-elements",
-            "256",
-        ]
-    };
-    let (old, new) = (solve_json(&args("sgcs")), solve_json(&args("default")));
-    assert_eq!(new["kernel"], "default");
-    for field in [
-        "basis_functions",
-        "rel_l2_b",
-        "rel_l2_reflected",
-        "iterations",
+    for (command, flag, old, new) in [
+        ("solve", "--kernel", "sgcs", "`light`"),
+        ("solve", "--kernel", "default", "`light`"),
+        ("solve", "--kernel", "first-shot", "`visibility`"),
+        ("fit", "--preset", "default", "`visibility`"),
+        ("bench", "--methods", "sgcs-paper", "`paper`"),
     ] {
-        assert_eq!(old[field], new[field], "{field}");
+        let mut args = vec![command, "--scene", as_str(&fig3), flag, old];
+        if command == "bench" {
+            args.extend(["--out", "never-made"]);
+        }
+        assert_usage_error(&flatland(&args), &[&format!("`{old}`"), new]);
     }
 }
 
@@ -1289,11 +1291,11 @@ fn scene_generates_a_floor_plan_and_a_hall_of_the_size_asked_for_the_same_each_t
     assert_one_line_error(&out, &["edges", "[24, 1000000]", "5"]);
 }
 
-/// The default kernel learns a generated floor plan to its tolerance, says how far it thinks
-/// it is beside the measured error, and the measured error is within reach of its estimate
-/// plus the mesh's own discretization error.
+/// The light-driven learner learns a generated floor plan to its tolerance, says how far it
+/// thinks it is beside the measured error, and the measured error is within reach of its
+/// estimate plus the mesh's own discretization error.
 #[test]
-fn solve_with_the_default_learner_meets_its_tolerance_on_a_floor_plan_and_says_so() {
+fn solve_with_the_light_driven_learner_meets_its_tolerance_on_a_floor_plan_and_says_so() {
     let dir = temp_dir("solve-light");
     let plan = dir.join("plan.json");
     let made = flatland(&[
@@ -1311,11 +1313,11 @@ fn solve_with_the_default_learner_meets_its_tolerance_on_a_floor_plan_and_says_s
         "--scene",
         as_str(&plan),
         "--kernel",
-        "sgcs",
+        "light",
         "--tolerance",
         "0.02",
     ]);
-    assert_eq!(json["kernel"], "default");
+    assert_eq!(json["kernel"], "light");
     assert_eq!(json["stopped"], "tolerance", "{json}");
     let estimated = json["estimated_rel_l2_reflected"].as_f64().unwrap();
     let measured = json["rel_l2_reflected"].as_f64().unwrap();
@@ -1331,7 +1333,7 @@ fn solve_with_the_default_learner_meets_its_tolerance_on_a_floor_plan_and_says_s
         "--scene",
         as_str(&plan),
         "--kernel",
-        "sgcs",
+        "light",
         "--tolerance",
         "1.5",
     ]);

@@ -15,10 +15,11 @@ use flatland_lab::report::timed::{
     write_relight, write_rows,
 };
 use flatland_lab::timed::{
-    Contender, DEFAULT_MAX_SECONDS, DEFAULT_TRACER_SECONDS, Scorer, TimedPlan, TimedRow, run_timed,
+    DEFAULT_MAX_SECONDS, DEFAULT_TRACER_SECONDS, Scorer, TimedPlan, TimedRow, run_timed,
 };
 use flatland_lab::{interrupt, output};
-use flatland_solve::{DEFAULT_ERROR_BOUND, ExactReference, SolveParams, Stop, elements_for_error};
+use flatland_methods::Method;
+use flatland_solve::{ExactReference, LitParams, LitScene, ReferenceMesh, SolveParams, Stop};
 
 use super::SceneArgs;
 
@@ -27,17 +28,17 @@ use super::SceneArgs;
 pub struct Args {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// Methods, comma-separated: default (the light-driven learner), first-shot (the learner
+    /// Methods, comma-separated: light (the light-driven learner), visibility (the network
     /// `flatland fit` trains), paper (the paper's network with the refit), paper-norefit, hr,
-    /// clustered (HR with clustering), uniform, exact, tracer (`sgcs` still names default).
-    /// Default: all of them; with --scaling: default, exact, hr, clustered, tracer.
-    #[arg(long, value_delimiter = ',')]
-    pub methods: Option<Vec<String>>,
+    /// clustered (HR with clustering), uniform, exact, tracer. Default: all of these; with
+    /// --scaling: light, exact, hr, clustered, tracer.
+    #[arg(long, value_delimiter = ',', value_parser = Method::parse)]
+    pub methods: Option<Vec<Method>>,
     /// The light-driven learner's tolerances on its estimated error of B − E, each in (0, 1),
     /// comma-separated; one row each.
     #[arg(long, value_delimiter = ',', default_value = "0.3,0.1,0.03,0.01,0.003")]
     pub tolerances: Vec<f64>,
-    /// Budgets (numbers of basis functions, each in [3, 10 000 000]) of first-shot, paper,
+    /// Budgets (numbers of basis functions, each in [3, 10 000 000]) of visibility, paper,
     /// paper-norefit, hr, clustered and uniform, comma-separated: exactly these. Default: 50, 100, 200,
     /// 400, 800, then doubling until a row is over --max-seconds.
     #[arg(long, value_delimiter = ',')]
@@ -81,16 +82,16 @@ pub struct Args {
 }
 
 /// The methods a bench runs when none are named.
-const ALL_METHODS: [&str; 9] = [
-    "default",
-    "first-shot",
-    "paper",
-    "paper-norefit",
-    "hr",
-    "clustered",
-    "uniform",
-    "exact",
-    "tracer",
+const ALL_METHODS: [Method; 9] = [
+    Method::Light,
+    Method::Visibility,
+    Method::Paper,
+    Method::PaperNorefit,
+    Method::Hr,
+    Method::Clustered,
+    Method::Uniform,
+    Method::Exact,
+    Method::Tracer,
 ];
 
 /// Most seeds per method and setting (each is a whole run).
@@ -99,13 +100,7 @@ const MAX_SEEDS: u64 = 1000;
 impl Args {
     /// The plan the arguments ask for, checked before any work.
     fn plan(&self) -> Result<TimedPlan> {
-        let methods = self
-            .methods
-            .clone()
-            .unwrap_or_else(|| ALL_METHODS.iter().map(|m| (*m).to_owned()).collect())
-            .iter()
-            .map(|m| Contender::parse(m.trim()))
-            .collect::<Result<Vec<_>, _>>()?;
+        let methods = self.methods.clone().unwrap_or_else(|| ALL_METHODS.to_vec());
         let mut plan = TimedPlan::new(methods);
         plan.tolerances = self.tolerances.clone();
         if let Some(budgets) = &self.budgets {
@@ -202,7 +197,8 @@ fn relight(
     Ok(())
 }
 
-/// The mesh and exact references of the scene, as `flatland solve` chooses them.
+/// The mesh as `flatland solve` chooses it (or `--solve-elements`) and the exact reference on
+/// four times as many elements.
 fn scorer(
     kernel: &Arc<flatland_geom::Kernel>,
     args: &Args,
@@ -210,22 +206,23 @@ fn scorer(
     stop: &Stop,
 ) -> Result<Scorer> {
     let zeta = Arc::new(flatland_lab::reference(kernel, args.res, &plan.fit));
-    let elements = match args.solve_elements {
-        Some(n) => n,
-        None => {
+    let lit = match args.solve_elements {
+        Some(n) => {
+            let reference = ExactReference::default_elements_for(kernel, n);
             let params = SolveParams::default();
-            elements_for_error(kernel, DEFAULT_ERROR_BOUND, &params, stop)
-                .context("choosing the solve's elements")?
-                .estimate
-                .elements
+            LitScene::scoring(Arc::clone(kernel), n, reference, &params, stop)
+        }
+        None => {
+            let params = LitParams {
+                reference: ReferenceMesh::FourTimes,
+                ..LitParams::default()
+            };
+            LitScene::new(Arc::clone(kernel), &params, stop)
         }
     };
+    let lit = lit.context("the exact reference solve")?;
     interrupt::check()?;
-    let reference_elements = ExactReference::default_elements_for(kernel, elements);
-    let scorer = Scorer::new(kernel, elements, reference_elements, zeta, stop)
-        .context("the exact reference solve")?;
-    interrupt::check()?;
-    Ok(scorer)
+    Ok(Scorer::with_zeta(lit, zeta))
 }
 
 /// One line on stderr per row (a failure with its reason), and the Ctrl-C note.

@@ -16,9 +16,11 @@ use flatland_lab::{interrupt, output};
 pub struct Args {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// Which learner: `default` (the default learner) or `paper` (the paper's network).
-    #[arg(long, value_enum, default_value_t = super::fit::PresetArg::Default)]
-    pub preset: super::fit::PresetArg,
+    /// Which network: `visibility` (learns V where geometry cannot decide it) or `paper` (the
+    /// paper's network, learning ζ).
+    #[arg(long, value_name = "NETWORK", default_value = "visibility",
+          value_parser = flatland_methods::Method::parse_network)]
+    pub preset: kernel_fit::Preset,
     /// Cells of the fit shown.
     #[arg(long, default_value_t = FitParams::default().target_cells)]
     pub cells: usize,
@@ -45,7 +47,7 @@ pub fn run(args: &Args) -> Result<()> {
     let params = FitParams {
         target_cells: args.cells,
         seed: args.seed,
-        ..args.preset.preset().params()
+        ..args.preset.params()
     };
     params.validate()?;
     output::folder(

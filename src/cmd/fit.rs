@@ -22,35 +22,16 @@ pub enum ResamplingArg {
     Uniform,
 }
 
-/// `--preset` values.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, Default)]
-pub enum PresetArg {
-    /// The default learner: visibility only, where geometry cannot decide it, with cells that
-    /// never straddle a shadow boundary.
-    #[default]
-    Default,
-    /// The paper's network: ζ learned from γ(s, t) (plus a least-squares refit).
-    Paper,
-}
-
-impl PresetArg {
-    /// The library's preset.
-    pub fn preset(self) -> Preset {
-        match self {
-            PresetArg::Default => Preset::Default,
-            PresetArg::Paper => Preset::Paper,
-        }
-    }
-}
-
 /// Arguments of `flatland fit`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// Which learner: `default` (the default learner) or `paper` (the paper's network).
-    #[arg(long, value_enum, default_value_t = PresetArg::Default)]
-    pub preset: PresetArg,
+    /// Which network: `visibility` (learns V where geometry cannot decide it) or `paper` (the
+    /// paper's network, learning ζ).
+    #[arg(long, value_name = "NETWORK", default_value = "visibility",
+          value_parser = flatland_methods::Method::parse_network)]
+    pub preset: Preset,
     /// Stop at this many cells, in [3, 10 000 000].
     #[arg(long, default_value_t = FitParams::default().target_cells)]
     pub cells: usize,
@@ -116,7 +97,7 @@ impl Args {
 
     /// The fit parameters these arguments ask for: the preset's, with the flags given.
     pub fn params(&self) -> Result<FitParams> {
-        let d = self.preset.preset().params();
+        let d = self.preset.params();
         anyhow::ensure!(
             !self.factor_emission || d.target == Target::Zeta,
             "--factor-emission applies to the paper's network (--preset paper), which learns ζ"
@@ -150,7 +131,7 @@ impl Args {
 /// Steps between two progress callbacks (bar updates, checkpoint and Ctrl-C checks).
 const PROGRESS_EVERY: u64 = 1000;
 
-/// Lists the pairs of surface edges whose visibility varies (where the default learner draws
+/// Lists the pairs of surface edges whose visibility varies (where the visibility network draws
 /// its samples; the kernel keeps the list for `Fit::new`), with a bar of the pairs decided:
 /// on a floor plan of 10⁴ edges it takes most of the set-up. Ctrl-C during it ends the
 /// command through the handler's grace period, with nothing computed yet to keep.

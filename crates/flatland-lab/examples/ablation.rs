@@ -1,4 +1,4 @@
-//! What each idea of the default learner earns on some scenes, against hierarchical radiosity:
+//! What each idea of the visibility network earns on some scenes, against hierarchical radiosity:
 //! `cargo run --release -p flatland-lab --example ablation -- [CELLS] [SEEDS] [SCENES]` where
 //! SCENES is a comma-separated list of bundled scene names and `roomN` (random room N), e.g.
 //! `fig3,maze,room3`. `flatland results` writes the same tables into RESULTS.md.

@@ -1,4 +1,4 @@
-//! What each idea of the default learner earns: the path from the paper's network to the
+//! What each idea of the visibility network earns: the path from the paper's network to the
 //! default one idea at a time, and the default with one idea taken out at a time. `flatland
 //! results` runs both on the bundled scenes and on random rooms (docs/ALGORITHM.md §4).
 
@@ -20,7 +20,7 @@ pub struct Variant {
     pub params: FitParams,
 }
 
-/// From the paper's network to the default learner, adding one idea at a time; the last
+/// From the paper's network to the visibility network, adding one idea at a time; the last
 /// variant is [`FitParams::default`].
 pub fn path() -> Vec<Variant> {
     let paper = FitParams::paper();
@@ -64,7 +64,7 @@ pub fn path() -> Vec<Variant> {
     out
 }
 
-/// The default learner, then the default with one idea taken out at a time.
+/// The visibility network, then the default with one idea taken out at a time.
 pub fn leave_one_out() -> Vec<Variant> {
     let d = FitParams::default();
     let without = |name: &'static str, change: &dyn Fn(&mut FitParams)| {

@@ -16,71 +16,23 @@ use serde::{Deserialize, Serialize};
 use kernel_fit::{Fit, FitParams};
 
 use crate::LabError;
+pub use flatland_methods::Method;
 
-/// A method the benchmark compares.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Method {
-    /// The default learner ([`Preset::Default`](kernel_fit::Preset::Default)).
-    #[serde(alias = "sgcs")]
-    Default,
-    /// The paper's network with the least-squares output refit
-    /// ([`Preset::Paper`](kernel_fit::Preset::Paper); one fit gives this row and the next).
-    #[serde(alias = "sgcs-paper")]
-    Paper,
-    /// The paper's network with its delta-rule output weights only.
-    #[serde(
-        rename = "paper-norefit",
-        alias = "sgcs-paper-norefit",
-        alias = "sgcs-paper-no-refit"
-    )]
-    PaperNoRefit,
-    /// Hierarchical radiosity (Hanrahan, Salzman, Aupperle 1991).
-    Hr,
-    /// Piecewise constant on a g × g grid.
-    Uniform,
-}
-
-/// The names of the methods before the default learner was named so, still accepted.
-const ALIASES: [(&str, Method); 3] = [
-    ("sgcs", Method::Default),
-    ("sgcs-paper", Method::Paper),
-    ("sgcs-paper-norefit", Method::PaperNoRefit),
+/// The methods the R4 table compares: the two networks and the baselines at a budget.
+pub const METHODS: [Method; 5] = [
+    Method::Visibility,
+    Method::Paper,
+    Method::PaperNorefit,
+    Method::Hr,
+    Method::Uniform,
 ];
 
-impl Method {
-    /// Every method, in the order tables list them.
-    pub const ALL: [Method; 5] = [
-        Method::Default,
-        Method::Paper,
-        Method::PaperNoRefit,
-        Method::Hr,
-        Method::Uniform,
-    ];
-
-    /// The name used in files and on the command line.
-    pub fn name(self) -> &'static str {
-        match self {
-            Method::Default => "default",
-            Method::Paper => "paper",
-            Method::PaperNoRefit => "paper-norefit",
-            Method::Hr => "hr",
-            Method::Uniform => "uniform",
-        }
-    }
-
-    /// Parses a name as [`Method::name`] writes it (or as it was written before: `sgcs`,
-    /// `sgcs-paper`, `sgcs-paper-norefit`).
-    pub fn parse(name: &str) -> Result<Method, LabError> {
-        Method::ALL
-            .into_iter()
-            .find(|m| m.name() == name)
-            .or_else(|| ALIASES.iter().find(|a| a.0 == name).map(|a| a.1))
-            .ok_or_else(|| LabError::InvalidParameter {
-                name: "methods",
-                value: name.to_owned(),
-                valid: "a comma-separated list of default, paper, paper-norefit, hr, uniform",
-            })
+/// The error of a method the table does not run.
+fn not_in_table(method: Method) -> LabError {
+    LabError::InvalidParameter {
+        name: "methods",
+        value: method.name().to_owned(),
+        valid: "visibility, paper, paper-norefit, hr or uniform",
     }
 }
 
@@ -157,8 +109,11 @@ impl BenchPlan {
             return bad(
                 "methods",
                 "(none)".into(),
-                "at least one of default, paper, paper-norefit, hr, uniform",
+                "at least one of visibility, paper, paper-norefit, hr, uniform",
             );
+        }
+        if let Some(&m) = self.methods.iter().find(|m| !METHODS.contains(m)) {
+            return Err(not_in_table(m));
         }
         if let Some(b) = self.budgets.iter().find(|&&b| b < 3) {
             return bad("budgets", b.to_string(), "each ≥ 3");
@@ -199,7 +154,7 @@ pub fn run_bench(
             let wants_paper = plan
                 .methods
                 .iter()
-                .any(|m| matches!(m, Method::Paper | Method::PaperNoRefit));
+                .any(|m| matches!(m, Method::Paper | Method::PaperNorefit));
             let paper = if wants_paper {
                 Some(paper_rows(
                     kernel,
@@ -215,9 +170,11 @@ pub fn run_bench(
             for &method in &plan.methods {
                 let s = solver.as_ref();
                 let row = match method {
-                    Method::Default => learner_row(kernel, reference, &plan.fit, budget, seed, s)?,
+                    Method::Visibility => {
+                        learner_row(kernel, reference, &plan.fit, budget, seed, s)?
+                    }
                     Method::Paper => paper.as_ref().map(|r| r.0.clone()).expect("fitted above"),
-                    Method::PaperNoRefit => {
+                    Method::PaperNorefit => {
                         paper.as_ref().map(|r| r.1.clone()).expect("fitted above")
                     }
                     Method::Hr => baseline_row(
@@ -236,6 +193,7 @@ pub fn run_bench(
                         reference,
                         s,
                     )?,
+                    other => return Err(not_in_table(other)),
                 };
                 rows.push(row);
                 progress(rows.len(), total);
@@ -339,7 +297,7 @@ fn baseline_row<A: Representation>(
     )
 }
 
-/// The default learner at `budget` cells (it may stop with fewer when it has converged).
+/// The visibility network at `budget` cells (it may stop with fewer when it has converged).
 pub(crate) fn learner_row(
     kernel: &Arc<Kernel>,
     reference: &Arc<Reference>,
@@ -351,7 +309,7 @@ pub(crate) fn learner_row(
     let mut learner = fitted(kernel, reference, fit, budget, seed)?;
     let summary = learner.finish()?;
     row(
-        Method::Default,
+        Method::Visibility,
         budget,
         seed,
         learner.model(),
@@ -384,7 +342,7 @@ pub(crate) fn paper_rows(
         .expect("the paper's network ends with its refit");
     let train_s = summary.wall_s - summary.refit_s;
     let before = row(
-        Method::PaperNoRefit,
+        Method::PaperNorefit,
         budget,
         seed,
         &learned,
@@ -434,7 +392,7 @@ mod tests {
         let scene = flatland_geom::bundled::scene("fig3").unwrap();
         let kernel = Arc::new(Kernel::new(scene));
         let reference = Arc::new(Reference::new(&kernel, 48, 512, 3));
-        let mut plan = BenchPlan::new(Method::ALL.to_vec(), vec![30, 60], 2);
+        let mut plan = BenchPlan::new(METHODS.to_vec(), vec![30, 60], 2);
         plan.solve_elements = Some(64);
         let mut calls = 0;
         let rows = run_bench(&kernel, &reference, &plan, |done, total| {
@@ -475,11 +433,11 @@ mod tests {
             // The refit never makes the paper's network worse on the samples it validates on.
             assert!(
                 pick(Method::Paper, budget).errors.heldout
-                    <= pick(Method::PaperNoRefit, budget).errors.heldout * 1.05
+                    <= pick(Method::PaperNorefit, budget).errors.heldout * 1.05
             );
             // The learner beats hierarchical radiosity by far at the same budget (R4), and so
             // does the scene it lights.
-            let (learned, hr) = (pick(Method::Default, budget), pick(Method::Hr, budget));
+            let (learned, hr) = (pick(Method::Visibility, budget), pick(Method::Hr, budget));
             assert!(
                 learned.errors.grid < 0.5 * hr.errors.grid,
                 "{learned:?} vs {hr:?}"
@@ -518,18 +476,15 @@ mod tests {
             let msg = plan.validate().unwrap_err().to_string();
             assert!(msg.contains(name), "{msg}");
         }
+        // A method the table does not run is refused, naming those it does.
+        let plan = BenchPlan {
+            methods: vec![Method::Light],
+            ..base.clone()
+        };
+        let msg = plan.validate().unwrap_err().to_string();
         assert!(
-            Method::parse("nope")
-                .unwrap_err()
-                .to_string()
-                .contains("paper-norefit")
+            msg.contains("light") && msg.contains("paper-norefit"),
+            "{msg}"
         );
-        for m in Method::ALL {
-            assert_eq!(Method::parse(m.name()).unwrap(), m);
-        }
-        // The names before the default learner was named so still parse.
-        for (old, m) in ALIASES {
-            assert_eq!(Method::parse(old).unwrap(), m);
-        }
     }
 }

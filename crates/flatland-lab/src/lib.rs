@@ -21,13 +21,13 @@
 //! upwards.
 //!
 //! ```
-//! use flatland_lab::bench::Method;
+//! use flatland_lab::bench::{METHODS, Method};
 //!
-//! // The methods every table lists, by the names files and the command line use.
-//! let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
-//! assert_eq!(names, ["default", "paper", "paper-norefit", "hr", "uniform"]);
+//! // The methods the R4 table lists, by the names files and the command line use.
+//! let names: Vec<&str> = METHODS.iter().map(|m| m.name()).collect();
+//! assert_eq!(names, ["visibility", "paper", "paper-norefit", "hr", "uniform"]);
 //! assert_eq!(Method::parse("hr")?, Method::Hr);
-//! # Ok::<(), flatland_lab::LabError>(())
+//! # Ok::<(), flatland_methods::MethodError>(())
 //! ```
 
 #![deny(missing_docs)]

@@ -16,14 +16,14 @@ use std::time::Instant;
 use anyhow::{Context as _, Result};
 use flatland_geom::Kernel;
 use flatland_geom::generate::{GenerateParams, SceneKind, generate};
-use flatland_solve::{DEFAULT_ERROR_BOUND, SolveParams, Stop, elements_for_error};
+use flatland_solve::{LitParams, LitScene, Stop};
 
 pub use slopes::{Slope, slopes};
 
 use crate::memory;
 use crate::timed::compute::Context;
 use crate::timed::relight::{RelightSummary, relight, summaries};
-use crate::timed::{Contender, Scorer, Setting, TimedPlan, TimedRow};
+use crate::timed::{Method, Scorer, Setting, TimedPlan, TimedRow};
 
 /// The sizes (edges asked of the generator) measured by default.
 pub const DEFAULT_SIZES: [usize; 3] = [100, 1_000, 10_000];
@@ -36,12 +36,12 @@ pub const DEFAULT_MAX_SECONDS: f64 = 120.0;
 const FIRST_SLOPE: f64 = 2.0;
 
 /// The methods a scaling run can measure: each one's default, as `flatland solve` builds it.
-pub const METHODS: [Contender; 5] = [
-    Contender::Default,
-    Contender::Exact,
-    Contender::Hr,
-    Contender::Clustered,
-    Contender::Tracer,
+pub const METHODS: [Method; 5] = [
+    Method::Light,
+    Method::Exact,
+    Method::Hr,
+    Method::Clustered,
+    Method::Tracer,
 ];
 
 /// Clustered HR's links per edge: its resources in proportion to the scene (the default of
@@ -57,9 +57,9 @@ pub struct ScalingPlan {
     pub sizes: Vec<usize>,
     /// The generator's seed.
     pub seed: u64,
-    /// Methods, of [`METHODS`]; the tracer runs for as long as the default learner took (ten
+    /// Methods, of [`METHODS`]; the tracer runs for as long as the light-driven learner took (ten
     /// seconds without it).
-    pub methods: Vec<Contender>,
+    pub methods: Vec<Method>,
     /// Extrapolated seconds above which a method is skipped at a size.
     pub max_seconds: f64,
     /// Lightings of the relighting comparison per scene (0: none).
@@ -208,21 +208,20 @@ pub fn run_scaling(
             })?;
             let kernel = Arc::new(Kernel::new(scene));
             let started = Instant::now();
-            let (found, reference_peak) = measured(|| {
-                elements_for_error(&kernel, DEFAULT_ERROR_BOUND, &SolveParams::default(), stop)
-            });
-            let found = found.with_context(|| format!("{name}: the exact reference"))?;
+            let (lit, reference_peak) =
+                measured(|| LitScene::new(Arc::clone(&kernel), &LitParams::default(), stop));
+            let lit = lit.with_context(|| format!("{name}: the exact reference"))?;
             let index = all.scenes.len();
             all.scenes.push(ScaledScene {
                 name: name.clone(),
                 kind,
                 edges: kernel.scene().edges().len(),
-                elements: found.coarse.mesh().len(),
-                reference_elements: found.finer.mesh().len(),
+                elements: lit.mesh().len(),
+                reference_elements: lit.reference().mesh().len(),
                 reference_s: started.elapsed().as_secs_f64(),
                 reference_peak,
             });
-            let scorer = Scorer::of_discretization(found);
+            let scorer = Scorer::of_lit(lit);
             scene_rows(
                 plan,
                 &kernel,
@@ -303,7 +302,7 @@ fn scene_rows(
                 let equal_time = all
                     .rows
                     .iter()
-                    .find(|r| r.scene == scene && r.row.method == Contender::Default && !r.skipped)
+                    .find(|r| r.scene == scene && r.row.method == Method::Light && !r.skipped)
                     .map_or(10.0, |r| r.row.total_s.max(0.01));
                 let (row, peak) = measured(|| one(&cx, method, equal_time));
                 ScalingRow {
@@ -333,21 +332,21 @@ fn scene_rows(
 
 /// The row of `method` with its default arguments (the tracer for `equal_time` seconds), or a
 /// failed row saying why.
-fn one(cx: &Context<'_>, method: Contender, equal_time: f64) -> TimedRow {
+fn one(cx: &Context<'_>, method: Method, equal_time: f64) -> TimedRow {
     let setting = setting_of(method, cx.scorer, cx.kernel.scene().edges().len());
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match method {
-        Contender::Default => cx
+        Method::Light => cx
             .light(flatland_light::LightParams::default().tolerance)
             .map(|r| r.0),
-        Contender::Exact => cx.exact(cx.scorer.mesh().len()),
-        Contender::Hr => cx.baseline(Contender::Hr, HR_BASIS, 1),
-        Contender::Clustered => cx.baseline(
-            Contender::Clustered,
+        Method::Exact => cx.exact(cx.scorer.mesh().len()),
+        Method::Hr => cx.baseline(Method::Hr, HR_BASIS, 1),
+        Method::Clustered => cx.baseline(
+            Method::Clustered,
             CLUSTERED_LINKS_PER_EDGE * cx.kernel.scene().edges().len(),
             1,
         ),
-        Contender::Tracer => cx.tracer_for(equal_time, 1).map(|mut row| {
-            row.add_note("as long as the default learner took");
+        Method::Tracer => cx.tracer_for(equal_time, 1).map(|mut row| {
+            row.add_note("as long as the light-driven learner took");
             row
         }),
         _ => Err(anyhow::anyhow!(
@@ -367,12 +366,12 @@ fn one(cx: &Context<'_>, method: Contender, equal_time: f64) -> TimedRow {
 const HR_BASIS: usize = 400;
 
 /// What `method` is run at, for its row's setting.
-fn setting_of(method: Contender, scorer: &Scorer, edges: usize) -> Setting {
+fn setting_of(method: Method, scorer: &Scorer, edges: usize) -> Setting {
     match method {
-        Contender::Default => Setting::Tolerance(flatland_light::LightParams::default().tolerance),
-        Contender::Exact => Setting::Elements(scorer.mesh().len()),
-        Contender::Tracer => Setting::Photons(0),
-        Contender::Clustered => Setting::Budget(CLUSTERED_LINKS_PER_EDGE * edges),
+        Method::Light => Setting::Tolerance(flatland_light::LightParams::default().tolerance),
+        Method::Exact => Setting::Elements(scorer.mesh().len()),
+        Method::Tracer => Setting::Photons(0),
+        Method::Clustered => Setting::Budget(CLUSTERED_LINKS_PER_EDGE * edges),
         _ => Setting::Budget(HR_BASIS),
     }
 }
@@ -386,7 +385,7 @@ fn timed_plan(plan: &ScalingPlan) -> TimedPlan {
 
 /// `method`'s time at `edges`, extrapolated from its rows on smaller scenes of `kind` (the
 /// slope of its last two, at least 1, or [`FIRST_SLOPE`] from one); `None` without any.
-fn predicted(all: &Scaling, method: Contender, kind: SceneKind, edges: usize) -> Option<f64> {
+fn predicted(all: &Scaling, method: Method, kind: SceneKind, edges: usize) -> Option<f64> {
     let mine: Vec<(f64, f64)> = all
         .rows
         .iter()
@@ -453,15 +452,15 @@ mod tests {
         }
         // The exact solve on the chosen mesh is within the discretization bound of the
         // reference on twice the elements (with room: the bound is on an estimate).
-        for r in all.rows.iter().filter(|r| r.row.method == Contender::Exact) {
+        for r in all.rows.iter().filter(|r| r.row.method == Method::Exact) {
             assert!(
-                r.row.reflected_error().unwrap() < 2.0 * DEFAULT_ERROR_BOUND,
+                r.row.reflected_error().unwrap() < 2.0 * flatland_solve::DEFAULT_ERROR_BOUND,
                 "{r:?}"
             );
         }
         assert_eq!(all.relit.len(), 2);
         for (_, summaries) in &all.relit {
-            assert!(summaries.iter().any(|s| s.method == Contender::Default));
+            assert!(summaries.iter().any(|s| s.method == Method::Light));
         }
     }
 
@@ -478,7 +477,7 @@ mod tests {
                 reference_s: 0.0,
                 reference_peak: None,
             });
-            let mut row = TimedRow::new(Contender::Hr, Setting::Budget(400), 1);
+            let mut row = TimedRow::new(Method::Hr, Setting::Budget(400), 1);
             row.total_s = seconds;
             all.rows.push(ScalingRow {
                 scene: all.scenes.len() - 1,
@@ -488,16 +487,16 @@ mod tests {
             });
         }
         // Linear from 100 to 1000 edges: 100 s at 10⁴.
-        let p = predicted(&all, Contender::Hr, SceneKind::Hall, 10_000).unwrap();
+        let p = predicted(&all, Method::Hr, SceneKind::Hall, 10_000).unwrap();
         assert_close!(p, 100.0, 1e-9);
         // Nothing measured on floor plans: no prediction.
         assert_eq!(
-            predicted(&all, Contender::Hr, SceneKind::FloorPlan, 10_000),
+            predicted(&all, Method::Hr, SceneKind::FloorPlan, 10_000),
             None
         );
         // One size only: quadratic.
         all.rows.pop();
-        let p = predicted(&all, Contender::Hr, SceneKind::Hall, 1000).unwrap();
+        let p = predicted(&all, Method::Hr, SceneKind::Hall, 1000).unwrap();
         assert_close!(p, 100.0, 1e-9);
     }
 
@@ -520,7 +519,7 @@ mod tests {
             ),
             (
                 ScalingPlan {
-                    methods: vec![Contender::Paper],
+                    methods: vec![Method::Paper],
                     ..ScalingPlan::new()
                 },
                 "methods",

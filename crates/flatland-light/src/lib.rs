@@ -1,4 +1,4 @@
-//! Learning driven by the light that flows: the default learner of `flatland solve`, which
+//! Learning driven by the light that flows: the light-driven learner of `flatland solve --kernel light`, which
 //! alternates solving and learning until the lit scene meets a tolerance (docs/ALGORITHM.md §4a).
 //! It needs the scene's geometry and the solver (`flatland_geom`, `flatland_solve`), not the
 //! network of `kernel-fit`: its cells are probes along the surfaces, grown in one dimension.

@@ -65,11 +65,13 @@ pub struct Discretization {
     pub finer_on_coarse: Vec<f64>,
     /// The estimated error of `coarse`.
     pub estimate: ErrorEstimate,
+    /// The element count of every exact solve made to find it, in order (each count once).
+    pub solved: Vec<usize>,
 }
 
 impl Discretization {
     /// `coarse` with a solve of `kernel` (the same scene) on twice its elements, and the
-    /// estimate they give.
+    /// estimate they give (`solved` lists the one solve made here, the finer).
     pub fn of(
         coarse: ExactReference,
         kernel: &Kernel,
@@ -79,6 +81,7 @@ impl Discretization {
         let finer = ExactReference::new(kernel, 2 * coarse.mesh().len(), params, stop)?;
         let (finer_on_coarse, estimate) = compare(&coarse, &finer, stop)?;
         Ok(Discretization {
+            solved: vec![finer.mesh().len()],
             coarse,
             finer,
             finer_on_coarse,
@@ -139,8 +142,10 @@ pub fn elements_for_error(
     let fits = |n: usize| n <= MAX_MESH_ELEMENTS && method.check(n).is_ok();
     let mut n = Mesh::min_elements(kernel.scene()).max(DEFAULT_ELEMENTS);
     let mut coarse = ExactReference::new(kernel, n, params, stop)?;
+    let mut solved = vec![n];
     loop {
         let finer = ExactReference::new(kernel, 2 * n, params, stop)?;
+        solved.push(2 * n);
         let (finer_on_coarse, estimate) = compare(&coarse, &finer, stop)?;
         if estimate.estimate <= bound || !fits(4 * n) {
             return Ok(Discretization {
@@ -148,6 +153,7 @@ pub fn elements_for_error(
                 finer,
                 finer_on_coarse,
                 estimate,
+                solved,
             });
         }
         (coarse, n) = (finer, 2 * n);

@@ -79,6 +79,7 @@ mod error;
 mod exact;
 mod frame;
 mod gmres;
+mod lit;
 mod mesh;
 mod operator;
 mod physical;
@@ -106,6 +107,7 @@ pub use exact::{
     ExactMethod, SWEEP_FROM_EDGES, check_scene, exact_block_means, exact_operator, receiver, sender,
 };
 pub use frame::InputFrame;
+pub use lit::{Elements, LitParams, LitScene, ReferenceMesh, check_elements};
 pub use mesh::{
     DEFAULT_ELEMENTS, Element, MAX_ELEMENTS, MAX_MESH_ELEMENTS, MIN_PER_EDGE, Mesh, MeshEdge,
 };

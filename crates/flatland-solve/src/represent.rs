@@ -137,6 +137,35 @@ pub fn quadrature_operator<R: Representation + ?Sized>(
     )
 }
 
+/// A shared representation is the representation: what a command holds in an `Arc` (the
+/// scene's kernel, a fit shared with a thread) is solved without a copy.
+impl<T: Representation + Send + ?Sized> Representation for std::sync::Arc<T> {
+    fn zeta(&self, s: f64, t: f64) -> f64 {
+        (**self).zeta(s, t)
+    }
+
+    fn basis_functions(&self) -> Option<usize> {
+        (**self).basis_functions()
+    }
+
+    fn memory_bytes(&self) -> usize {
+        (**self).memory_bytes()
+    }
+
+    fn scene_fingerprint(&self) -> Option<u64> {
+        (**self).scene_fingerprint()
+    }
+
+    fn operator(
+        &self,
+        mesh: &Mesh,
+        params: &SolveParams,
+        stop: &Stop,
+    ) -> Result<Box<dyn TransferOperator>, SolveError> {
+        (**self).operator(mesh, params, stop)
+    }
+}
+
 impl Representation for Kernel {
     fn zeta(&self, s: f64, t: f64) -> f64 {
         Kernel::zeta(self, s, t)

@@ -1,9 +1,9 @@
 //! The lit scene: the radiosity `B` solved with the kernel as learned so far, beside the
 //! exact `B`, made beside the learner (`worker`) and drawn by `views`.
 //!
-//! Per scene, once: a [`Mesh`] and an [`ExactReference`] (the exact kernel solved on a mesh four
-//! times finer), whose `B` at the mesh's collocation points is what every learned solve is
-//! measured against ([`LitSetup`]). While the network learns, the learned kernel is solved on
+//! Per scene, once: a [`LitScene`] — a [`Mesh`] and an [`ExactReference`] (the exact kernel
+//! solved on a mesh four times finer), whose `B` at the mesh's collocation points is what every
+//! learned solve is measured against ([`LitSetup`]). While the network learns, the learned kernel is solved on
 //! that mesh again at most every [`LIT_EVERY`], and for no more than [`LIT_SHARE`] of the
 //! time (of its core) — or, when the learner spends its time waiting for the pace of growth, for
 //! at most [`LIT_SHARE_IDLE`] of it ([`solve_interval`]): a visibility model integrates its own
@@ -14,8 +14,10 @@
 use std::time::Duration;
 
 use flatland_geom::Kernel;
+use std::sync::Arc;
+
 use flatland_solve::{
-    ExactReference, MAX_ELEMENTS, Mesh, SolveError, SolveErrors, SolveParams, Stop, solve_against,
+    ExactReference, LitScene, MAX_ELEMENTS, Mesh, SolveError, SolveErrors, SolveParams, Stop,
 };
 use kernel_fit::{LearnedKernel, Target};
 
@@ -58,12 +60,9 @@ pub fn solve_interval(cost: Duration, idle: f64) -> Duration {
 pub struct LitSetup {
     /// The id of the reference (the worker's `World`) it belongs to.
     pub world: u64,
-    /// The elements the learned kernel is solved on.
-    pub mesh: Mesh,
-    /// The exact `B` at the mesh's collocation points.
-    pub exact: Vec<f64>,
-    /// The exact kernel solved on a finer mesh (for the `B(s)` curve).
-    pub reference: ExactReference,
+    /// The elements the learned kernel is solved on and the exact kernel solved on a finer
+    /// mesh (its B at the mesh's collocation points is what every solve is scored against).
+    pub lit: LitScene,
     /// The top of the colour scale: the brightest non-emitting element of the exact `B`
     /// (emitters are drawn above the scale).
     pub top: f64,
@@ -76,36 +75,46 @@ impl LitSetup {
     /// `stop` is polled in the long loops ([`SolveError::Interrupted`]).
     pub fn build(
         world: u64,
-        kernel: &Kernel,
+        kernel: Arc<Kernel>,
         target: Target,
         stop: &Stop,
     ) -> Result<LitSetup, SolveError> {
         let started = std::time::Instant::now();
-        let mesh = Mesh::new(kernel, lit_elements(kernel, target))?;
-        let fine = ExactReference::default_elements(mesh.len());
-        let reference = ExactReference::new(kernel, fine, &SolveParams::default(), stop)?;
-        let exact = reference.radiosity_on(&mesh, stop)?;
-        let top = colour_top(&mesh, &exact);
+        let elements = lit_elements(&kernel, target);
+        let fine = ExactReference::default_elements(elements);
+        let params = SolveParams::default();
+        let lit = LitScene::scoring(kernel, elements, fine, &params, stop)?;
+        let top = colour_top(lit.mesh(), lit.reference_on_mesh());
         Ok(LitSetup {
             world,
-            mesh,
-            exact,
-            reference,
+            lit,
             top,
             build_s: started.elapsed().as_secs_f64(),
         })
     }
 
+    /// The elements the learned kernel is solved on.
+    #[must_use]
+    pub fn mesh(&self) -> &Mesh {
+        self.lit.mesh()
+    }
+
+    /// The exact `B` at the mesh's collocation points.
+    #[must_use]
+    pub fn exact(&self) -> &[f64] {
+        self.lit.reference_on_mesh()
+    }
+
+    /// The exact kernel solved on a finer mesh (for the `B(s)` curve).
+    #[must_use]
+    pub fn reference(&self) -> &ExactReference {
+        self.lit.reference()
+    }
+
     /// Solves `model` on the mesh and measures it against the exact `B`.
     pub fn solve(&self, model: &LearnedKernel, stop: &Stop) -> Result<LitSolve, SolveError> {
         let started = std::time::Instant::now();
-        let c = solve_against(
-            model,
-            &self.mesh,
-            &self.exact,
-            &SolveParams::default(),
-            stop,
-        )?;
+        let c = self.lit.score(model, stop)?;
         Ok(LitSolve {
             b: c.solution.radiosity,
             errors: c.errors,
@@ -214,16 +223,16 @@ mod tests {
 
     #[test]
     fn an_exact_default_model_solves_to_the_exact_b() {
-        // The default learner on fig3 converges to the exact kernel; its solve then matches the
+        // The visibility network on fig3 converges to the exact kernel; its solve then matches the
         // exact B up to the mesh's discretisation (512 elements against 2048: ≈ 1e-4).
         let k = Arc::new(kernel("fig3"));
-        let setup = LitSetup::build(1, &k, Target::Visibility, &never).unwrap();
-        assert_eq!(setup.mesh.len(), setup.exact.len());
+        let setup = LitSetup::build(1, Arc::clone(&k), Target::Visibility, &never).unwrap();
+        assert_eq!(setup.mesh().len(), setup.exact().len());
         assert!(setup.top > 0.0 && setup.top.is_finite());
         let reference = Arc::new(Reference::new(&k, 32, 64, 1));
         let mut fit = Fit::new(Arc::clone(&k), reference, FitParams::default()).unwrap();
         let first = setup.solve(fit.model(), &never).unwrap();
-        assert_eq!(first.b.len(), setup.mesh.len());
+        assert_eq!(first.b.len(), setup.mesh().len());
         assert!(first.errors.rel_l2_reflected > 0.05, "{:?}", first.errors);
         let stop = loop {
             if let Some(reason) = fit.step() {

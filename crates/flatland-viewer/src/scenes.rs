@@ -3,7 +3,7 @@
 //! first.
 //!
 //! The first launch opens [`DEFAULT`], the bundled floor plan: on a small scene such as `fig3`
-//! the default learner is exact after a few dozen cells, before the window has shown anything
+//! the visibility network is exact after a few dozen cells, before the window has shown anything
 //! worth watching; a floor plan of 288 edges has hundreds of faces where visibility varies,
 //! so cells keep appearing where the light flows for as long as the pace lets them.
 

@@ -30,7 +30,7 @@ pub enum LearnerChoice {
 pub enum LearnerName {
     /// The light-driven loop (`light`).
     Light,
-    /// The default network, [`Preset::Default`] (`theta`).
+    /// The default network, [`Preset::Visibility`] (`theta`).
     Theta,
     /// The paper's network, [`Preset::Paper`] (`paper`).
     Paper,
@@ -57,7 +57,7 @@ impl std::str::FromStr for LearnerName {
 pub struct Settings {
     /// Which learner runs (settings saved before there was a choice: the light-driven one).
     pub learner: LearnerChoice,
-    /// The network learner the parameters started from ([`Preset::Default`] or [`Preset::Paper`]).
+    /// The network learner the parameters started from ([`Preset::Visibility`] or [`Preset::Paper`]).
     pub preset: Preset,
     /// The fit's parameters (the preset's, possibly changed in the panel).
     pub params: FitParams,
@@ -91,9 +91,9 @@ impl Default for Settings {
     fn default() -> Self {
         Settings {
             learner: LearnerChoice::Light,
-            preset: Preset::Default,
+            preset: Preset::Visibility,
             params: FitParams::default(),
-            learner_defaults: Some(Preset::Default.params()),
+            learner_defaults: Some(Preset::Visibility.params()),
             scene: SceneChoice::Bundled(crate::scenes::DEFAULT.into()),
             subdivide: 1,
             // Slow enough to watch: the default 400 cells grow over 20 s.
@@ -170,7 +170,7 @@ impl Settings {
             LearnerName::Theta | LearnerName::Paper => {
                 self.learner = LearnerChoice::Network;
                 self.choose_preset(if name == LearnerName::Theta {
-                    Preset::Default
+                    Preset::Visibility
                 } else {
                     Preset::Paper
                 });
@@ -223,17 +223,17 @@ mod tests {
         settings.choose_learner("theta".parse().unwrap());
         assert_eq!(
             (settings.learner, settings.preset),
-            (LearnerChoice::Network, Preset::Default)
+            (LearnerChoice::Network, Preset::Visibility)
         );
         assert_eq!(
             settings.params,
-            with_preset(Preset::Default, &settings.params)
+            with_preset(Preset::Visibility, &settings.params)
         );
         settings.choose_learner("light".parse().unwrap());
         assert_eq!(settings.learner, LearnerChoice::Light);
         assert_eq!(
             settings.preset,
-            Preset::Default,
+            Preset::Visibility,
             "the network's choice is kept for later"
         );
         let err = "network".parse::<LearnerName>().unwrap_err();
@@ -318,7 +318,7 @@ mod tests {
         eframe::set_value(&mut storage, SETTINGS_KEY, &old);
         let (loaded, note) = Settings::load(Some(&storage));
         assert!(note.unwrap().contains("older viewer"));
-        assert_eq!(loaded.preset, Preset::Default);
+        assert_eq!(loaded.preset, Preset::Visibility);
         assert_eq!(loaded.params.target, Target::Visibility);
         assert_eq!(loaded.params.gating, Gating::Faces);
         assert_eq!(loaded.params.network.insertion, Insertion::WorstSample);
@@ -377,7 +377,7 @@ mod tests {
             (50, 4, 500)
         );
         assert!(settings.is_preset());
-        settings.choose_preset(Preset::Default);
+        settings.choose_preset(Preset::Visibility);
         assert_eq!(
             settings.params,
             FitParams {

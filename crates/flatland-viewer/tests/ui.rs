@@ -87,7 +87,7 @@ fn ready(app: &ViewerApp) -> bool {
 fn the_viewer_starts_learning_at_once_and_pause_is_one_click_away() {
     // What `cargo run --release` and `flatland view` do: default options. Many target cells
     // on the maze, so the fit is still growing whenever a loaded machine gets to look (on fig3
-    // the default learner is exact after a few dozen cells and stops).
+    // the visibility network is exact after a few dozen cells and stops).
     let mut settings = quick_settings();
     settings.params.target_cells = 5000;
     settings.scene = flatland_viewer::SceneChoice::Bundled("maze".into());
@@ -265,8 +265,8 @@ fn switching_presets_starts_a_new_fit_with_that_learner() {
     wait_for(&mut h, "the reference", ready);
     settled(&mut h);
     let fit = h.state().fit_params().expect("a running fit");
-    assert_eq!(fit.target, Target::Visibility, "the default learner");
-    assert_eq!(h.state().settings().preset, Preset::Default);
+    assert_eq!(fit.target, Target::Visibility, "the visibility network");
+    assert_eq!(h.state().settings().preset, Preset::Visibility);
     let default_world = h.state().world_id();
 
     h.get_by_label("paper").click();
@@ -286,19 +286,19 @@ fn switching_presets_starts_a_new_fit_with_that_learner() {
     wait_for(&mut h, "the paper network's lit scene", |a| {
         a.lit().is_some_and(|l| {
             l.setup.world == a.world_id()
-                && l.setup.mesh.len() == flatland_viewer::lit::NETWORK_ELEMENTS
+                && l.setup.mesh().len() == flatland_viewer::lit::NETWORK_ELEMENTS
         })
     });
 
     let paper_world = h.state().world_id();
     h.get_by_label("θ-driven").click();
-    wait_for(&mut h, "a fresh fit of the default learner", |a| {
+    wait_for(&mut h, "a fresh fit of the visibility network", |a| {
         a.world_id() > paper_world
             && a.caught_up()
             && a.fit_params()
                 .is_some_and(|p| p.target == Target::Visibility && p.gating == Gating::Faces)
     });
-    assert_eq!(h.state().settings().preset, Preset::Default);
+    assert_eq!(h.state().settings().preset, Preset::Visibility);
     assert!(h.state().settings().is_preset());
 
     // The light-driven learner, and back: the θ-driven network as it was.
@@ -377,16 +377,19 @@ fn the_lit_scene_publishes_b_and_its_error_while_the_cells_grow() {
         a.lit().is_some_and(|l| l.setup.world == a.world_id())
     });
     let first = h.state().lit().unwrap();
-    let (elements, start_error) = (first.setup.mesh.len(), first.solve.errors.rel_l2_reflected);
+    let (elements, start_error) = (
+        first.setup.mesh().len(),
+        first.solve.errors.rel_l2_reflected,
+    );
     assert_eq!(first.solve.b.len(), elements);
-    assert_eq!(first.setup.exact.len(), elements);
+    assert_eq!(first.setup.exact().len(), elements);
     assert!(first.solve.b.iter().all(|b| b.is_finite()));
     assert!(
         start_error.is_finite() && start_error > 0.05,
         "three cells do not know the shadows yet: {start_error}"
     );
 
-    // fig3: the default learner finds every face it needs and stops, converged; the lit
+    // fig3: the visibility network finds every face it needs and stops, converged; the lit
     // scene follows it to the exact solution (up to the mesh: 512 elements against 2048).
     h.get_by_label("Play").click();
     wait_for(&mut h, "convergence", |a| {
@@ -637,7 +640,7 @@ fn scrubbing_the_timeline_shows_an_earlier_state_and_live_returns() {
 
 #[test]
 fn the_edges_overlay_can_be_switched_off_and_only_joins_cells_of_one_face() {
-    // The default learner's S₀ and cells on fig3: some faces end up with more than one cell.
+    // The visibility network's S₀ and cells on fig3: some faces end up with more than one cell.
     let mut settings = quick_settings();
     settings.params.initial_samples = Settings::default().params.initial_samples;
     settings.params.target_cells = Settings::default().params.target_cells;
@@ -677,7 +680,7 @@ fn the_view_and_the_model_are_saved_named_after_scene_learner_and_step() {
         export_dir: Some(dir.clone()),
         ..Options::default()
     };
-    // The default learner (its S₀ too), so the files are named after it.
+    // The visibility network (its S₀ too), so the files are named after it.
     let mut settings = quick_settings();
     settings.params.initial_samples = Settings::default().params.initial_samples;
     let app = ViewerApp::with_options(egui::Context::default(), settings, &options);
@@ -713,7 +716,7 @@ fn the_view_and_the_model_are_saved_named_after_scene_learner_and_step() {
         }
     }
     assert!(answered, "Save view asks for a screenshot");
-    let png = dir.join("fig3-default-step500.png");
+    let png = dir.join("fig3-visibility-step500.png");
     wait_until(&mut h, "the PNG", |h| {
         h.state()
             .message()
@@ -731,7 +734,7 @@ fn the_view_and_the_model_are_saved_named_after_scene_learner_and_step() {
             .message()
             .is_some_and(|(m, _)| m.starts_with("saved the model"))
     });
-    let model = ModelFile::load(&dir.join("fig3-default-step500.model.json")).unwrap();
+    let model = ModelFile::load(&dir.join("fig3-visibility-step500.model.json")).unwrap();
     assert_eq!(model.model.network().len(), h.state().cells());
     let fig3 = flatland_geom::bundled::scene("fig3").unwrap();
     model

@@ -271,12 +271,12 @@ mod tests {
         }
     }
 
-    /// The default learner on the paper's scene: every face of the blocker's shadows is found,
+    /// The visibility network on the paper's scene: every face of the blocker's shadows is found,
     /// the learned kernel is then exact, and the fit stops by itself.
     #[test]
     fn default_learner_converges_to_the_exact_kernel_on_fig3() {
         let kernel = fig3();
-        let mut fit = fit_with(&kernel, preset(Preset::Default, 400));
+        let mut fit = fit_with(&kernel, preset(Preset::Visibility, 400));
         let summary = run(&mut fit);
         assert_eq!(summary.stop, StopReason::Converged, "{summary:?}");
         assert!(summary.cells < 400, "{summary:?}");
@@ -297,7 +297,7 @@ mod tests {
     #[test]
     fn default_learner_keeps_cells_in_their_faces_and_beats_hr_on_maze() {
         let kernel = maze();
-        let mut fit = fit_with(&kernel, preset(Preset::Default, 150));
+        let mut fit = fit_with(&kernel, preset(Preset::Visibility, 150));
         while fit.step().is_none() {
             if fit.steps().is_multiple_of(97) || fit.steps().is_multiple_of(300) {
                 fit.model().check_invariants().unwrap();
@@ -325,7 +325,7 @@ mod tests {
     #[test]
     fn a_scene_without_shadows_needs_no_learning() {
         let kernel = Arc::new(Kernel::new(Scene::from_ron_str(BOX).unwrap()));
-        let mut fit = fit_with(&kernel, preset(Preset::Default, 50));
+        let mut fit = fit_with(&kernel, preset(Preset::Visibility, 50));
         let summary = run(&mut fit);
         assert_eq!(summary.stop, StopReason::Exact);
         assert_eq!((summary.rays, summary.samples), (0, 0));

@@ -18,7 +18,7 @@
 //!   `θ(ξ) = ρ_ACC(ξ) ∨ ¬ρ_A(ξ)` (the printed `∧` is an erratum): a candidate costs a ray only if
 //!   it falls in a critical zone or outside the network. Training draws a set uniformly, then a
 //!   sample from it; the [`sgcs::Network`] inserts a cell every λ steps.
-//! - **The default learner** ([`FitParams::default`], [`Head::Visibility`]). `ζ = E' ρ G · V`, and
+//! - **The visibility network** ([`FitParams::default`], [`Head::Visibility`]). `ζ = E' ρ G · V`, and
 //!   everything but `V` is known in closed form, as is `V` itself on every pair of surface
 //!   edges the geometry proves unoccluded or fully blocked. So the network learns only `V`,
 //!   only where it varies, and `ζ̃ = ζ_unoccluded · Ṽ`. On such a pair `V` is constant on the

@@ -1,5 +1,5 @@
 //! The fit's parameters as files and the command line spell them, with the paper's values and
-//! the default learner's; [`FitParams::check`] (in `valid`) turns them into the learner's
+//! the visibility network's; [`FitParams::check`] (in `valid`) turns them into the learner's
 //! variant and the parameters by lifetime.
 
 use serde::{Deserialize, Serialize};
@@ -16,7 +16,7 @@ pub use valid::{
 };
 
 /// Everything that configures a [`Fit`](crate::Fit), flat, as model and checkpoint files and
-/// `--set` spell it. `Default` is the default learner ([`Preset::Default`]);
+/// `--set` spell it. `Default` is the visibility network ([`Preset::Visibility`]);
 /// [`FitParams::paper`] the paper's values (§3.2). Not every combination means something:
 /// [`FitParams::check`] refuses those that do not and says which learner the rest describe.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -143,7 +143,7 @@ pub enum Resampling {
 }
 
 impl Default for FitParams {
-    /// The default learner ([`Preset::Default`]). Where it departs from the paper:
+    /// The visibility network ([`Preset::Visibility`]). Where it departs from the paper:
     /// - `target: Visibility`, `gating: Faces`: learn `V` only where it varies, with cells
     ///   that never straddle a visibility discontinuity (the paper learns ζ everywhere);
     /// - `output_mode: Normalized`, `output_rule: Local`: a partition of unity whose cells
@@ -212,7 +212,7 @@ impl FitParams {
 impl FitParams {
     /// These parameters learning `target`, with what only some learners have brought along so
     /// that the combination means something (see [`FitParams::check`]): switching to
-    /// [`Target::Visibility`] takes the default learner's gating, importance and weights and
+    /// [`Target::Visibility`] takes the visibility network's gating, importance and weights and
     /// drops the refit; switching away from it turns those off and takes the paper's refit.
     /// The same target returns the parameters unchanged.
     #[must_use]

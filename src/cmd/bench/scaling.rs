@@ -6,7 +6,6 @@ use flatland_lab::report::scaling::{
     CSV, MARKDOWN, OUTPUTS, PARTIAL, markdown, write_csv, write_plots,
 };
 use flatland_lab::scaling::{ScalingPlan, run_scaling};
-use flatland_lab::timed::Contender;
 use flatland_lab::{interrupt, output};
 use flatland_solve::Stop;
 
@@ -29,10 +28,7 @@ fn plan(args: &Args) -> Result<ScalingPlan> {
         })
         .collect::<Result<_>>()?;
     if let Some(methods) = &args.methods {
-        plan.methods = methods
-            .iter()
-            .map(|m| Contender::parse(m.trim()))
-            .collect::<Result<_, _>>()?;
+        plan.methods = methods.clone();
     }
     if let Some(seconds) = args.max_seconds {
         plan.max_seconds = seconds;

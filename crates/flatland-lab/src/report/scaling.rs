@@ -218,7 +218,7 @@ pub fn write_plots(dir: &Path, all: &Scaling) -> Result<()> {
 mod tests {
     use super::*;
     use crate::scaling::{ScaledScene, ScalingRow};
-    use crate::timed::{Contender, Setting, TimedRow};
+    use crate::timed::{Method, Setting, TimedRow};
     use flatland_geom::generate::SceneKind;
 
     #[test]
@@ -234,7 +234,7 @@ mod tests {
                 reference_s: 0.5,
                 reference_peak: Some(3_000_000),
             });
-            let mut row = TimedRow::new(Contender::Exact, Setting::Elements(4 * edges), 1);
+            let mut row = TimedRow::new(Method::Exact, Setting::Elements(4 * edges), 1);
             row.total_s = edges as f64 / 100.0;
             all.rows.push(ScalingRow {
                 scene: all.scenes.len() - 1,

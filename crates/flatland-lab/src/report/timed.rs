@@ -11,7 +11,7 @@ use anyhow::Result;
 use crate::interrupt;
 use crate::plot::{Series, log_log};
 use crate::timed::relight::{RelightRow, summaries};
-use crate::timed::{Contender, TimedRow};
+use crate::timed::{Method, TimedRow};
 
 /// The file the rows are kept in while the bench runs; renamed to [`RESULTS`] at the end.
 pub const PARTIAL: &str = "results.partial.csv";
@@ -193,8 +193,8 @@ pub fn write_plots(dir: &Path, scene: &str, rows: &[TimedRow]) -> Result<()> {
 }
 
 /// The rows of each method and setting, in the order they ran.
-fn groups(rows: &[TimedRow]) -> BTreeMap<Contender, Vec<Vec<&TimedRow>>> {
-    let mut by_method: BTreeMap<Contender, Vec<Vec<&TimedRow>>> = BTreeMap::new();
+fn groups(rows: &[TimedRow]) -> BTreeMap<Method, Vec<Vec<&TimedRow>>> {
+    let mut by_method: BTreeMap<Method, Vec<Vec<&TimedRow>>> = BTreeMap::new();
     for r in rows.iter().filter(|r| !r.failed) {
         let settings = by_method.entry(r.method).or_default();
         match settings.last_mut() {
@@ -285,7 +285,7 @@ pub fn table(rows: &[TimedRow]) -> String {
 
 /// Per method, the least solved `B − E` error among its rows whose total time is within each
 /// of `seconds` (`None`: no row was that fast).
-pub fn error_within(rows: &[TimedRow], seconds: &[f64]) -> Vec<(Contender, Vec<Option<f64>>)> {
+pub fn error_within(rows: &[TimedRow], seconds: &[f64]) -> Vec<(Method, Vec<Option<f64>>)> {
     groups(rows)
         .into_iter()
         .map(|(method, settings)| {

@@ -9,12 +9,12 @@ use std::sync::Arc;
 use anyhow::{Context as _, Result};
 use flatland_geom::generate::{GenerateParams, SceneKind, generate};
 use flatland_geom::{Kernel, Scene};
-use flatland_solve::{DEFAULT_ERROR_BOUND, SolveParams, elements_for_error};
+use flatland_solve::{LitParams, LitScene};
 
 use crate::report::timed::{WITHIN_SECONDS, error_within, within_table, write_plots};
 use crate::scaling::{Scaling, ScalingPlan, run_scaling};
 use crate::timed::relight::{RelightSummary, relight, summaries};
-use crate::timed::{Contender, Scorer, TimedPlan, TimedRow, run_timed};
+use crate::timed::{Method, Scorer, TimedPlan, TimedRow, run_timed};
 use crate::{interrupt, report};
 
 /// The bundled realistic scenes.
@@ -32,12 +32,12 @@ pub fn stages(quick: bool) -> usize {
 }
 
 /// The methods compared at equal time.
-const METHODS: [Contender; 5] = [
-    Contender::Default,
-    Contender::Exact,
-    Contender::Hr,
-    Contender::Clustered,
-    Contender::Tracer,
+const METHODS: [Method; 5] = [
+    Method::Light,
+    Method::Exact,
+    Method::Hr,
+    Method::Clustered,
+    Method::Tracer,
 ];
 
 /// One scene's equal-time comparison.
@@ -100,9 +100,9 @@ pub fn measure(
     for (name, scene) in scenes(folder, quick)? {
         stage(&format!("every method at equal time on {name}"))?;
         let kernel = Arc::new(Kernel::new(scene));
-        let found = elements_for_error(&kernel, DEFAULT_ERROR_BOUND, &SolveParams::default(), stop)
+        let lit = LitScene::new(Arc::clone(&kernel), &LitParams::default(), stop)
             .with_context(|| format!("{name}: the exact reference"))?;
-        let scorer = Scorer::of_discretization(found);
+        let scorer = Scorer::of_lit(lit);
         let rows = run_timed(&kernel, &scorer, &plan, stop, |_| Ok(()))?;
         let dir = plots.join(file_name(&name));
         std::fs::create_dir_all(&dir)?;
@@ -148,7 +148,7 @@ fn file_name(name: &str) -> String {
 }
 
 /// The least error `method` reached within `seconds`, from [`error_within`].
-fn best_within(rows: &[TimedRow], method: Contender, seconds: f64) -> Option<f64> {
+fn best_within(rows: &[TimedRow], method: Method, seconds: f64) -> Option<f64> {
     error_within(rows, &[seconds])
         .into_iter()
         .find(|(m, _)| *m == method)
@@ -207,8 +207,8 @@ fn verdicts(real: &Real) -> Vec<String> {
         let mut exact_wins = Vec::new();
         for t in WITHIN_SECONDS {
             let (d, x) = (
-                best_within(&s.rows, Contender::Default, t),
-                best_within(&s.rows, Contender::Exact, t),
+                best_within(&s.rows, Method::Light, t),
+                best_within(&s.rows, Method::Exact, t),
             );
             if x.is_some_and(|x| d.is_none_or(|d| x < d)) {
                 let (x, d) = distinguished(x, d);
@@ -217,21 +217,21 @@ fn verdicts(real: &Real) -> Vec<String> {
         }
         if exact_wins.is_empty() {
             lines.push(format!(
-                "{}: the default learner is at least as accurate as the exact solve within \
+                "{}: the light-driven learner is at least as accurate as the exact solve within \
                  every time listed.",
                 s.name
             ));
         } else {
             lines.push(format!(
-                "{}: **the exact solve beats the default learner** within {}.",
+                "{}: **the exact solve beats the light-driven learner** within {}.",
                 s.name,
                 exact_wins.join("; ")
             ));
         }
         lines.push(against_hr(s));
         if let (Some(d), Some(x)) = (
-            s.relit.iter().find(|r| r.method == Contender::Default),
-            s.relit.iter().find(|r| r.method == Contender::Exact),
+            s.relit.iter().find(|r| r.method == Method::Light),
+            s.relit.iter().find(|r| r.method == Method::Exact),
         ) {
             lines.push(format!(
                 "{}, relighting ({} lightings): default {:.2} s (mean error {:.4}), exact \
@@ -253,14 +253,14 @@ fn verdicts(real: &Real) -> Vec<String> {
     lines
 }
 
-/// Whether the default learner's rows lie at or below HR's best error at their time.
+/// Whether the light-driven learner's rows lie at or below HR's best error at their time.
 fn against_hr(s: &RealScene) -> String {
     let mut above = Vec::new();
     let mut compared = 0;
-    for r in s.rows.iter().filter(|r| r.method == Contender::Default) {
+    for r in s.rows.iter().filter(|r| r.method == Method::Light) {
         let (Some(d), Some(hr)) = (
             r.reflected_error(),
-            best_within(&s.rows, Contender::Hr, r.total_s),
+            best_within(&s.rows, Method::Hr, r.total_s),
         ) else {
             continue;
         };
@@ -271,19 +271,19 @@ fn against_hr(s: &RealScene) -> String {
     }
     if compared == 0 {
         format!(
-            "{}: HR had no row as fast as any of the default learner's (its initial linking \
+            "{}: HR had no row as fast as any of the light-driven learner's (its initial linking \
              takes longer).",
             s.name
         )
     } else if above.is_empty() {
         format!(
-            "{}: the default learner's error is at or below HR's at equal time at each of its \
+            "{}: the light-driven learner's error is at or below HR's at equal time at each of its \
              {compared} point(s) where HR has a row.",
             s.name
         )
     } else {
         format!(
-            "{}: **the default learner is above HR** at {}.",
+            "{}: **the light-driven learner is above HR** at {}.",
             s.name,
             above.join("; ")
         )
@@ -356,7 +356,7 @@ mod tests {
         );
     }
 
-    fn row(method: Contender, total_s: f64, error: f64) -> TimedRow {
+    fn row(method: Method, total_s: f64, error: f64) -> TimedRow {
         let mut r = TimedRow::new(method, Setting::Budget(1), 1);
         r.total_s = total_s;
         r.solve = Some(flatland_solve::SolveErrors {
@@ -374,10 +374,10 @@ mod tests {
             elements: 64,
             reference_elements: 128,
             rows: vec![
-                row(Contender::Default, 0.2, 0.05),
-                row(Contender::Default, 2.0, 0.01),
-                row(Contender::Exact, 0.1, 0.02),
-                row(Contender::Hr, 0.1, 0.03),
+                row(Method::Light, 0.2, 0.05),
+                row(Method::Light, 2.0, 0.01),
+                row(Method::Exact, 0.1, 0.02),
+                row(Method::Hr, 0.1, 0.03),
             ],
             relit: Vec::new(),
         };

@@ -43,7 +43,7 @@ pub fn document(f: &Findings) -> Result<String> {
         doc,
         "`flatland bench` on each scene: every method at every budget (basis functions: cells, \
          links, blocks), {} seed(s); the radiosity solved with each on {SOLVE_ELEMENTS} elements. \
-         `default` is the default learner, `paper` the paper's network with the least-squares \
+         `visibility` is the visibility network, `paper` the paper's network with the least-squares \
          refit, `paper-norefit` the paper's network as printed; `hr` is hierarchical \
          radiosity with a brightness-weighted oracle (E'·ρ·F) and link values from exact \
          form factors times a 20-ray visibility estimate, its F_ε searched per budget by one \
@@ -104,7 +104,7 @@ struct Compared {
 fn compare(b: &SceneBench) -> Option<Compared> {
     let at = |m: Method, f: fn(&BenchRow) -> Option<f64>| mean_at(&b.rows, m, HEADLINE_BUDGET, f);
     let both =
-        |f: fn(&BenchRow) -> Option<f64>| Some((at(Method::Default, f)?, at(Method::Hr, f)?));
+        |f: fn(&BenchRow) -> Option<f64>| Some((at(Method::Visibility, f)?, at(Method::Hr, f)?));
     let solved = |r: &BenchRow| r.solve.map(|e| e.rel_l2_reflected);
     Some(Compared {
         grid: both(|r| Some(r.errors.grid))?,
@@ -112,20 +112,20 @@ fn compare(b: &SceneBench) -> Option<Compared> {
         l1: both(|r| Some(r.errors.l1_grid))?,
         build_s: both(|r| Some(r.wall_s))?,
         solved: (
-            at(Method::Default, solved),
+            at(Method::Visibility, solved),
             at(Method::Hr, solved),
             b.exact_blocks.map(|e| e.rel_l2_reflected),
         ),
         worst_heldout: b
             .rows
             .iter()
-            .filter(|r| r.method == Method::Default)
+            .filter(|r| r.method == Method::Visibility)
             .map(|r| r.errors.heldout)
             .fold(0.0, f64::max),
     })
 }
 
-/// The acceptance table: the default learner against HR at the headline budget, every scene.
+/// The acceptance table: the visibility network against HR at the headline budget, every scene.
 fn verdict(doc: &mut String, f: &Findings) -> Result<()> {
     writeln!(
         doc,
@@ -343,7 +343,7 @@ fn r1(doc: &mut String, f: &Findings) -> Result<()> {
         "\nThe panels of `flatland figure --preset paper` and `flatland figure` (the paper's \
          Fig. 3: geometry, kernel, cells, approximation, error; all five in \
          `docs/results/figure-paper/` and `docs/results/figure-default/`). The paper's network \
-         spreads its Gaussians over ζ; the default learner's cells live only on the surface \
+         spreads its Gaussians over ζ; the visibility network's cells live only on the surface \
          pairs whose visibility varies, each inside one visibility face:\n\n\
          ![paper's cells](docs/results/figure-paper/c_cells.png)\n\
          ![default cells](docs/results/figure-default/c_cells.png)\n"
@@ -398,7 +398,7 @@ fn r2_r3(doc: &mut String, f: &Findings) -> Result<()> {
         doc,
         "\nAn initial link joins an ordered pair of surface edges that can exchange light (the \
          paper counts about 10⁶; by this rule it is the number above). Neither learner links \
-         pairs: the paper's network never looks at the edge count, and the default learner \
+         pairs: the paper's network never looks at the edge count, and the visibility network \
          groups collinear pieces of one edge into one parent surface before it decides which \
          pairs need learning.\n"
     )?;
@@ -496,9 +496,9 @@ fn scene_bench(doc: &mut String, b: &SceneBench) -> Result<()> {
     let grid = |r: &BenchRow| Some(r.errors.grid);
     let heldout = |r: &BenchRow| Some(r.errors.heldout);
     for (method, label) in [
-        (Method::Default, "default learner"),
+        (Method::Visibility, "visibility network"),
         (Method::Paper, "paper's network with refit"),
-        (Method::PaperNoRefit, "paper's network as printed"),
+        (Method::PaperNorefit, "paper's network as printed"),
     ] {
         if let (Some(g), Some(h)) = (ratio(method, grid), ratio(method, heldout)) {
             writeln!(
@@ -568,7 +568,10 @@ mod tests {
                 grid: true,
                 heldout: true,
             },
-            rows: vec![row(Method::Default, ours, ours), row(Method::Hr, 0.2, 0.2)],
+            rows: vec![
+                row(Method::Visibility, ours, ours),
+                row(Method::Hr, 0.2, 0.2),
+            ],
             hr_form_factor: None,
             exact_blocks: None,
         };

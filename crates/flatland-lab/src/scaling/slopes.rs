@@ -3,7 +3,7 @@
 use flatland_geom::generate::SceneKind;
 
 use super::Scaling;
-use crate::timed::Contender;
+use crate::timed::Method;
 
 /// The least-squares slope of `ln cost` against `ln edges` of one method on one kind of scene.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -11,7 +11,7 @@ pub struct Slope {
     /// The kind of scene.
     pub kind: SceneKind,
     /// The method.
-    pub method: Contender,
+    pub method: Method,
     /// Of time to the lit scene (`None`: fewer than two sizes measured).
     pub time: Option<f64>,
     /// Of the peak memory added.

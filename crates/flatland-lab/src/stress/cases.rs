@@ -467,7 +467,7 @@ pub fn parameter_cases(suite: &mut Suite, fig3: &Scene) {
             |row| {
                 let (summary, fit) = small_fit(fig3, params)?;
                 inspect_fit(row, &summary, &fit);
-                // The default learner stops early once its error is gone.
+                // The visibility network stops early once its error is gone.
                 row.require(
                     summary.cells == FIT_CELLS || summary.stop == StopReason::Converged,
                     || format!("{} cells instead of {FIT_CELLS}", summary.cells),
@@ -543,7 +543,7 @@ pub fn soak_case(suite: &mut Suite, fig3: &Scene) {
         |row| {
             let inserts = if steps >= 1_000_000 { 200 } else { 100 };
             let lambda = u32::try_from((steps / inserts).max(1)).unwrap_or(u32::MAX);
-            // The paper's network keeps learning for the whole soak; the default learner would
+            // The paper's network keeps learning for the whole soak; the visibility network would
             // converge (exactly) and stop.
             let d = FitParams::paper();
             let params = FitParams {

@@ -15,7 +15,7 @@ use flatland_solve::{
     TransferOperator, exact_operator, solve_errors, solve_operator, sweep_operator,
 };
 
-use super::{Contender, Scorer, Setting, TimedPlan, TimedRow};
+use super::{Method, Scorer, Setting, TimedPlan, TimedRow};
 use crate::bench::{BenchRow, learner_row, paper_rows};
 
 /// What every row is computed with.
@@ -28,7 +28,7 @@ pub(crate) struct Context<'a> {
 
 /// A row of a built representation: solved on the scorer's mesh and measured.
 struct Built<'r> {
-    method: Contender,
+    method: Method,
     setting: Setting,
     seed: u64,
     rep: &'r dyn Representation,
@@ -71,7 +71,7 @@ impl Context<'_> {
         let stopped = fit.run(self.stop, |_| {})?;
         let build_s = started.elapsed().as_secs_f64();
         let mut row = self.scored(Built {
-            method: Contender::Default,
+            method: Method::Light,
             setting: Setting::Tolerance(tolerance),
             seed: 1,
             rep: &fit,
@@ -101,7 +101,7 @@ impl Context<'_> {
             seed,
             Some(&solver),
         )?;
-        let mut row = self.of_bench(Contender::FirstShot, row);
+        let mut row = self.of_bench(Method::Visibility, row);
         if let Some(n) = row
             .basis_functions
             .filter(|&n| n + budget_tolerance(budget) < budget)
@@ -124,8 +124,8 @@ impl Context<'_> {
             Some(&solver),
         )?;
         Ok((
-            self.of_bench(Contender::Paper, after),
-            self.of_bench(Contender::PaperNoRefit, before),
+            self.of_bench(Method::Paper, after),
+            self.of_bench(Method::PaperNorefit, before),
         ))
     }
 
@@ -136,7 +136,7 @@ impl Context<'_> {
             .context("this run measures no ζ, which the network learners are trained against")
     }
 
-    fn of_bench(&self, method: Contender, r: BenchRow) -> TimedRow {
+    fn of_bench(&self, method: Method, r: BenchRow) -> TimedRow {
         let solve_s = r.solve_s;
         TimedRow {
             method,
@@ -158,16 +158,16 @@ impl Context<'_> {
 
     /// HR, clustered HR or the uniform grid at `budget` (or the nearest count it can build,
     /// noted).
-    pub fn baseline(&self, method: Contender, budget: usize, seed: u64) -> Result<TimedRow> {
+    pub fn baseline(&self, method: Method, budget: usize, seed: u64) -> Result<TimedRow> {
         let kernel = self.kernel.as_ref();
         match method {
-            Contender::Hr => self.baseline_row(
+            Method::Hr => self.baseline_row(
                 method,
                 budget,
                 seed,
                 run_hr_at_budget(kernel, budget, seed, &self.plan.hr)?,
             ),
-            Contender::Clustered => self.baseline_row(
+            Method::Clustered => self.baseline_row(
                 method,
                 budget,
                 seed,
@@ -184,7 +184,7 @@ impl Context<'_> {
 
     fn baseline_row<A: Representation>(
         &self,
-        method: Contender,
+        method: Method,
         budget: usize,
         seed: u64,
         run: BaselineRun<A>,
@@ -215,7 +215,7 @@ impl Context<'_> {
         let errors = self
             .scorer
             .errors_on(&mesh, &solution.radiosity, self.stop)?;
-        let mut row = TimedRow::new(Contender::Exact, Setting::Elements(elements), 1);
+        let mut row = TimedRow::new(Method::Exact, Setting::Elements(elements), 1);
         row.basis_functions = Some(mesh.len());
         row.build_s = build_s;
         row.solve_s = solution.solve_s;
@@ -249,7 +249,7 @@ impl Context<'_> {
             TraceBudget::Photons(asked) => asked,
             TraceBudget::Seconds(_) => traced.photons,
         };
-        let mut row = TimedRow::new(Contender::Tracer, Setting::Photons(photons), seed);
+        let mut row = TimedRow::new(Method::Tracer, Setting::Photons(photons), seed);
         row.solve_s = traced.wall_s();
         row.total_s = row.solve_s;
         row.bytes = traced.memory_bytes;

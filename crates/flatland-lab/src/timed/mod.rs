@@ -7,7 +7,6 @@
 //! fails there gives a failed row with the reason, and the sweep goes on.
 
 pub(crate) mod compute;
-mod contender;
 pub mod relight;
 
 mod row;
@@ -18,7 +17,7 @@ mod settings;
 use flatland_baselines::{ClusteredParams, HrParams, UniformParams};
 use kernel_fit::FitParams;
 
-pub use contender::Contender;
+pub use flatland_methods::Method;
 pub use row::{Setting, TimedRow};
 pub use run::run_timed;
 pub use scorer::Scorer;
@@ -48,7 +47,7 @@ pub const MAX_DOUBLINGS: usize = 12;
 #[derive(Clone, Debug, PartialEq)]
 pub struct TimedPlan {
     /// Methods, in the order they run.
-    pub methods: Vec<Contender>,
+    pub methods: Vec<Method>,
     /// The light-driven learner's tolerances.
     pub tolerances: Vec<f64>,
     /// Budgets of basis functions, ascending.
@@ -77,7 +76,7 @@ pub struct TimedPlan {
 
 impl TimedPlan {
     /// Every method with its default sweep.
-    pub fn new(methods: Vec<Contender>) -> TimedPlan {
+    pub fn new(methods: Vec<Method>) -> TimedPlan {
         TimedPlan {
             methods,
             tolerances: DEFAULT_TOLERANCES.to_vec(),

@@ -19,7 +19,7 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::compute::{Context, exact_operator_of};
-use super::{Contender, Setting, TimedRow};
+use super::{Method, Setting, TimedRow};
 
 /// Lightings of a relighting run.
 pub const LIGHTINGS: usize = 10;
@@ -145,13 +145,13 @@ pub fn emission(mesh: &Mesh, lighting: &Lighting) -> Vec<f64> {
 }
 
 /// A method that could not relight, and why.
-pub type Failure = (Contender, String);
+pub type Failure = (Method, String);
 
 /// One method's lit scene under one lighting.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RelightRow {
     /// The method.
-    pub method: Contender,
+    pub method: Method,
     /// Which lighting (0: the scene as it is).
     pub lighting: usize,
     /// Seconds spent on this lighting (the first includes building the representation).
@@ -189,7 +189,7 @@ pub fn exact_lit(
 
 /// Solves every lighting with one operator; the first lighting's time includes `build_s`.
 fn resolved(
-    method: Contender,
+    method: Method,
     cx: &Context<'_>,
     op: &dyn TransferOperator,
     build_s: f64,
@@ -229,7 +229,7 @@ fn default_relit(
     let build_s = started.elapsed().as_secs_f64();
     let note = format!("learned once at tolerance {tolerance}");
     resolved(
-        Contender::Default,
+        Method::Light,
         cx,
         op.as_ref(),
         build_s,
@@ -246,7 +246,7 @@ fn exact_relit(cx: &Context<'_>, relits: &[Relit], exact: &[Vec<f64>]) -> Result
     let build_s = started.elapsed().as_secs_f64();
     let note = format!("{} elements", cx.scorer.mesh().len());
     resolved(
-        Contender::Exact,
+        Method::Exact,
         cx,
         op.as_ref(),
         build_s,
@@ -258,7 +258,7 @@ fn exact_relit(cx: &Context<'_>, relits: &[Relit], exact: &[Vec<f64>]) -> Result
 
 /// The first of `rows` (of one method, in sweep order) whose solved error is at most `target`,
 /// or the most accurate when none is, with a note saying which.
-fn matching(rows: &[TimedRow], method: Contender, target: f64) -> Option<(Setting, String)> {
+fn matching(rows: &[TimedRow], method: Method, target: f64) -> Option<(Setting, String)> {
     let mine: Vec<&TimedRow> = rows
         .iter()
         .filter(|r| r.method == method && !r.failed && r.solve.is_some())
@@ -284,7 +284,7 @@ fn matching(rows: &[TimedRow], method: Contender, target: f64) -> Option<(Settin
 /// HR or clustered HR built once at the budget that matched the learner's error, solved for every lighting.
 fn links_relit(
     cx: &Context<'_>,
-    method: Contender,
+    method: Method,
     budget: usize,
     note: &str,
     relits: &[Relit],
@@ -292,7 +292,7 @@ fn links_relit(
 ) -> Result<Vec<RelightRow>> {
     let started = Instant::now();
     let (mesh, params) = (cx.scorer.mesh(), SolveParams::default());
-    let op = if method == Contender::Clustered {
+    let op = if method == Method::Clustered {
         let run = run_clustered(cx.kernel, budget, 1, &cx.plan.clustered)?;
         run.approx.operator(mesh, &params, cx.stop)?
     } else {
@@ -322,7 +322,7 @@ fn tracer_relit(
         let started = Instant::now();
         let traced = tracer.trace(&relit.lighting, &params, cx.stop)?;
         rows.push(RelightRow {
-            method: Contender::Tracer,
+            method: Method::Tracer,
             lighting: l,
             seconds: started.elapsed().as_secs_f64(),
             errors: solve_errors(mesh, &traced.radiosity, exact),
@@ -336,7 +336,7 @@ fn tracer_relit(
 #[derive(Clone, Debug, PartialEq)]
 pub struct RelightSummary {
     /// The method.
-    pub method: Contender,
+    pub method: Method,
     /// Seconds to all the lit scenes: the sum of its rows' seconds.
     pub total_s: f64,
     /// The mean relative L2 error of `B − E` over the lightings.
@@ -387,13 +387,13 @@ pub(crate) fn relight_all(
 ) -> (Vec<RelightRow>, Vec<Failure>) {
     let mut rows = Vec::new();
     let mut failures = Vec::new();
-    let asked = |method: Contender| cx.plan.methods.contains(&method);
+    let asked = |method: Method| cx.plan.methods.contains(&method);
     let mut keep =
         |method, result: Result<Vec<RelightRow>>, rows: &mut Vec<RelightRow>| match result {
             Ok(r) => rows.extend(r),
             Err(e) => failures.push((method, format!("{e:#}"))),
         };
-    let learned = if asked(Contender::Default) {
+    let learned = if asked(Method::Light) {
         default_relit(cx, tolerance, relits, exact)
     } else {
         Ok(Vec::new())
@@ -403,11 +403,11 @@ pub(crate) fn relight_all(
         .ok()
         .and_then(|r| r.first())
         .map_or(0.0, |r| r.errors.rel_l2_reflected);
-    keep(Contender::Default, learned, &mut rows);
-    if asked(Contender::Exact) {
-        keep(Contender::Exact, exact_relit(cx, relits, exact), &mut rows);
+    keep(Method::Light, learned, &mut rows);
+    if asked(Method::Exact) {
+        keep(Method::Exact, exact_relit(cx, relits, exact), &mut rows);
     }
-    for method in [Contender::Hr, Contender::Clustered] {
+    for method in [Method::Hr, Method::Clustered] {
         if asked(method) {
             let result = match matching(sweep, method, target) {
                 Some((Setting::Budget(b), note)) => {
@@ -421,12 +421,12 @@ pub(crate) fn relight_all(
             keep(method, result, &mut rows);
         }
     }
-    if asked(Contender::Tracer) {
-        let result = match matching(sweep, Contender::Tracer, target) {
+    if asked(Method::Tracer) {
+        let result = match matching(sweep, Method::Tracer, target) {
             Some((Setting::Photons(p), note)) => tracer_relit(cx, p, &note, relits, exact),
             _ => Err(anyhow::anyhow!("no tracer row in the sweep to match")),
         };
-        keep(Contender::Tracer, result, &mut rows);
+        keep(Method::Tracer, result, &mut rows);
     }
     (rows, failures)
 }
@@ -498,26 +498,26 @@ mod tests {
     #[test]
     fn relighting_totals_are_the_sums_of_the_lightings() {
         let (kernel, scorer) = tiny();
-        let mut plan = TimedPlan::new(Contender::ALL.to_vec());
-        plan.methods = vec![Contender::Hr, Contender::Clustered, Contender::Tracer];
+        let mut plan = TimedPlan::new(Method::ALL.to_vec());
+        plan.methods = vec![Method::Hr, Method::Clustered, Method::Tracer];
         plan.budgets = vec![200];
         plan.extend_budgets = false;
         plan.tracer_seconds = 0.1;
         plan.first_photons = 2_000;
         let sweep = run_timed(&kernel, &scorer, &plan, &never, |_| Ok(())).unwrap();
-        plan.methods = Contender::ALL.to_vec();
+        plan.methods = Method::ALL.to_vec();
         let (rows, failures) = relight(&scorer, &kernel, &plan, &sweep, 4, &never).unwrap();
         assert!(failures.is_empty(), "{failures:?}");
         let all = summaries(&rows);
-        let methods: Vec<Contender> = all.iter().map(|s| s.method).collect();
+        let methods: Vec<Method> = all.iter().map(|s| s.method).collect();
         assert_eq!(
             methods,
             [
-                Contender::Default,
-                Contender::Exact,
-                Contender::Hr,
-                Contender::Clustered,
-                Contender::Tracer
+                Method::Light,
+                Method::Exact,
+                Method::Hr,
+                Method::Clustered,
+                Method::Tracer
             ]
         );
         for s in &all {
@@ -530,7 +530,7 @@ mod tests {
         }
         // The exact operator on the solve's mesh is close under every lighting (only its
         // discretization differs from the reference).
-        let exact = all.iter().find(|s| s.method == Contender::Exact).unwrap();
+        let exact = all.iter().find(|s| s.method == Method::Exact).unwrap();
         assert!(exact.max_error < 0.2, "{exact:?}");
     }
 }

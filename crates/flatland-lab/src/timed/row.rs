@@ -3,7 +3,7 @@
 
 use flatland_solve::SolveErrors;
 
-use super::Contender;
+use super::Method;
 
 /// The knob a row was run at.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -43,7 +43,7 @@ impl Setting {
 #[derive(Clone, Debug, PartialEq)]
 pub struct TimedRow {
     /// The method.
-    pub method: Contender,
+    pub method: Method,
     /// What it was run at.
     pub setting: Setting,
     /// The seed (1 for a method without one).
@@ -78,7 +78,7 @@ pub struct TimedRow {
 
 impl TimedRow {
     /// A row of `method` at `setting` that has cost and measured nothing yet.
-    pub fn new(method: Contender, setting: Setting, seed: u64) -> TimedRow {
+    pub fn new(method: Method, setting: Setting, seed: u64) -> TimedRow {
         TimedRow {
             method,
             setting,
@@ -98,7 +98,7 @@ impl TimedRow {
     }
 
     /// The row of a method that failed at `setting`.
-    pub fn failed(method: Contender, setting: Setting, seed: u64, why: &str) -> TimedRow {
+    pub fn failed(method: Method, setting: Setting, seed: u64, why: &str) -> TimedRow {
         TimedRow {
             note: format!("failed: {why}"),
             failed: true,

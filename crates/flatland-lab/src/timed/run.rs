@@ -11,12 +11,12 @@ use flatland_solve::Stop;
 
 use super::compute::Context;
 use super::settings::{ElementRange, Sweep};
-use super::{Contender, Scorer, Setting, TimedPlan, TimedRow};
+use super::{Method, Scorer, Setting, TimedPlan, TimedRow};
 use crate::interrupt;
 
 /// Rows computed by a fit that gives two (the paper's network with and without its refit),
 /// waiting for the other method's sweep to reach them.
-type Spare = HashMap<(Contender, usize, u64), TimedRow>;
+type Spare = HashMap<(Method, usize, u64), TimedRow>;
 
 /// Runs every method's sweep on `scorer`'s mesh, calling `kept` with the rows so far after each
 /// row (so they are on disk before the next one starts). A setting that fails gives a failed
@@ -72,7 +72,7 @@ pub fn run_timed(
 /// The row of `method` at `setting`, or a failed row with the error or panic that stopped it.
 fn isolated(
     cx: &Context<'_>,
-    method: Contender,
+    method: Method,
     setting: Setting,
     seed: u64,
     spare: &mut Spare,
@@ -95,20 +95,20 @@ fn isolated(
 
 fn computed(
     cx: &Context<'_>,
-    method: Contender,
+    method: Method,
     setting: Setting,
     seed: u64,
     spare: &mut Spare,
 ) -> Result<TimedRow> {
     match (method, setting) {
-        (Contender::Default, Setting::Tolerance(t)) => Ok(cx.light(t)?.0),
-        (Contender::FirstShot, Setting::Budget(b)) => cx.first_shot(b, seed),
-        (Contender::Paper | Contender::PaperNoRefit, Setting::Budget(b)) => {
+        (Method::Light, Setting::Tolerance(t)) => Ok(cx.light(t)?.0),
+        (Method::Visibility, Setting::Budget(b)) => cx.first_shot(b, seed),
+        (Method::Paper | Method::PaperNorefit, Setting::Budget(b)) => {
             if let Some(row) = spare.remove(&(method, b, seed)) {
                 return Ok(row);
             }
             let (refit, norefit) = cx.paper(b, seed)?;
-            let (mine, other) = if method == Contender::Paper {
+            let (mine, other) = if method == Method::Paper {
                 (refit, norefit)
             } else {
                 (norefit, refit)
@@ -116,11 +116,11 @@ fn computed(
             spare.insert((other.method, b, seed), other);
             Ok(mine)
         }
-        (Contender::Hr | Contender::Clustered | Contender::Uniform, Setting::Budget(b)) => {
+        (Method::Hr | Method::Clustered | Method::Uniform, Setting::Budget(b)) => {
             cx.baseline(method, b, seed)
         }
-        (Contender::Exact, Setting::Elements(n)) => cx.exact(n),
-        (Contender::Tracer, Setting::Photons(p)) => cx.tracer(p, seed),
+        (Method::Exact, Setting::Elements(n)) => cx.exact(n),
+        (Method::Tracer, Setting::Photons(p)) => cx.tracer(p, seed),
         _ => anyhow::bail!("{} has no {} setting", method.name(), setting.kind()),
     }
 }
@@ -145,7 +145,7 @@ mod tests {
 
     #[test]
     fn a_failing_method_gives_failed_rows_and_the_rows_before_are_kept_first() {
-        let mut plan = TimedPlan::new(vec![Contender::Uniform, Contender::Hr]);
+        let mut plan = TimedPlan::new(vec![Method::Uniform, Method::Hr]);
         plan.budgets = vec![16, 36];
         plan.extend_budgets = false;
         // An HR that may not build its initial linking fails at every budget.
@@ -160,9 +160,9 @@ mod tests {
         assert!(
             rows[..first_failure]
                 .iter()
-                .all(|r| r.method == Contender::Uniform)
+                .all(|r| r.method == Method::Uniform)
         );
-        let hr: Vec<&TimedRow> = rows.iter().filter(|r| r.method == Contender::Hr).collect();
+        let hr: Vec<&TimedRow> = rows.iter().filter(|r| r.method == Method::Hr).collect();
         assert_eq!(hr.len(), 2, "each budget tried: {hr:?}");
         assert!(
             hr.iter()
@@ -171,14 +171,14 @@ mod tests {
         );
         assert!(
             rows.iter()
-                .filter(|r| r.method == Contender::Uniform)
+                .filter(|r| r.method == Method::Uniform)
                 .all(|r| { !r.failed && r.reflected_error().is_some_and(f64::is_finite) })
         );
     }
 
     #[test]
     fn a_budget_below_what_hr_can_build_gives_one_noted_row() {
-        let mut plan = TimedPlan::new(vec![Contender::Hr]);
+        let mut plan = TimedPlan::new(vec![Method::Hr]);
         plan.budgets = vec![3, 4, 5];
         plan.extend_budgets = false;
         let (rows, _) = run(&plan);
@@ -191,7 +191,7 @@ mod tests {
 
     #[test]
     fn clustered_rows_land_on_their_budgets_and_light_the_scene() {
-        let mut plan = TimedPlan::new(vec![Contender::Clustered]);
+        let mut plan = TimedPlan::new(vec![Method::Clustered]);
         plan.budgets = vec![16, 256, 4096];
         plan.extend_budgets = false;
         let (rows, _) = run(&plan);
@@ -210,7 +210,7 @@ mod tests {
 
     #[test]
     fn default_rows_have_their_estimated_and_measured_errors() {
-        let mut plan = TimedPlan::new(vec![Contender::Default]);
+        let mut plan = TimedPlan::new(vec![Method::Light]);
         plan.tolerances = vec![0.3, 0.05];
         let (rows, _) = run(&plan);
         assert_eq!(rows.len(), 2);
@@ -227,13 +227,13 @@ mod tests {
 
     #[test]
     fn exact_doubles_its_elements_and_the_tracer_its_photons_within_its_time() {
-        let mut plan = TimedPlan::new(vec![Contender::Exact, Contender::Tracer]);
+        let mut plan = TimedPlan::new(vec![Method::Exact, Method::Tracer]);
         plan.tracer_seconds = 0.2;
         plan.first_photons = 2_000;
         let (rows, _) = run(&plan);
         let elements: Vec<usize> = rows
             .iter()
-            .filter(|r| r.method == Contender::Exact)
+            .filter(|r| r.method == Method::Exact)
             .filter_map(|r| r.basis_functions)
             .collect();
         assert!(
@@ -244,10 +244,7 @@ mod tests {
             elements.windows(2).all(|w| w[1] == 2 * w[0]),
             "{elements:?}"
         );
-        let traced: Vec<&TimedRow> = rows
-            .iter()
-            .filter(|r| r.method == Contender::Tracer)
-            .collect();
+        let traced: Vec<&TimedRow> = rows.iter().filter(|r| r.method == Method::Tracer).collect();
         assert!(!traced.is_empty());
         assert!(
             traced.iter().all(|r| r.zeta_error.is_none() && r.rays > 0),
@@ -260,7 +257,7 @@ mod tests {
 
     #[test]
     fn a_sweep_stops_at_its_first_row_over_the_time_budget() {
-        let mut plan = TimedPlan::new(vec![Contender::Uniform]);
+        let mut plan = TimedPlan::new(vec![Method::Uniform]);
         plan.budgets = vec![16, 36, 64];
         plan.extend_budgets = false;
         plan.max_seconds = 1e-9;

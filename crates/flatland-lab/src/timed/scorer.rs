@@ -1,24 +1,19 @@
-//! What every row is scored against: the solve's mesh, the exact B on it from an independent
-//! finer solve, and the ζ reference for the learned kernels.
+//! What every row is scored against: a [`LitScene`] (the solve's mesh and the exact B on it
+//! from an independent finer solve) and the ζ reference for the learned kernels.
 
 use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::Result;
 use flatland_geom::Kernel;
-use flatland_solve::{
-    Discretization, ExactReference, Mesh, Reference, Representation, SolveErrors, SolveParams,
-    Stop, solve_against, solve_errors,
-};
+use flatland_solve::{LitScene, Mesh, Reference, Representation, SolveErrors, SolveParams, Stop};
 
 use crate::Defined;
 use crate::bench::Solver;
 
-/// The mesh rows are solved on and the references they are measured against.
+/// The lit scene rows are solved on and scored against, and the ζ reference.
 pub struct Scorer {
-    mesh: Mesh,
-    exact: Vec<f64>,
-    fine: ExactReference,
+    lit: LitScene,
     /// `None` where no ζ is measured (the scaling runs: a ζ grid of a huge scene costs more
     /// than the methods it would judge).
     zeta: Option<Arc<Reference>>,
@@ -29,33 +24,39 @@ impl Scorer {
     /// Solves `kernel` exactly on `reference_elements` (the independent reference) and
     /// evaluates it at the collocation points of a mesh of `elements`.
     pub fn new(
-        kernel: &Kernel,
+        kernel: &Arc<Kernel>,
         elements: usize,
         reference_elements: usize,
         zeta: Arc<Reference>,
         stop: &Stop,
     ) -> Result<Scorer> {
-        let mesh = Mesh::new(kernel, elements)?;
-        let fine = ExactReference::new(kernel, reference_elements, &SolveParams::default(), stop)?;
-        let exact = fine.radiosity_on(&mesh, stop)?;
-        let defined = Defined::of(&zeta);
-        Ok(Scorer {
-            mesh,
-            exact,
-            fine,
-            zeta: Some(zeta),
-            defined,
-        })
+        let params = SolveParams::default();
+        let lit = LitScene::scoring(
+            Arc::clone(kernel),
+            elements,
+            reference_elements,
+            &params,
+            stop,
+        )?;
+        Ok(Scorer::with_zeta(lit, zeta))
     }
 
-    /// Scores on the chosen mesh of `found` against its solve on twice the elements (what
-    /// `flatland solve` measures against), with no ζ reference: rows have no ζ error, and the
-    /// learners that need one (first-shot, paper) fail with a note.
-    pub fn of_discretization(found: Discretization) -> Scorer {
+    /// Scores on `lit`, and the learned kernels' ζ on `zeta`.
+    pub fn with_zeta(lit: LitScene, zeta: Arc<Reference>) -> Scorer {
+        let defined = Defined::of(&zeta);
         Scorer {
-            mesh: found.coarse.mesh().clone(),
-            exact: found.finer_on_coarse,
-            fine: found.finer,
+            lit,
+            zeta: Some(zeta),
+            defined,
+        }
+    }
+
+    /// Scores on `lit`'s mesh against its reference (what `flatland solve` measures against),
+    /// with no ζ reference: rows have no ζ error, and the learners that need one (visibility,
+    /// paper) fail with a note.
+    pub fn of_lit(lit: LitScene) -> Scorer {
+        Scorer {
+            lit,
             zeta: None,
             defined: Defined {
                 grid: false,
@@ -64,19 +65,24 @@ impl Scorer {
         }
     }
 
+    /// The lit scene rows are scored on.
+    pub fn lit(&self) -> &LitScene {
+        &self.lit
+    }
+
     /// The mesh every representation is solved on.
     pub fn mesh(&self) -> &Mesh {
-        &self.mesh
+        self.lit.mesh()
     }
 
     /// The exact B at the mesh's collocation points.
     pub fn exact(&self) -> &[f64] {
-        &self.exact
+        self.lit.reference_on_mesh()
     }
 
     /// Elements of the independent reference solve.
     pub fn reference_elements(&self) -> usize {
-        self.fine.mesh().len()
+        self.lit.reference().mesh().len()
     }
 
     /// The ζ reference learned kernels are measured on, if there is one.
@@ -98,22 +104,18 @@ impl Scorer {
     /// The errors of B solved with `rep` on the mesh, and the seconds the solve took.
     pub fn solve(&self, rep: &dyn Representation, stop: &Stop) -> Result<(SolveErrors, f64)> {
         let started = Instant::now();
-        let c = solve_against(rep, &self.mesh, &self.exact, &SolveParams::default(), stop)?;
+        let c = self.lit.score(rep, stop)?;
         Ok((c.errors, started.elapsed().as_secs_f64()))
     }
 
     /// The errors of `b`, a radiosity on `mesh` (any mesh of the scene), against the reference.
     pub fn errors_on(&self, mesh: &Mesh, b: &[f64], stop: &Stop) -> Result<SolveErrors> {
-        if mesh.len() == self.mesh.len() {
-            return Ok(solve_errors(mesh, b, &self.exact));
-        }
-        let exact = self.fine.radiosity_on(mesh, stop)?;
-        Ok(solve_errors(mesh, b, &exact))
+        Ok(self.lit.errors_on(mesh, b, stop)?)
     }
 
-    /// The solver the first-shot and paper rows of [`crate::bench`] score with.
+    /// The solver the visibility and paper rows of [`crate::bench`] score with.
     pub(crate) fn solver(&self) -> Solver {
-        Solver::of(self.mesh.clone(), self.exact.clone())
+        Solver::of(self.mesh().clone(), self.exact().to_vec())
     }
 }
 

@@ -4,7 +4,7 @@
 use flatland_baselines::budget_tolerance;
 use flatland_solve::{ExactMethod, MAX_MESH_ELEMENTS, Mesh};
 
-use super::{Contender, MAX_DOUBLINGS, Setting, TimedPlan, TimedRow};
+use super::{MAX_DOUBLINGS, Method, Setting, TimedPlan, TimedRow};
 
 /// The largest budget a sweep doubles to (the `--budgets` range).
 const MAX_BUDGET: usize = 10_000_000;
@@ -45,14 +45,14 @@ impl ElementRange {
 
 /// One method's sweep: the settings handed out so far.
 pub(crate) struct Sweep {
-    method: Contender,
+    method: Method,
     issued: usize,
     doublings: usize,
 }
 
 impl Sweep {
     /// A sweep of `method` that has run nothing.
-    pub fn new(method: Contender) -> Sweep {
+    pub fn new(method: Method) -> Sweep {
         Sweep {
             method,
             issued: 0,
@@ -70,17 +70,17 @@ impl Sweep {
     ) -> Option<Setting> {
         let last = rows.last().map(|r| r.setting);
         let next = match (self.method, last) {
-            (Contender::Default, _) => plan
+            (Method::Light, _) => plan
                 .tolerances
                 .get(self.issued)
                 .map(|&t| Setting::Tolerance(t)),
             (m, _) if m.budgeted() => self.next_budget(plan, rows),
-            (Contender::Exact, None) => Some(Setting::Elements(elements.min)),
-            (Contender::Exact, Some(Setting::Elements(n))) => {
+            (Method::Exact, None) => Some(Setting::Elements(elements.min)),
+            (Method::Exact, Some(Setting::Elements(n))) => {
                 elements.fits(2 * n).then_some(Setting::Elements(2 * n))
             }
-            (Contender::Tracer, None) => Some(Setting::Photons(plan.first_photons)),
-            (Contender::Tracer, Some(Setting::Photons(p))) => {
+            (Method::Tracer, None) => Some(Setting::Photons(plan.first_photons)),
+            (Method::Tracer, Some(Setting::Photons(p))) => {
                 let spent: f64 = rows.iter().map(|r| r.total_s).sum();
                 (spent < plan.tracer_seconds && 2 * p <= MAX_PHOTONS)
                     .then_some(Setting::Photons(2 * p))
@@ -132,7 +132,7 @@ impl Sweep {
 mod tests {
     use super::*;
 
-    fn row(method: Contender, setting: Setting, basis: usize, total_s: f64) -> TimedRow {
+    fn row(method: Method, setting: Setting, basis: usize, total_s: f64) -> TimedRow {
         let mut r = TimedRow::new(method, setting, 1);
         r.basis_functions = Some(basis);
         r.total_s = total_s;
@@ -141,43 +141,43 @@ mod tests {
 
     #[test]
     fn a_budget_below_what_was_built_is_not_repeated() {
-        let plan = TimedPlan::new(vec![Contender::Hr]);
+        let plan = TimedPlan::new(vec![Method::Hr]);
         let range = ElementRange {
             min: 8,
             max: 64,
             method: ExactMethod::Dense,
         };
-        let mut sweep = Sweep::new(Contender::Hr);
+        let mut sweep = Sweep::new(Method::Hr);
         assert_eq!(sweep.next(&plan, &range, &[]), Some(Setting::Budget(50)));
         // HR built 300 links at budget 50: the next row is past them, at 400.
-        let first = row(Contender::Hr, Setting::Budget(50), 300, 0.1);
+        let first = row(Method::Hr, Setting::Budget(50), 300, 0.1);
         assert_eq!(
             sweep.next(&plan, &range, &[&first]),
             Some(Setting::Budget(400))
         );
         // 5000 links at 800, the end of the list: doubling from what was built.
-        let last = row(Contender::Hr, Setting::Budget(800), 5000, 0.1);
+        let last = row(Method::Hr, Setting::Budget(800), 5000, 0.1);
         assert_eq!(
             sweep.next(&plan, &range, &[&first, &last]),
             Some(Setting::Budget(10_000))
         );
         // Its finest linking, 7000 links, at 10 000: nothing more to build.
-        let finest = row(Contender::Hr, Setting::Budget(10_000), 7000, 0.1);
+        let finest = row(Method::Hr, Setting::Budget(10_000), 7000, 0.1);
         assert_eq!(sweep.next(&plan, &range, &[&first, &last, &finest]), None);
     }
 
     #[test]
     fn exact_doubles_to_four_times_the_solve_and_the_tracer_to_its_time() {
-        let plan = TimedPlan::new(vec![Contender::Exact, Contender::Tracer]);
+        let plan = TimedPlan::new(vec![Method::Exact, Method::Tracer]);
         let range = ElementRange {
             min: 8,
             max: 32,
             method: ExactMethod::Dense,
         };
-        let mut exact = Sweep::new(Contender::Exact);
+        let mut exact = Sweep::new(Method::Exact);
         let mut done = Vec::new();
         while let Some(s) = exact.next(&plan, &range, &done.iter().collect::<Vec<_>>()) {
-            done.push(row(Contender::Exact, s, 0, 0.0));
+            done.push(row(Method::Exact, s, 0, 0.0));
         }
         let counts: Vec<Setting> = done.iter().map(|r| r.setting).collect();
         assert_eq!(
@@ -185,14 +185,14 @@ mod tests {
             [8, 16, 32].map(Setting::Elements).to_vec(),
             "{counts:?}"
         );
-        let mut tracer = Sweep::new(Contender::Tracer);
-        let first = row(Contender::Tracer, Setting::Photons(10_000), 0, 20.0);
+        let mut tracer = Sweep::new(Method::Tracer);
+        let first = row(Method::Tracer, Setting::Photons(10_000), 0, 20.0);
         assert!(tracer.next(&plan, &range, &[]).is_some());
         assert_eq!(
             tracer.next(&plan, &range, &[&first]),
             Some(Setting::Photons(20_000))
         );
-        let second = row(Contender::Tracer, Setting::Photons(20_000), 0, 11.0);
+        let second = row(Method::Tracer, Setting::Photons(20_000), 0, 11.0);
         assert_eq!(tracer.next(&plan, &range, &[&first, &second]), None);
     }
 }

@@ -60,7 +60,7 @@ impl ViewerApp {
     /// fit.
     pub fn choose_preset(&mut self, preset: Preset) {
         self.settings.choose_learner(match preset {
-            Preset::Default => LearnerName::Theta,
+            Preset::Visibility => LearnerName::Theta,
             Preset::Paper => LearnerName::Paper,
         });
         self.reset();

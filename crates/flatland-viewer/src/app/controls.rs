@@ -199,7 +199,7 @@ impl ViewerApp {
             }
             let presets = [
                 (
-                    Preset::Default,
+                    Preset::Visibility,
                     "θ-driven",
                     "learns only the visibility V, where geometry cannot decide it, in cells \
                      that never straddle a shadow boundary (ALGORITHM.md §4)",

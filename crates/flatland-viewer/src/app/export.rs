@@ -1,7 +1,7 @@
 //! Export: the window as a PNG (egui's screenshot command; the pixels are encoded by `image`
 //! and written atomically on a thread of their own, so no frame waits for it) and the run as
 //! the model file `flatland eval` reads (written by the learner's thread, which owns the fit).
-//! Files are named after the scene, the learner and the step: `floorplan-default-step12000.png`.
+//! Files are named after the scene, the learner and the step: `floorplan-visibility-step12000.png`.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

@@ -164,7 +164,7 @@ impl ViewerApp {
     fn scene_panels(&mut self, ui: &mut egui::Ui, layout: &Layout, shown: &Shown) {
         let lit = self.shown_lit(shown);
         let learned_paint = lit.map(|l| LitPaint {
-            mesh: &l.setup.mesh,
+            mesh: l.setup.mesh(),
             b: &l.solve.b,
             top: l.setup.top,
         });
@@ -172,7 +172,7 @@ impl ViewerApp {
             Some(l) => format!(
                 "lit by the learned kernel: B − E rel. L2 {} ({} el., {:.0} ms)",
                 error_text(l.solve.errors.rel_l2_reflected, true),
-                l.setup.mesh.len(),
+                l.setup.mesh().len(),
                 1e3 * l.solve.solve_s
             ),
             None => "scene".to_owned(),
@@ -210,8 +210,8 @@ impl ViewerApp {
         let title = "lit by the exact kernel";
         if let Some(l) = lit {
             let paint = LitPaint {
-                mesh: &l.setup.mesh,
-                b: &l.setup.exact,
+                mesh: l.setup.mesh(),
+                b: l.setup.exact(),
                 top: l.setup.top,
             };
             views::lit_view(

@@ -15,9 +15,9 @@ use crate::worker::Lit;
 /// non-emitter; emitters leave the plot.
 fn b_curves(ui: &mut egui::Ui, lit: &Lit, height: f32) {
     let setup = &lit.setup;
-    let (mesh, b) = (&setup.mesh, &lit.solve.b);
-    let fine = setup.reference.mesh();
-    let exact = &setup.reference.solution().radiosity;
+    let (mesh, b) = (&setup.mesh(), &lit.solve.b);
+    let fine = setup.reference().mesh();
+    let exact = &setup.reference().solution().radiosity;
     let lit_max = |mesh: &Mesh, b: &[f64]| {
         (0..mesh.len())
             .filter(|&i| mesh.edge_of(i).emission == 0.0)

@@ -1,6 +1,6 @@
 //! Which of the network's edges join cells of one face: the only edges the overlay draws.
 //!
-//! The default learner files every cell under one face of the visibility structure, and a cell
+//! The visibility network files every cell under one face of the visibility structure, and a cell
 //! answers only rays of its own face; the network's other edges (its simplices span faces)
 //! join cells that never answer the same ray, and drawn they are a web across the plot. The
 //! face of a cell is asked at its re-projected `(s, t)` ([`LearnedKernel::face_cells`]), once

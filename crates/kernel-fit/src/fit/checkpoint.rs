@@ -117,7 +117,10 @@ mod tests {
 
     #[test]
     fn resume_continues_to_the_same_result() {
-        for (p, kernel, cells) in [(Preset::Paper, fig3(), 60), (Preset::Default, maze(), 120)] {
+        for (p, kernel, cells) in [
+            (Preset::Paper, fig3(), 60),
+            (Preset::Visibility, maze(), 120),
+        ] {
             let mut full = fit_with(&kernel, preset(p, cells));
             let uninterrupted = run(&mut full);
 

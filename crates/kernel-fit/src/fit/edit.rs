@@ -83,12 +83,12 @@ mod tests {
     }
 
     /// Scene edits at random (an end point of a random edge dragged, as in the viewer), each
-    /// followed by training that moves and inserts cells: the default learner's cells and
+    /// followed by training that moves and inserts cells: the visibility network's cells and
     /// samples stay filed under the faces of the scene of the moment.
     #[test]
     fn face_filing_survives_random_scene_edits() {
         let mut kernel = maze();
-        let mut fit = fit_with(&kernel, preset(Preset::Default, 60));
+        let mut fit = fit_with(&kernel, preset(Preset::Visibility, 60));
         run(&mut fit);
         assert_filed(&fit, "before any edit");
         let mut rng = flatland_testkit::rng(31);
@@ -113,7 +113,7 @@ mod tests {
             let cells = fit.network().len();
             fit.set_kernel(Arc::clone(&kernel), reference);
             assert_filed(&fit, &format!("after edit {edits} (edge {e})"));
-            fit.set_params(preset(Preset::Default, cells + 15).live())
+            fit.set_params(preset(Preset::Visibility, cells + 15).live())
                 .unwrap();
             for _ in 0..3000 {
                 if fit.step().is_some() {

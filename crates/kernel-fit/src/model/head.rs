@@ -230,7 +230,7 @@ mod tests {
     #[test]
     fn cells_stay_filed_under_their_faces_through_random_moves_and_insertions() {
         let kernel = maze();
-        let base = preset(Preset::Default, 120);
+        let base = preset(Preset::Visibility, 120);
         let params = FitParams {
             network: sgcs::Params {
                 eps_b: 0.5,

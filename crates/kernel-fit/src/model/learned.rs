@@ -269,7 +269,7 @@ impl LearnedKernel {
     }
 }
 
-/// The learned model. A visibility model (the default learner) integrates its own `Ṽ` exactly
+/// The learned model. A visibility model (the visibility network) integrates its own `Ṽ` exactly
 /// against the closed-form transfer, asking `Ṽ` once per face (the `operator` module); a
 /// model of ζ or k uses the quadrature default.
 impl Representation for LearnedKernel {

@@ -141,7 +141,7 @@ mod tests {
     #[test]
     fn visibility_models_round_trip_through_model_files() {
         let kernel = maze();
-        let mut fit = fit_with(&kernel, preset(Preset::Default, 60));
+        let mut fit = fit_with(&kernel, preset(Preset::Visibility, 60));
         let summary = run(&mut fit);
         let dir = std::env::temp_dir().join(format!("flatland-vismodel-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();

@@ -239,7 +239,7 @@ mod tests {
         }
     }
 
-    /// Issue 11's bar: with the default learner at 400 cells the reflected light is at most
+    /// Issue 11's bar: with the visibility network at 400 cells the reflected light is at most
     /// half as wrong as with exact 20×20 block means of k, and no worse than with HR.
     #[test]
     fn the_learned_kernel_lights_the_scene_better_than_the_baselines() {

@@ -1,4 +1,4 @@
-//! The two named learners: the default learner and the paper's network.
+//! The two networks' parameter sets: the visibility network and the paper's network.
 
 use serde::{Deserialize, Serialize};
 
@@ -8,12 +8,14 @@ use crate::{FitError, FitParams};
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Preset {
-    /// The default learner ([`FitParams::default`]): the network learns only
+    /// The visibility network ([`FitParams::default`]): the network learns only
     /// the visibility, on the pairs of surface edges where geometry cannot decide it; the
     /// exact unoccluded kernel does the rest. Its cells never straddle a visibility
     /// discontinuity, so it improves on the paper's network at a faster rate.
     #[default]
-    Default,
+    // Settings the viewer saved before the network had its name read back as it.
+    #[serde(alias = "default")]
+    Visibility,
     /// The paper's network ([`FitParams::paper`]): SGCS learns ζ itself from `γ(s, t)`, with
     /// the paper's parameters, plus this project's stability fixes and least-squares refit.
     Paper,
@@ -21,12 +23,12 @@ pub enum Preset {
 
 impl Preset {
     /// Every preset, in the order tables list them.
-    pub const ALL: [Preset; 2] = [Preset::Default, Preset::Paper];
+    pub const ALL: [Preset; 2] = [Preset::Visibility, Preset::Paper];
 
     /// The name used on the command line and in files.
     pub fn name(self) -> &'static str {
         match self {
-            Preset::Default => "default",
+            Preset::Visibility => "visibility",
             Preset::Paper => "paper",
         }
     }
@@ -39,14 +41,14 @@ impl Preset {
             .ok_or_else(|| FitError::InvalidParameter {
                 name: "preset",
                 value: name.to_owned(),
-                valid: "default or paper",
+                valid: "visibility or paper",
             })
     }
 
     /// The preset's parameters.
     pub fn params(self) -> FitParams {
         match self {
-            Preset::Default => FitParams::default(),
+            Preset::Visibility => FitParams::default(),
             Preset::Paper => FitParams::paper(),
         }
     }

@@ -163,12 +163,12 @@ impl Schema for FitParams {
 }
 
 /// The Markdown table of every numeric parameter (name, symbol, range, the paper's and the
-/// default learner's value, meaning): the table of docs/ALGORITHM.md §8, which a test keeps
+/// visibility network's value, meaning): the table of docs/ALGORITHM.md §8, which a test keeps
 /// equal to this.
 pub fn parameter_table() -> String {
     sgcs::schema::markdown_table(&[
         ("paper", &FitParams::paper()),
-        ("default learner", &FitParams::default()),
+        ("visibility network", &FitParams::default()),
     ])
 }
 

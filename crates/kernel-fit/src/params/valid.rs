@@ -22,7 +22,7 @@ pub enum Head {
         /// The least-squares refit that ends the fit, if any.
         refit: Option<Refit>,
     },
-    /// The default learner's: the network learns the visibility `V` on the pairs of surface
+    /// The visibility network's: the network learns the visibility `V` on the pairs of surface
     /// edges where geometry cannot decide it, and `ζ̃ = ζ_unoccluded · Ṽ`.
     Visibility(VisibilityParams),
 }

@@ -194,7 +194,7 @@ impl Learner {
         };
         let made = LightFit::new(
             Arc::clone(&world.kernel),
-            setup.mesh.clone(),
+            setup.mesh().clone(),
             LightParams::default(),
             &|| false,
         );
@@ -257,7 +257,7 @@ impl Learner {
         let Some(run) = &mut self.light else { return };
         let Some(fit) = &run.fit else { return };
         let b = fit.radiosity().to_vec();
-        let errors = solve_errors(&setup.mesh, &b, &setup.exact);
+        let errors = solve_errors(setup.mesh(), &b, setup.exact());
         let rounds = fit.history().len();
         run.history.push(LitPoint {
             steps: rounds as u64,

@@ -205,8 +205,7 @@ impl Learner {
             Some((w, b)) if *w == world.id => b.take()?,
             _ => {
                 let (id, kernel) = (world.id, Arc::clone(&world.kernel));
-                let work =
-                    Background::start(move |stop| LitSetup::build(id, &kernel, target, stop));
+                let work = Background::start(move |stop| LitSetup::build(id, kernel, target, stop));
                 self.lit.building = Some((id, work));
                 return None;
             }

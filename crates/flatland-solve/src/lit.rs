@@ -1,0 +1,350 @@
+//! The lit scene: one type that owns a scene's mesh, its exact solve, the finer solve that
+//! estimates that solve's error, and the reference every other solution is scored against —
+//! each solved once and reused. `flatland solve`, the bench, the experiments and the viewer
+//! all light a scene through it.
+
+use std::sync::Arc;
+
+use flatland_geom::Kernel;
+
+use crate::{
+    Comparison, DEFAULT_ERROR_BOUND, Discretization, ErrorEstimate, ExactMethod, ExactReference,
+    Mesh, Representation, Solution, SolveError, SolveErrors, SolveParams, Stop, elements_for_error,
+    solve_against, solve_errors,
+};
+
+/// How many elements the lit scene's mesh has.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Elements {
+    /// The fewest of the doubling from the scene's minimum whose estimated error of `B − E` is
+    /// at most this ([`elements_for_error`]).
+    ForError(f64),
+    /// Exactly this many.
+    Exactly(usize),
+}
+
+/// What solutions are scored against.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ReferenceMesh {
+    /// The solve on twice the elements the estimate is made from (no solve more).
+    Finer,
+    /// An exact solve on this many elements (the finer one when it is that count).
+    Elements(usize),
+    /// An exact solve on four times the chosen elements, at least 2048
+    /// ([`ExactReference::default_elements_for`]): what the bench scores against.
+    FourTimes,
+}
+
+/// Settings of a lit scene, checked by [`LitParams::check`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LitParams {
+    /// The mesh's element count.
+    pub elements: Elements,
+    /// The reference.
+    pub reference: ReferenceMesh,
+    /// Every exact solve's settings.
+    pub solve: SolveParams,
+}
+
+impl Default for LitParams {
+    /// What `flatland solve` does by default: the elements for a 1 % error of `B − E`, scored
+    /// against the finer solve.
+    fn default() -> Self {
+        LitParams {
+            elements: Elements::ForError(DEFAULT_ERROR_BOUND),
+            reference: ReferenceMesh::Finer,
+            solve: SolveParams::default(),
+        }
+    }
+}
+
+impl LitParams {
+    /// Checks the settings against `kernel`'s scene before any solve: an error bound in
+    /// (0, 1), element counts a mesh and the scene's exact operator can have.
+    pub fn check(&self, kernel: &Kernel) -> Result<(), SolveError> {
+        self.solve.validate()?;
+        match self.elements {
+            Elements::ForError(bound) if !(bound > 0.0 && bound < 1.0) => {
+                return Err(SolveError::InvalidParameter {
+                    name: "error bound",
+                    value: bound.to_string(),
+                    valid: "in (0, 1)",
+                });
+            }
+            Elements::ForError(_) => {}
+            Elements::Exactly(n) => check_elements(kernel, n)?,
+        }
+        if let ReferenceMesh::Elements(n) = self.reference {
+            check_elements(kernel, n)?;
+        }
+        Ok(())
+    }
+}
+
+/// Refuses an element count no mesh, or no exact operator of this scene, can have.
+pub fn check_elements(kernel: &Kernel, elements: usize) -> Result<(), SolveError> {
+    ExactMethod::of(kernel).check(elements)?;
+    Mesh::new(kernel, elements).map(|_| ())
+}
+
+/// A scene lit exactly on a mesh, and what every other lighting of it is scored against.
+#[derive(Clone, Debug)]
+pub struct LitScene {
+    kernel: Arc<Kernel>,
+    mesh: Mesh,
+    /// The exact solve on `mesh` and its estimated error, when they were made
+    /// ([`LitScene::new`]; [`LitScene::scoring`] makes neither).
+    exact: Option<(ExactReference, ErrorEstimate)>,
+    reference: ExactReference,
+    /// The reference's B at `mesh`'s collocation points.
+    reference_on_mesh: Vec<f64>,
+    solved: Vec<usize>,
+}
+
+impl LitScene {
+    /// Lights `kernel`'s scene exactly as `params` say: the mesh, its exact solve, the solve
+    /// on twice the elements that estimates its error, and the reference (that finer solve,
+    /// or one more solve when another count is asked). Each mesh is solved once.
+    pub fn new(
+        kernel: Arc<Kernel>,
+        params: &LitParams,
+        stop: &Stop,
+    ) -> Result<LitScene, SolveError> {
+        params.check(&kernel)?;
+        let found = match params.elements {
+            Elements::ForError(bound) => elements_for_error(&kernel, bound, &params.solve, stop)?,
+            Elements::Exactly(n) => {
+                let coarse = ExactReference::new(&kernel, n, &params.solve, stop)?;
+                let mut found = Discretization::of(coarse, &kernel, &params.solve, stop)?;
+                found.solved.insert(0, n);
+                found
+            }
+        };
+        let Discretization {
+            coarse,
+            finer,
+            finer_on_coarse,
+            estimate,
+            mut solved,
+        } = found;
+        let mesh = coarse.mesh().clone();
+        let reference = match params.reference {
+            ReferenceMesh::FourTimes => {
+                ReferenceMesh::Elements(ExactReference::default_elements_for(&kernel, mesh.len()))
+            }
+            other => other,
+        };
+        let (reference, reference_on_mesh) = match reference {
+            ReferenceMesh::Elements(n) if n != finer.mesh().len() => {
+                let reference = if n == mesh.len() {
+                    coarse.clone()
+                } else {
+                    solved.push(n);
+                    ExactReference::new(&kernel, n, &params.solve, stop)?
+                };
+                let on_mesh = reference.radiosity_on(&mesh, stop)?;
+                (reference, on_mesh)
+            }
+            _ => (finer, finer_on_coarse),
+        };
+        Ok(LitScene {
+            kernel,
+            mesh,
+            exact: Some((coarse, estimate)),
+            reference,
+            reference_on_mesh,
+            solved,
+        })
+    }
+
+    /// A mesh of `elements` to score other lightings on, against an exact solve on
+    /// `reference_elements` — no exact solve on the mesh itself, no estimate.
+    pub fn scoring(
+        kernel: Arc<Kernel>,
+        elements: usize,
+        reference_elements: usize,
+        params: &SolveParams,
+        stop: &Stop,
+    ) -> Result<LitScene, SolveError> {
+        params.validate()?;
+        check_elements(&kernel, reference_elements)?;
+        let mesh = Mesh::new(&kernel, elements)?;
+        let reference = ExactReference::new(&kernel, reference_elements, params, stop)?;
+        let reference_on_mesh = reference.radiosity_on(&mesh, stop)?;
+        Ok(LitScene {
+            kernel,
+            mesh,
+            exact: None,
+            reference,
+            reference_on_mesh,
+            solved: vec![reference_elements],
+        })
+    }
+
+    /// The kernel of the scene lit.
+    #[must_use]
+    pub fn kernel(&self) -> &Arc<Kernel> {
+        &self.kernel
+    }
+
+    /// The mesh every lighting is solved on.
+    #[must_use]
+    pub fn mesh(&self) -> &Mesh {
+        &self.mesh
+    }
+
+    /// The exact solve on the mesh, when it was made.
+    #[must_use]
+    pub fn exact(&self) -> Option<&ExactReference> {
+        self.exact.as_ref().map(|(e, _)| e)
+    }
+
+    /// The exact solve's estimated discretization error, when it was made.
+    #[must_use]
+    pub fn estimate(&self) -> Option<&ErrorEstimate> {
+        self.exact.as_ref().map(|(_, e)| e)
+    }
+
+    /// The exact solve scores are measured against.
+    #[must_use]
+    pub fn reference(&self) -> &ExactReference {
+        &self.reference
+    }
+
+    /// The reference's B at the mesh's collocation points.
+    #[must_use]
+    pub fn reference_on_mesh(&self) -> &[f64] {
+        &self.reference_on_mesh
+    }
+
+    /// The element count of every exact solve this lit scene made, in order: no count twice.
+    #[must_use]
+    pub fn solved(&self) -> &[usize] {
+        &self.solved
+    }
+
+    /// Solves the scene with `rep` on the mesh and scores the solution against the reference.
+    pub fn score(&self, rep: &dyn Representation, stop: &Stop) -> Result<Comparison, SolveError> {
+        solve_against(
+            rep,
+            &self.mesh,
+            &self.reference_on_mesh,
+            &SolveParams::default(),
+            stop,
+        )
+    }
+
+    /// The exact solve on the mesh scored against the reference, without solving again.
+    #[must_use]
+    pub fn exact_scored(&self) -> Option<Comparison> {
+        self.exact().map(|e| self.scored(e.solution().clone()))
+    }
+
+    /// `solution`, a radiosity on the mesh, scored against the reference.
+    #[must_use]
+    pub fn scored(&self, solution: Solution) -> Comparison {
+        let errors = solve_errors(&self.mesh, &solution.radiosity, &self.reference_on_mesh);
+        Comparison { solution, errors }
+    }
+
+    /// The errors of `b`, a radiosity on `mesh` (any mesh of the scene), against the
+    /// reference.
+    pub fn errors_on(
+        &self,
+        mesh: &Mesh,
+        b: &[f64],
+        stop: &Stop,
+    ) -> Result<SolveErrors, SolveError> {
+        if mesh.len() == self.mesh.len() {
+            return Ok(solve_errors(mesh, b, &self.reference_on_mesh));
+        }
+        let exact = self.reference.radiosity_on(mesh, stop)?;
+        Ok(solve_errors(mesh, b, &exact))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::never;
+    use crate::test_support::{bundled, floor_plan};
+
+    #[test]
+    fn each_mesh_is_solved_once_and_the_exact_solve_is_reused() {
+        for (scene, params) in [
+            (bundled("fig3"), LitParams::default()),
+            (
+                floor_plan(300),
+                LitParams {
+                    elements: Elements::Exactly(600),
+                    ..LitParams::default()
+                },
+            ),
+            (
+                bundled("maze"),
+                LitParams {
+                    elements: Elements::Exactly(256),
+                    reference: ReferenceMesh::Elements(1024),
+                    ..LitParams::default()
+                },
+            ),
+        ] {
+            let kernel = Arc::new(Kernel::new(scene));
+            let lit = LitScene::new(kernel, &params, &never).unwrap();
+            let mut counts = lit.solved().to_vec();
+            counts.sort_unstable();
+            counts.dedup();
+            assert_eq!(counts.len(), lit.solved().len(), "{:?}", lit.solved());
+            let n = lit.mesh().len();
+            assert!(lit.solved().contains(&n) && lit.solved().contains(&(2 * n)));
+            assert_eq!(lit.estimate().unwrap().elements, n);
+            // The exact lighting is the solve already made, scored as a re-solve would be.
+            let reused = lit.exact_scored().unwrap();
+            let again = lit.score(lit.kernel().as_ref(), &never).unwrap();
+            assert_eq!(reused.solution.radiosity, again.solution.radiosity);
+            assert_eq!(reused.errors, again.errors);
+        }
+    }
+
+    #[test]
+    fn a_reference_of_another_count_is_one_solve_more() {
+        let kernel = Arc::new(Kernel::new(bundled("maze")));
+        let params = LitParams {
+            elements: Elements::Exactly(256),
+            reference: ReferenceMesh::Elements(1024),
+            ..LitParams::default()
+        };
+        let lit = LitScene::new(kernel, &params, &never).unwrap();
+        assert_eq!(lit.solved(), [256, 512, 1024]);
+        assert_eq!(lit.reference().mesh().len(), 1024);
+        let finer = LitParams {
+            reference: ReferenceMesh::Finer,
+            ..params
+        };
+        let lit = LitScene::new(Arc::clone(lit.kernel()), &finer, &never).unwrap();
+        assert_eq!(lit.solved(), [256, 512]);
+        assert_eq!(lit.reference().mesh().len(), 512);
+    }
+
+    #[test]
+    fn bad_counts_are_refused_before_any_solve() {
+        let kernel = Arc::new(Kernel::new(bundled("fig3")));
+        for params in [
+            LitParams {
+                elements: Elements::ForError(0.0),
+                ..LitParams::default()
+            },
+            LitParams {
+                elements: Elements::Exactly(1),
+                ..LitParams::default()
+            },
+            LitParams {
+                reference: ReferenceMesh::Elements(1),
+                ..LitParams::default()
+            },
+        ] {
+            let err = LitScene::new(Arc::clone(&kernel), &params, &never).unwrap_err();
+            assert!(matches!(err, SolveError::InvalidParameter { .. }), "{err}");
+        }
+    }
+}
