@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 /// Everything that can go wrong when building, loading or saving a scene or a kernel.
 ///
-/// Messages name the edge (by its index in the file, from 0), the rule and the valid range,
+/// Messages name the edge or light (by its index in the file, from 0), the rule and the valid range,
 /// or the file, line and column of a parse error.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -65,6 +65,38 @@ pub enum GeomError {
     )]
     TwoSidedSurface {
         /// Index of the offending edge.
+        edge: usize,
+    },
+    /// A light's position is not a finite number.
+    #[error("light {light}: {field} must be finite, but is {value}")]
+    LightNonFinite {
+        /// Index of the offending light.
+        light: usize,
+        /// Which field (`at.x` or `at.y`).
+        field: &'static str,
+        /// The offending value.
+        value: f64,
+    },
+    /// A light's power is negative or not finite.
+    #[error("light {light}: power must be finite and >= 0, but is {value}")]
+    LightPower {
+        /// Index of the offending light.
+        light: usize,
+        /// The offending value.
+        value: f64,
+    },
+    /// A light lies on an edge (a corner lies on two: the first is named).
+    #[error(
+        "light {light}: at ({x}, {y}) lies on edge {edge}; a light must be off every edge (move it into the room, even a little)"
+    )]
+    LightOnEdge {
+        /// Index of the offending light.
+        light: usize,
+        /// Its x.
+        x: f64,
+        /// Its y.
+        y: f64,
+        /// The edge it lies on.
         edge: usize,
     },
     /// The scene has no edge with role `surface`, so there is nothing to parameterize.

@@ -13,6 +13,14 @@
 //!   long shelf) at least 0.3 apart, lit by skylights (emitting pieces of the ceiling): one per
 //!   15 units of width, at least one.
 //!
+//! Both also come **lit by point lights** instead ([`generate_lit`], [`floor_plan_lit`],
+//! [`hall_lit`]), with no edge emitting: a floor plan gets a lamp in every room (a
+//! [`PointLight`] of power 8, kept 0.4 clear of walls, doors and furniture, which are placed
+//! around it), a hall one lamp per 10 units of width, 0.5 under the ceiling, over the clear
+//! band the boxes leave there, and its skylights are plain ceiling. The walls, doors and
+//! furniture are drawn from the same seed stream, so they are not the same as the emitting
+//! version's: only what a seed gives is fixed.
+//!
 //! Nothing overlaps or hides inside another object: where a wall abuts another, the covered
 //! part of the face is left out, so every surface can be lit. A scene's edge count is close to
 //! the size asked for ([`GenerateParams::edges`], within a fifth for sizes from 100 up), and the
@@ -24,7 +32,7 @@ use glam::DVec2;
 use rand::{Rng, RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::{Edge, GeomError, Scene};
+use crate::{Edge, GeomError, PointLight, Scene};
 
 /// Which kind of scene [`generate`] builds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -68,15 +76,33 @@ impl GenerateParams {
     }
 }
 
-/// The scene `params` describe (see the module docs).
+/// The scene `params` describe, lit by emitting edges (see the module docs).
 pub fn generate(params: &GenerateParams) -> Result<Scene, GeomError> {
+    build(params, Lamps::Emitting)
+}
+
+/// The scene `params` describe, lit by point lights, no edge emitting (see the module docs).
+pub fn generate_lit(params: &GenerateParams) -> Result<Scene, GeomError> {
+    build(params, Lamps::Points)
+}
+
+/// How the generated scene is lit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Lamps {
+    /// Emitting boxes (floor plans) and skylights (halls).
+    Emitting,
+    /// Point lights.
+    Points,
+}
+
+fn build(params: &GenerateParams, lamps: Lamps) -> Result<Scene, GeomError> {
     params.check()?;
     let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
-    let edges = match params.kind {
-        SceneKind::FloorPlan => floor_plan_edges(params.edges, &mut rng),
-        SceneKind::Hall => hall_edges(params.edges, &mut rng),
+    let (edges, lights) = match params.kind {
+        SceneKind::FloorPlan => floor_plan_edges(params.edges, lamps, &mut rng),
+        SceneKind::Hall => hall_edges(params.edges, lamps, &mut rng),
     };
-    Scene::new(edges)
+    Scene::new(edges)?.with_lights(lights)
 }
 
 /// A floor plan of about `edges` edges (see the module docs).
@@ -96,6 +122,31 @@ pub fn hall(edges: usize, seed: u64) -> Result<Scene, GeomError> {
         seed,
     })
 }
+
+/// A floor plan of about `edges` edges with a lamp (a point light) in every room and no
+/// emitting edge (see the module docs).
+pub fn floor_plan_lit(edges: usize, seed: u64) -> Result<Scene, GeomError> {
+    generate_lit(&GenerateParams {
+        kind: SceneKind::FloorPlan,
+        edges,
+        seed,
+    })
+}
+
+/// A hall of about `edges` edges lit by point lights under its ceiling, no emitting edge
+/// (see the module docs).
+pub fn hall_lit(edges: usize, seed: u64) -> Result<Scene, GeomError> {
+    generate_lit(&GenerateParams {
+        kind: SceneKind::Hall,
+        edges,
+        seed,
+    })
+}
+
+/// A room lamp's power.
+const LAMP_POWER: f64 = 8.0;
+/// A hall lamp's power.
+const HALL_LAMP_POWER: f64 = 15.0;
 
 /// Interior wall thickness.
 const WALL: f64 = 0.2;
@@ -438,7 +489,11 @@ impl Placer {
     }
 }
 
-fn floor_plan_edges(target: usize, rng: &mut ChaCha8Rng) -> Vec<Edge> {
+fn floor_plan_edges(
+    target: usize,
+    lamps: Lamps,
+    rng: &mut ChaCha8Rng,
+) -> (Vec<Edge>, Vec<PointLight>) {
     let rooms = (target as f64 / EDGES_PER_ROOM).max(1.0);
     let cols = (rooms * 4.0 / 3.0).sqrt().round().max(1.0) as usize;
     let rows = (rooms / cols as f64).round().max(1.0) as usize;
@@ -457,11 +512,27 @@ fn floor_plan_edges(target: usize, rng: &mut ChaCha8Rng) -> Vec<Edge> {
         )
     };
     // Lamps first, so every plan has its light wherever the furniture goes.
-    let lamps = (rows * cols / 12).max(2);
+    let half = DVec2::splat(0.1);
+    let mut lights = Vec::new();
+    if lamps == Lamps::Points {
+        // One per room; its little box is only kept free, so the lamp stands 0.4 from
+        // anything (a room too cluttered by doors for it stays dark).
+        for r in 0..rows {
+            for c in 0..cols {
+                if let Some(center) = placer.place(room_area(r, c), half, 0.0, rng) {
+                    lights.push(PointLight::new(center, LAMP_POWER));
+                }
+            }
+        }
+    }
+    let emitting = if lamps == Lamps::Emitting {
+        (rows * cols / 12).max(2)
+    } else {
+        0
+    };
     let mut lit = 0;
-    while lit < lamps {
+    while lit < emitting {
         let (r, c) = (rng.random_range(0..rows), rng.random_range(0..cols));
-        let half = DVec2::splat(0.1);
         if let Some(center) = placer.place(room_area(r, c), half, 0.0, rng) {
             edges.extend(solid_box(center, half, 0.0, 0.3, 10.0));
             lit += 1;
@@ -483,10 +554,10 @@ fn floor_plan_edges(target: usize, rng: &mut ChaCha8Rng) -> Vec<Edge> {
             }
         }
     }
-    edges
+    (edges, lights)
 }
 
-fn hall_edges(target: usize, rng: &mut ChaCha8Rng) -> Vec<Edge> {
+fn hall_edges(target: usize, lamps: Lamps, rng: &mut ChaCha8Rng) -> (Vec<Edge>, Vec<PointLight>) {
     let boxes = target.saturating_sub(8).max(4) / 4;
     // About 10 units of floor per box, 3 : 2.
     let area = 10.0 * boxes as f64;
@@ -502,7 +573,14 @@ fn hall_edges(target: usize, rng: &mut ChaCha8Rng) -> Vec<Edge> {
         let center = w * (i as f64 + 0.5) / skylights as f64;
         let half = rng.random_range(1.0..2.0);
         edges.push(Edge::surface(v(x, h), v(center + half, h), 0.55));
-        edges.push(Edge::surface(v(center + half, h), v(center - half, h), 0.2).with_emission(5.0));
+        let skylight = Edge::surface(v(center + half, h), v(center - half, h), 0.2);
+        edges.push(match lamps {
+            Lamps::Emitting => skylight.with_emission(5.0),
+            Lamps::Points => Edge {
+                reflectance: 0.55,
+                ..skylight
+            },
+        });
         x = center - half;
     }
     edges.push(Edge::surface(v(x, h), v(0.0, h), 0.55));
@@ -546,7 +624,20 @@ fn hall_edges(target: usize, rng: &mut ChaCha8Rng) -> Vec<Edge> {
             placed += 1;
         }
     }
-    edges
+    let lights = match lamps {
+        Lamps::Emitting => Vec::new(),
+        Lamps::Points => {
+            // In the band under the ceiling that no box reaches (boxes end 1.5 below it).
+            let count = ((w / 10.0).round() as usize).max(1);
+            (0..count)
+                .map(|i| {
+                    let x = w * (i as f64 + 0.5) / count as f64;
+                    PointLight::new(v(x, h - 0.5), HALL_LAMP_POWER)
+                })
+                .collect()
+        }
+    };
+    (edges, lights)
 }
 
 /// Boxes filed by the square buckets they touch, for overlap tests in large halls.
@@ -664,6 +755,53 @@ mod tests {
                 assert!((total - 1.0).abs() < 0.02, "s = {s}: ∫ G V = {total}");
             }
         }
+    }
+
+    /// Lit by lamps: no edge emits, every room of a plan has its lamp (but for rooms too
+    /// crowded by doors), each lamp at least 0.4 from every edge; a hall's lamps hang in its
+    /// clear band. Same seed, same scene.
+    #[test]
+    fn lit_plans_and_halls_have_lamps_clear_of_everything_and_no_emitter() {
+        for kind in [SceneKind::FloorPlan, SceneKind::Hall] {
+            for edges in [100, 1000, 10_000] {
+                let params = GenerateParams {
+                    kind,
+                    edges,
+                    seed: 4,
+                };
+                let scene = generate_lit(&params).unwrap();
+                assert_eq!(scene, generate_lit(&params).unwrap());
+                assert_eq!(emitters(&scene), 0, "{kind:?} {edges}");
+                let ratio = scene.edges().len() as f64 / edges as f64;
+                assert!((0.75..=1.2).contains(&ratio), "{kind:?} {edges}: {ratio}");
+                let lights = scene.lights();
+                assert!(!lights.is_empty() && lights.iter().all(|l| l.power > 0.0));
+                if kind == SceneKind::FloorPlan {
+                    let rooms = edges as f64 / EDGES_PER_ROOM;
+                    assert!(lights.len() as f64 >= 0.8 * rooms, "{} lamps", lights.len());
+                }
+                if edges <= 1000 {
+                    for (i, l) in lights.iter().enumerate() {
+                        let nearest = scene
+                            .edges()
+                            .iter()
+                            .map(|e| distance_to_segment(l.at, e.a, e.b))
+                            .fold(f64::INFINITY, f64::min);
+                        assert!(nearest >= 0.4 - 1e-9, "{kind:?}: lamp {i} at {nearest}");
+                    }
+                }
+            }
+        }
+        // The emitting version is unchanged by the lamps' code: same scene as before, no light.
+        assert!(floor_plan(300, 7).unwrap().lights().is_empty());
+        assert!(floor_plan_lit(300, 7).unwrap().is_lit());
+        assert!(hall_lit(300, 7).unwrap().is_lit());
+    }
+
+    fn distance_to_segment(p: DVec2, a: DVec2, b: DVec2) -> f64 {
+        let d = b - a;
+        let u = ((p - a).dot(d) / d.length_squared()).clamp(0.0, 1.0);
+        p.distance(a + d * u)
     }
 
     #[test]

@@ -64,5 +64,5 @@ pub use io::write_atomic;
 pub use kernel::{
     Hit, Kernel, KernelParams, KernelSample, PairClass, PairEventsRef, Unoccluded, VaryingPairs,
 };
-pub use scene::{Edge, Role, Scene, SurfacePoint};
+pub use scene::{Edge, PointLight, Role, Scene, SurfacePoint};
 pub use visibility::{OnRay, PairEvents, RayFace, SenderFace};

@@ -4,6 +4,7 @@ mod build;
 mod edge;
 mod edit;
 mod fingerprint;
+mod light;
 mod param;
 mod raw;
 
@@ -11,8 +12,9 @@ use std::fmt;
 
 use glam::DVec2;
 
-use crate::{EdgeId, SurfaceRank};
+use crate::{EdgeId, GeomError, SurfaceRank};
 pub use edge::{Edge, Role};
+pub use light::PointLight;
 pub use param::SurfacePoint;
 pub(crate) use raw::RawScene;
 
@@ -40,20 +42,27 @@ pub(crate) struct Group {
     pub rank: Option<SurfaceRank>,
 }
 
-/// A validated Flatland scene (docs/ALGORITHM.md §1): edges, the arc-length parameterization of its surface
-/// edges, and the parent structure left by [`Scene::subdivide`].
+/// A validated Flatland scene (docs/ALGORITHM.md §1): edges, its point lights, the arc-length
+/// parameterization of its surface edges, and the parent structure left by [`Scene::subdivide`].
 ///
 /// The only ways to get one are [`Scene::new`], loading/deserializing (which validate) and the
 /// methods that derive a scene from another, so every `Scene` in memory is valid: finite
-/// coordinates, positive lengths, ρ ∈ [0, 1], finite E ≥ 0, at least one surface edge.
+/// coordinates, positive lengths, ρ ∈ [0, 1], finite E ≥ 0, at least one surface edge; lights
+/// at finite points off every edge, with finite power Φ ≥ 0.
 ///
 /// Serialized form (`.ron` or `.json`): `{"edges": [{"a": [0, 0], "b": [1, 0], "reflectance":
-/// 0.5, "emission": 0.0, "role": "surface", "two_sided": false}, ...]}`; `emission`, `role` and
-/// `two_sided` are optional. The parent structure is not serialized: a saved subdivided scene
-/// loads as independent edges (same kernel up to rounding, but culling no longer merges pieces).
+/// 0.5, "emission": 0.0, "role": "surface", "two_sided": false}, ...], "lights": [{"at": [0.5,
+/// 0.5], "power": 2.0}]}`; `emission`, `role`, `two_sided` and `lights` are optional (a scene
+/// without lights is written without the key, so its file is what it was before lights
+/// existed). The parent structure is not serialized: a saved subdivided scene loads as
+/// independent edges (same kernel up to rounding, but culling no longer merges pieces).
+///
+/// Lights are not part of the kernel `k(s, t)` (nor of [`Scene::fingerprint`]): they light the
+/// scene, they do not change how its surfaces exchange light.
 #[derive(Clone, PartialEq)]
 pub struct Scene {
     edges: Vec<Edge>,
+    lights: Vec<PointLight>,
     group_of: Vec<usize>,
     groups: Vec<Group>,
     surface_edges: Vec<EdgeId>,
@@ -73,6 +82,7 @@ impl fmt::Debug for Scene {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("Scene")
             .field("edges", &self.edges)
+            .field("lights", &self.lights)
             .field("parent_groups", &self.groups.len())
             .field("total_length", &self.total_length)
             .finish()
@@ -84,6 +94,28 @@ impl Scene {
     #[must_use]
     pub fn edges(&self) -> &[Edge] {
         &self.edges
+    }
+
+    /// The point lights, in file order (empty for a scene lit by its edges only).
+    #[must_use]
+    pub fn lights(&self) -> &[PointLight] {
+        &self.lights
+    }
+
+    /// The same scene lit by `lights` instead of its own (validated: finite, power ≥ 0, off
+    /// every edge; errors name the light by its index and the edge it lies on). Nothing that
+    /// depends on the edges is rebuilt, so moving a light costs a look-up per light in a grid
+    /// of the edges.
+    pub fn with_lights(mut self, lights: Vec<PointLight>) -> Result<Scene, GeomError> {
+        light::check_lights(&self.edges, &lights)?;
+        self.lights = lights;
+        Ok(self)
+    }
+
+    /// Whether anything lights the scene: an emitting edge or a light of positive power.
+    #[must_use]
+    pub fn is_lit(&self) -> bool {
+        self.max_emission() > 0.0 || self.lights.iter().any(|l| l.power > 0.0)
     }
 
     /// Edge `id`.

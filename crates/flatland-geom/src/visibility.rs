@@ -37,9 +37,7 @@ mod side;
 pub(crate) use bundle::{Hull, cuts_bundle};
 pub(crate) use bvh::{Bvh, Segment, wins_tie};
 pub use events::{OnRay, PairEvents, RayFace, SenderFace};
-#[cfg(test)]
-pub(crate) use predicates::on_closed_segment;
-pub(crate) use predicates::{open_segment_hits, orient};
+pub(crate) use predicates::{on_closed_segment, open_segment_hits, orient};
 pub(crate) use ray::{Contact, Ray};
 #[cfg(test)]
 pub(crate) use shaft::Candidates;

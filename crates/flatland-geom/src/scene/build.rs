@@ -4,7 +4,8 @@ use super::{Edge, Group, Role, Scene};
 use crate::{EdgeId, GeomError, SurfaceRank};
 
 impl Scene {
-    /// Validates `edges` and builds the scene. Errors name the first offending edge and the rule.
+    /// Validates `edges` and builds the scene, without lights ([`Scene::with_lights`] adds
+    /// them). Errors name the first offending edge and the rule.
     pub fn new(edges: Vec<Edge>) -> Result<Scene, GeomError> {
         let runs = vec![1; edges.len()];
         Scene::from_runs(edges, &runs)
@@ -69,6 +70,7 @@ impl Scene {
             .collect();
         Ok(Scene {
             edges,
+            lights: Vec::new(),
             group_of,
             groups,
             surface_edges,

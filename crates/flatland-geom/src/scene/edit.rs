@@ -5,7 +5,7 @@ use super::{Edge, Scene};
 use crate::{EdgeId, GeomError};
 
 impl Scene {
-    /// Splits every surface edge into `m` equal edges (blockers stay as they are).
+    /// Splits every surface edge into `m` equal edges (blockers stay as they are; lights too).
     /// [`Scene::point`] is unchanged for every `s`, and the kernel over `(s, t)` is the same
     /// function: the pieces remember their parent edge. `m = 0` is an error.
     pub fn subdivide(&self, m: usize) -> Result<Scene, GeomError> {
@@ -45,10 +45,11 @@ impl Scene {
             }
             runs.push(n);
         }
-        Scene::from_runs(edges, &runs)
+        Scene::from_runs(edges, &runs)?.with_lights(self.lights.clone())
     }
 
-    /// The scene with edge `index` replaced by `edge` (validated). If `index` was a piece of a
+    /// The scene with edge `index` replaced by `edge` (validated, also against the lights, which
+    /// stay). If `index` was a piece of a
     /// subdivided edge, that parent's pieces become independent edges.
     pub fn with_edge(&self, index: EdgeId, edge: Edge) -> Result<Scene, GeomError> {
         let index = index.index();
@@ -69,7 +70,8 @@ impl Scene {
                 runs.push(g.count);
             }
         }
-        Scene::from_runs(edges, &runs)
+        // The new edge may pass through a light: checked again.
+        Scene::from_runs(edges, &runs)?.with_lights(self.lights.clone())
     }
 }
 

@@ -7,6 +7,11 @@ impl Scene {
     /// each edge the IEEE bits of `a.x, a.y, b.x, b.y, reflectance, emission` (little endian,
     /// `-0.0` counted as `0.0`), then one byte for the role (0 surface, 1 blocker) and one for
     /// `two_sided`. Same on every run and platform; the parent structure is not included.
+    ///
+    /// Nor are the point lights: the fingerprint names what a kernel (and a model learned of
+    /// it) is of, and `k(s, t)` does not depend on the lights, so one model serves every
+    /// placement of the lamps. What depends on the lights (a mesh's source term, a solved B)
+    /// compares them itself.
     #[must_use]
     pub fn fingerprint(&self) -> u64 {
         let mut h = Fnv1a::default();
@@ -69,6 +74,15 @@ mod tests {
             scene.fingerprint()
         );
         edges[0].reflectance = 0.5;
+        let lit = scene
+            .clone()
+            .with_lights(vec![crate::PointLight::new(v(0.5, 0.5), 3.0)])
+            .unwrap();
+        assert_eq!(
+            lit.fingerprint(),
+            scene.fingerprint(),
+            "lights are not in it"
+        );
         edges[0].a = v(-0.0, 0.0);
         assert_eq!(
             Scene::new(edges).unwrap().fingerprint(),
