@@ -285,7 +285,7 @@ fn block_means_with(
     panels: usize,
     stop: &Stop,
 ) -> Result<Vec<f64>, SolveError> {
-    let mesh = Mesh::coarsest(kernel)?;
+    let mesh = Mesh::coarsest_unlit(kernel);
     let table = PairTable::new(kernel, &mesh)?;
     let (nodes, weights) = crate::gauss_legendre(BLOCK_POINTS);
     let l = mesh.total_length();

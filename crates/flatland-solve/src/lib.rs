@@ -79,6 +79,7 @@ mod error;
 mod exact;
 mod frame;
 mod gmres;
+mod lights;
 mod lit;
 mod mesh;
 mod operator;
@@ -108,6 +109,7 @@ pub use exact::{
 };
 pub use frame::InputFrame;
 pub use lit::{Elements, LitParams, LitScene, ReferenceMesh, check_elements};
+pub use lights::{DirectLight, LightBuffers, LitSurfaces};
 pub use mesh::{
     DEFAULT_ELEMENTS, Element, MAX_ELEMENTS, MAX_MESH_ELEMENTS, MIN_PER_EDGE, Mesh, MeshEdge,
 };

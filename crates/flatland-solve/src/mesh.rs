@@ -4,7 +4,7 @@ use std::cmp::{Ordering, Reverse};
 use std::collections::BinaryHeap;
 use std::ops::Range;
 
-use flatland_geom::{DVec2, EdgeId, Kernel, Scene};
+use flatland_geom::{DVec2, EdgeId, Kernel, PointLight, Scene};
 use rayon::prelude::*;
 
 use crate::bvh::{Aabb, Bvh};
@@ -72,6 +72,10 @@ pub struct Mesh {
     frame: InputFrame,
     total_length: f64,
     fingerprint: u64,
+    /// The scene's point lights.
+    lights: Vec<PointLight>,
+    /// Their mean irradiance per element; empty without lights.
+    direct: Vec<f64>,
 }
 
 /// Most elements a dense operator may have: it holds N² numbers (8192² · 8 B = 512 MiB). A mesh
@@ -104,15 +108,10 @@ impl Mesh {
             .min(MAX_ELEMENTS.max(sections))
     }
 
-    /// `elements` elements over the surfaces of `kernel`'s scene, spread so that their lengths
-    /// are as equal as the sections allow (each section gets at least one, apportioned by
-    /// length). Sections are the parts of a surface edge between its ends and the junctions
-    /// where other edges touch or cross it ([`MeshEdge::junctions`]). Errors name the valid
-    /// range: at least [`Mesh::min_elements`], at most [`MAX_MESH_ELEMENTS`]. A dense operator
-    /// refuses more than [`MAX_ELEMENTS`] when it is built.
-    ///
-    /// Linear in the edges up to a logarithm: junctions are found through a spatial index.
-    pub fn new(kernel: &Kernel, elements: usize) -> Result<Mesh, SolveError> {
+    /// [`Mesh::new`] without the lights' direct light (its source is E alone): the elements
+    /// only. `Mesh::new` and `Mesh::coarsest` are in `lights.rs`, above the sweep that lights
+    /// them.
+    pub(crate) fn unlit(kernel: &Kernel, elements: usize) -> Result<Mesh, SolveError> {
         let scene = kernel.scene();
         let runs = surface_runs(scene);
         let cuts = all_junctions(scene, &runs);
@@ -224,16 +223,26 @@ impl Mesh {
             frame,
             total_length,
             fingerprint: scene.fingerprint(),
+            lights: Vec::new(),
+            direct: Vec::new(),
         }
     }
 
-    /// One element per section of a surface edge: the coarsest mesh (no limit on the count).
-    pub fn coarsest(kernel: &Kernel) -> Result<Mesh, SolveError> {
+    /// [`Mesh::coarsest`] without the lights' direct light.
+    pub(crate) fn coarsest_unlit(kernel: &Kernel) -> Mesh {
         let scene = kernel.scene();
         let runs = surface_runs(scene);
         let cuts = all_junctions(scene, &runs);
         let fewest = sections(&cuts);
-        Ok(Mesh::build(kernel, runs, &cuts, fewest))
+        Mesh::build(kernel, runs, &cuts, fewest)
+    }
+
+    /// Lights the mesh: the scene's `lights` and the mean irradiance `direct` they give each
+    /// element.
+    pub(crate) fn set_lights(&mut self, lights: Vec<PointLight>, direct: Vec<f64>) {
+        debug_assert_eq!(direct.len(), self.len());
+        self.lights = lights;
+        self.direct = direct;
     }
 
     /// The fewest elements a mesh of `scene` can have: one per section, the parts of a surface
@@ -273,10 +282,35 @@ impl Mesh {
         &self.edges[self.elements[i].mesh_edge]
     }
 
-    /// E per element.
+    /// The source term per element, what the solver's `B = B₀ + K B` starts from:
+    /// `B₀_i = E_i + ρ_i H̄_i`, E and the reflected direct light of the scene's point lights
+    /// (`H̄_i` their mean irradiance over the element, exact: [`Mesh::direct_irradiance`]).
+    /// Without lights it is E, bit for bit. `B − B₀` is the part a kernel decides.
     #[must_use]
     pub fn emission(&self) -> Vec<f64> {
-        (0..self.len()).map(|i| self.edge_of(i).emission).collect()
+        if self.direct.is_empty() {
+            return (0..self.len()).map(|i| self.edge_of(i).emission).collect();
+        }
+        (0..self.len())
+            .map(|i| {
+                let edge = self.edge_of(i);
+                edge.emission + edge.reflectance * self.direct[i]
+            })
+            .collect()
+    }
+
+    /// The point lights of the scene the mesh was made for (what [`Mesh::fingerprint`] leaves
+    /// out).
+    #[must_use]
+    pub fn lights(&self) -> &[PointLight] {
+        &self.lights
+    }
+
+    /// Their mean irradiance `H̄_i` over each element (`Σ Φ Δφ_i / (2π l_i)`, `Δφ_i` the angle
+    /// the element's visible front subtends from a light); empty for a scene without lights.
+    #[must_use]
+    pub fn direct_irradiance(&self) -> &[f64] {
+        &self.direct
     }
 
     /// Total surface length `L`.

@@ -11,8 +11,8 @@ use serde::{Deserialize, Serialize};
 use crate::exact::{self, PairTable};
 use crate::sweep::{self, SweepBuffers, SweepScene};
 use crate::{
-    ExactMethod, MAX_ELEMENTS, MAX_MESH_ELEMENTS, Mesh, Representation, SolveError, SolveParams,
-    Stop, TransferOperator, check_scene, gmres,
+    DirectLight, ExactMethod, LitSurfaces, MAX_ELEMENTS, MAX_MESH_ELEMENTS, Mesh, Representation,
+    SolveError, SolveParams, Stop, TransferOperator, check_scene, gmres,
 };
 
 /// A solved radiosity.
@@ -187,6 +187,9 @@ pub struct ExactReference {
     mesh: Mesh,
     visibility: Visibility,
     solution: Solution,
+    /// What the scene's point lights see, for their irradiance at other points; `None`
+    /// without lights.
+    lit: Option<LitSurfaces>,
 }
 
 /// What an [`ExactReference`] keeps to evaluate the exact transfer at other points.
@@ -237,10 +240,17 @@ impl ExactReference {
         let assembly_s = started.elapsed().as_secs_f64();
         let mut solution = solve_operator(op.as_ref(), &mesh, params, stop)?;
         solution.assembly_s = assembly_s;
+        let lights = kernel.scene().lights();
+        let lit = if lights.is_empty() {
+            None
+        } else {
+            Some(DirectLight::new(kernel, &mesh)?.lit(&mesh, lights))
+        };
         Ok(ExactReference {
             mesh,
             visibility,
             solution,
+            lit,
         })
     }
 
@@ -283,14 +293,26 @@ impl ExactReference {
         &self.solution
     }
 
-    /// The exact B at the collocation points of `mesh` (a mesh of the same scene): the
-    /// equation itself evaluated there, `E + ρ Σ_j B_j ∫_{fine element j} G V`, with the
-    /// exact transfer. Rows in parallel; `stop` polled per point.
+    /// The exact B at the collocation points of `mesh` (a mesh of the same scene, lit by the
+    /// same lights): the equation itself evaluated there,
+    /// `E + ρ (H + Σ_j B_j ∫_{fine element j} G V)`, with the exact transfer and `H` the point
+    /// lights' irradiance at the point itself ([`LitSurfaces::irradiance_at`]; a solved B
+    /// holds the element's mean of it instead, so an element a shadow edge crosses differs
+    /// from this by what piecewise constant B cannot hold). Rows in parallel; `stop` polled
+    /// per point.
     pub fn radiosity_on(&self, mesh: &Mesh, stop: &Stop) -> Result<Vec<f64>, SolveError> {
         if mesh.fingerprint() != self.mesh.fingerprint() {
             return Err(SolveError::SceneMismatch {
                 representation: format!("{:016x}", self.mesh.fingerprint()),
                 mesh: format!("{:016x}", mesh.fingerprint()),
+            });
+        }
+        if mesh.lights() != self.mesh.lights() {
+            return Err(SolveError::InvalidParameter {
+                name: "mesh",
+                value: format!("lit by {} point lights", mesh.lights().len()),
+                valid: "a mesh of the scene the reference was solved for, lit by the same \
+                        point lights",
             });
         }
         match &self.visibility {
@@ -338,8 +360,15 @@ impl ExactReference {
                 if edge.reflectance == 0.0 {
                     return Ok(edge.emission);
                 }
-                let gathered = gather(scratch, mesh.elements()[i].mesh_edge, mesh.local(i)[2]);
-                Ok(edge.emission + edge.reflectance * gathered)
+                let k = mesh.elements()[i].mesh_edge;
+                let gathered = gather(scratch, k, mesh.local(i)[2]);
+                Ok(match &self.lit {
+                    None => edge.emission + edge.reflectance * gathered,
+                    Some(lit) => {
+                        let direct = lit.irradiance_at(mesh, k, mesh.elements()[i].midpoint);
+                        edge.emission + edge.reflectance * (direct + gathered)
+                    }
+                })
             })
             .collect()
     }

@@ -13,8 +13,12 @@
 //! nothing inside it can be seen. Each row costs about `log n` plus what is seen, so the whole
 //! operator is `O(N (log n + visible))` in time and `O(N · visible)` in memory, where the dense
 //! one is `O(n²)` pair classifications and `N²` numbers.
+//!
+//! A point light is seen the same way, by two half-plane views from where it stands
+//! (`light.rs`): what it lights, exactly, with the hierarchy built once for every light.
 
 mod envelope;
+mod light;
 mod probe;
 mod row;
 mod view;
@@ -28,6 +32,7 @@ use crate::bvh::{Aabb, Bvh, Contents};
 use crate::exact::check_scene;
 use crate::{Mesh, SolveError, SparseOperator, Stop};
 
+pub(crate) use light::{LitPiece, element_angles, holds};
 pub use probe::{ProbeBuffers, SeenSpan, Sweep};
 pub(crate) use row::transfers;
 

@@ -154,17 +154,21 @@ pub fn random_room(inside: usize, seed: u64) -> Scene {
     Scene::new(edges).expect("a valid random room")
 }
 
-/// Emitted and absorbed power of the solve with `op` on `mesh`: `∫ E dl` and `∫ (1 − ρ) H dl`,
-/// with H the irradiance `(K B)_i / ρ_i` (equal in a closed scene without blockers).
+/// Emitted and absorbed power of the solve with `op` on `mesh`: `∫ E dl + Σ Φ` and
+/// `∫ (1 − ρ) H dl`, with H the irradiance `H̄_i + (K B)_i / ρ_i`, the point lights' direct
+/// light and what the surfaces send (equal in a closed scene without blockers).
 pub fn power_balance(op: &dyn TransferOperator, mesh: &Mesh) -> (f64, f64) {
     let solution = solve_operator(op, mesh, &SolveParams::default(), &never).unwrap();
     let mut gathered = vec![0.0; mesh.len()];
     op.apply(&solution.radiosity, &mut gathered);
-    let (mut emitted, mut absorbed) = (0.0, 0.0);
+    let mut emitted: f64 = mesh.lights().iter().map(|l| l.power).sum();
+    let mut absorbed = 0.0;
+    let direct = mesh.direct_irradiance();
     for (i, el) in mesh.elements().iter().enumerate() {
         let edge = mesh.edge_of(i);
+        let h = direct.get(i).copied().unwrap_or(0.0) + gathered[i] / edge.reflectance;
         emitted += edge.emission * el.length;
-        absorbed += (1.0 - edge.reflectance) * gathered[i] / edge.reflectance * el.length;
+        absorbed += (1.0 - edge.reflectance) * h * el.length;
     }
     (emitted, absorbed)
 }

@@ -120,7 +120,7 @@ impl Sweep {
                     segment: self.scene.segment_of[m],
                     far: 0.0,
                 };
-                seen_part(&view, mesh, m, &piece, row);
+                seen_part(&view, mesh, m, &piece, row, |lo, hi| 0.5 * (hi - lo));
             }
         }
         row.sort_by_key(|&(j, _)| j);

@@ -27,7 +27,9 @@ pub(crate) fn transfers<'b>(
     scene.envelope(&view, skip, cull, buffers);
     for piece in buffers.envelope.pieces() {
         if let Some(m) = scene.mesh_edge[piece.segment as usize] {
-            seen_part(&view, mesh, m as usize, piece, &mut out);
+            seen_part(&view, mesh, m as usize, piece, &mut out, |lo, hi| {
+                0.5 * (hi - lo)
+            });
         }
     }
     // Pieces of one element seen in several places (between occluders) sum.
@@ -43,15 +45,17 @@ pub(crate) fn transfers<'b>(
     &buffers.transfers
 }
 
-/// Appends the transfer of `piece` of surface `m` to each element of `m` it overlaps, when
-/// `m`'s front faces the receiving point (a surface seen from behind sends nothing, but still
-/// hides what lies beyond it).
+/// Appends `measure(σ₁, σ₂)` of the part `[σ₁, σ₂]` of `piece` of surface `m` that each
+/// element of `m` takes, when `m`'s front faces the viewpoint (a surface seen from behind
+/// sends nothing, but still hides what lies beyond it): the transfer `(σ₂ − σ₁) / 2` for a
+/// receiving point, the angle `asin σ₂ − asin σ₁` for a light.
 pub(super) fn seen_part(
     view: &View,
     mesh: &Mesh,
     m: usize,
     piece: &Piece,
     out: &mut Vec<(u32, f64)>,
+    measure: impl Fn(f64, f64) -> f64,
 ) {
     let edge = &mesh.edges()[m];
     let elements = edge.elements.clone();
@@ -102,9 +106,9 @@ pub(super) fn seen_part(
             break;
         }
         let above = sine(b + 1);
-        let part = above.min(piece.hi) - below.max(piece.lo);
-        if part > 0.0 {
-            out.push((element(b) as u32, 0.5 * part));
+        let (lo, hi) = (below.max(piece.lo), above.min(piece.hi));
+        if hi > lo {
+            out.push((element(b) as u32, measure(lo, hi)));
         }
         below = above;
     }
