@@ -5,12 +5,14 @@
 //! kernel (one fit, any lighting) is measured against.
 //!
 //! # The method
-//! - **Emission.** An emitter sends power `E × length`. Photons of equal power are spread over
-//!   the emitters in proportion, stratified: photon `k` of a batch of `S` sits at `(k + ξ)/S`
-//!   along all emitters laid end to end, so each emitter gets its share to within one photon
-//!   and its start points are uniform along it.
-//! - **Directions.** Cosine-distributed about the front normal: in Flatland `sin θ` is uniform
-//!   in `[−1, 1]` (the density `cos θ / 2` of the kernel's `1/(2r)`).
+//! - **Emission.** An emitter sends power `E × length`, a point light its power `Φ`. Photons of
+//!   equal power are spread over the emitters in proportion, stratified: photon `k` of a batch
+//!   of `S` sits at `(k + ξ)/S` along all emitters laid end to end (the edges, then the
+//!   lights), so each emitter gets its share to within one photon, an edge's start points are
+//!   uniform along it and a light's directions uniform in angle (`Φ / (2π)` per radian,
+//!   docs/ALGORITHM.md §1a).
+//! - **Directions.** From a surface, cosine-distributed about the front normal: in Flatland
+//!   `sin θ` is uniform in `[−1, 1]` (the density `cos θ / 2` of the kernel's `1/(2r)`).
 //! - **Transport.** The closest hit by the BVH ([`Kernel::first_hit`]; of a thin wall's two
 //!   faces back to back, the one towards the photon). On the front of a surface the photon's
 //!   power is added to the irradiance `H` of the element it lands in (per unit length), and it
@@ -25,8 +27,9 @@
 //!   gives each element's standard error ([`Traced::std_error`]).
 //!
 //! # Use
-//! [`trace`] lights a scene as it is; a [`LightTracer`] traces any [`Lighting`] (emission
-//! overrides per edge) of one scene and mesh, one trace per lighting. A budget is a photon
+//! [`trace`] lights a scene as it is, its point lights included; a [`LightTracer`] traces any
+//! [`Lighting`] (emission overrides per edge, with the scene's lights) of one scene and mesh,
+//! one trace per lighting. A budget is a photon
 //! count or a wall time ([`TraceBudget`]); `stop` is polled between batches and ends the trace
 //! with what is done ([`Traced::stopped`]). The result has what a bench row needs: `B`
 //! (compare it with [`solve_errors`](flatland_solve::solve_errors) against the exact
@@ -190,10 +193,10 @@ impl Traced {
     }
 }
 
-/// Where the emitted power went (scene power units: `E × length` summed).
+/// Where the emitted power went (scene power units: `E × length` summed, and each light's `Φ`).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PowerBalance {
-    /// Sent by the emitters.
+    /// Sent by the emitters and the point lights.
     pub emitted: f64,
     /// Absorbed by surfaces, blockers and the backs of one-sided surfaces (and the rare photon
     /// still going after 1000 bounces).
@@ -256,7 +259,8 @@ impl<'a> LightTracer<'a> {
     ) -> Result<Traced, BaselineError> {
         params.check()?;
         let started = Instant::now();
-        let emitters = Emitters::new(self.mesh, &self.surface_of, lighting)?;
+        let lights = self.kernel.scene().lights();
+        let emitters = Emitters::new(self.mesh, &self.surface_of, lighting, lights)?;
         let (batches, size) = plan(params.budget, emitters.power());
         let round = 4 * rayon::current_num_threads().max(1) as u64;
         let mut tallies = Tallies::new(self.mesh.len(), size);
@@ -381,6 +385,33 @@ mod tests {
                 .map(|e| e.with_emission(emission))
                 .collect(),
         )
+    }
+
+    /// With point lights the exact solve and the tracer are two independent computations of
+    /// the same light: on a generated plan with a lamp per room and nothing emitting, the
+    /// exact element means agree with the trace within 1 % plus three times its noise, and
+    /// every watt the lamps send is absorbed (the plan is closed).
+    #[test]
+    fn a_plan_lit_by_lamps_is_lit_alike_by_the_solve_and_the_tracer() {
+        let scene = flatland_geom::generate::floor_plan_lit(120, 3).unwrap();
+        assert!(scene.max_emission() == 0.0 && scene.lights().len() >= 8);
+        let phi: f64 = scene.lights().iter().map(|l| l.power).sum();
+        let kernel = Kernel::new(scene);
+        let mesh = Mesh::new(&kernel, 300).unwrap();
+        let traced = trace(&kernel, &mesh, &photons(1_500_000, 5), &never).unwrap();
+        assert_close!(traced.power.emitted, phi, 1e-12);
+        assert_close!(traced.power.absorbed, phi, 1e-9);
+        let exact = exact_means(&kernel, &mesh);
+        let diff = norm(&mesh, |i| traced.radiosity[i] - exact[i]);
+        let (size, noise) = (
+            norm(&mesh, |i| exact[i]),
+            norm(&mesh, |i| traced.std_error[i]),
+        );
+        assert!(noise < 0.01 * size, "noise {noise} of {size}");
+        assert!(
+            diff <= 0.01 * size + 3.0 * noise,
+            "|traced − exact| = {diff}, |B| = {size}, noise {noise}"
+        );
     }
 
     #[test]

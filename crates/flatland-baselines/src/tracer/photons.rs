@@ -5,7 +5,7 @@ use flatland_solve::Mesh;
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 
-use super::emitters::{Emitters, Start};
+use super::emitters::{Emitters, Leaving, Start};
 use super::tally::BatchTally;
 
 /// Bounces after which a photon is counted absorbed: it would carry `ρ^1000` of its power.
@@ -30,18 +30,21 @@ impl Batch<'_> {
         for k in 0..self.size {
             let u = (k as f64 + self.rng.random::<f64>()) / self.size as f64;
             let start = self.emitters.start(u.min(below_one));
-            self.photon(start, start.normal, &mut tally);
+            self.photon(start, &mut tally);
         }
         tally
     }
 
-    /// One photon from `start`, leaving about `normal`, until it is absorbed or leaves.
-    fn photon(&mut self, start: Start, mut normal: DVec2, tally: &mut BatchTally) {
-        let (mut x, mut skip, power) = (start.point, start.edge, 1.0);
+    /// One photon from `start` until it is absorbed or leaves.
+    fn photon(&mut self, start: Start, tally: &mut BatchTally) {
+        let (mut x, mut skip, mut leaving, power) = (start.point, start.skip, start.leaving, 1.0);
         for _ in 0..MAX_BOUNCES {
-            let d = cosine_direction(normal, self.rng.random::<f64>());
+            let d = match leaving {
+                Leaving::About(normal) => cosine_direction(normal, self.rng.random::<f64>()),
+                Leaving::Along(d) => d,
+            };
             tally.rays += 1;
-            let Some(hit) = self.kernel.first_hit(x, d, Some(skip)) else {
+            let Some(hit) = self.kernel.first_hit(x, d, skip) else {
                 tally.escaped += power;
                 return;
             };
@@ -66,8 +69,8 @@ impl Batch<'_> {
                 tally.absorbed += power;
                 return;
             }
-            (x, skip) = (hit.point, hit.edge);
-            normal = edge.normal;
+            (x, skip) = (hit.point, Some(hit.edge));
+            leaving = Leaving::About(edge.normal);
         }
         tally.absorbed += power;
     }
