@@ -54,22 +54,7 @@ pub fn summary(name: &str, scene: &Scene) -> String {
         plural(blockers, "blocker"),
         edges.iter().filter(|e| e.two_sided).count()
     );
-    let list = named(
-        emitters
-            .iter()
-            .map(|&i| format!("edge {i} (E = {})", edges[i].emission)),
-    );
-    let _ = match emitters.len() {
-        0 => writeln!(w, "emitters: none"),
-        1 => writeln!(w, "emitters: {list}"),
-        n => writeln!(w, "emitters: {n}: {list}"),
-    };
-    if emitters.is_empty() {
-        let _ = writeln!(
-            w,
-            "warning: nothing emits, so zeta = 0 everywhere (relative errors are undefined)"
-        );
-    }
+    lighting(w, scene, &emitters);
     let overlaps = scene.overlapping_surface_edges();
     for (a, b) in overlaps.iter().take(MAX_LISTED) {
         let _ = writeln!(
@@ -133,6 +118,42 @@ pub fn summary(name: &str, scene: &Scene) -> String {
 }
 
 /// The first [`MAX_NAMED`] of `items`, comma-separated, and how many more there are.
+/// The emitters, the point lights, and a warning when nothing (or only lights) lights the scene.
+fn lighting(w: &mut String, scene: &Scene, emitters: &[usize]) {
+    let edges = scene.edges();
+    let list = named(
+        emitters
+            .iter()
+            .map(|&i| format!("edge {i} (E = {})", edges[i].emission)),
+    );
+    let _ = match emitters.len() {
+        0 => writeln!(w, "emitters: none"),
+        1 => writeln!(w, "emitters: {list}"),
+        n => writeln!(w, "emitters: {n}: {list}"),
+    };
+    let lights = scene.lights();
+    if !lights.is_empty() {
+        let list = named(
+            lights
+                .iter()
+                .map(|l| format!("({}, {}) power {}", l.at.x, l.at.y, l.power)),
+        );
+        let _ = writeln!(w, "lights: {}: {list}", lights.len());
+    }
+    if !scene.is_lit() {
+        let _ = writeln!(
+            w,
+            "warning: nothing emits, so zeta = 0 everywhere (relative errors are undefined)"
+        );
+    } else if emitters.is_empty() {
+        let _ = writeln!(
+            w,
+            "warning: only point lights light the scene: zeta = E' k is 0 everywhere (no edge \
+             emits), so errors of zeta are undefined; B is solved as usual"
+        );
+    }
+}
+
 fn named(items: impl ExactSizeIterator<Item = String>) -> String {
     let more = items.len().saturating_sub(MAX_NAMED);
     let list: Vec<String> = items.take(MAX_NAMED).collect();

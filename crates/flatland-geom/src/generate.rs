@@ -626,18 +626,21 @@ fn hall_edges(target: usize, lamps: Lamps, rng: &mut ChaCha8Rng) -> (Vec<Edge>, 
     }
     let lights = match lamps {
         Lamps::Emitting => Vec::new(),
-        Lamps::Points => {
-            // In the band under the ceiling that no box reaches (boxes end 1.5 below it).
-            let count = ((w / 10.0).round() as usize).max(1);
-            (0..count)
-                .map(|i| {
-                    let x = w * (i as f64 + 0.5) / count as f64;
-                    PointLight::new(v(x, h - 0.5), HALL_LAMP_POWER)
-                })
-                .collect()
-        }
+        Lamps::Points => hall_lamps(w, h),
     };
     (edges, lights)
+}
+
+/// A hall's lamps: one per 10 units of width, in the band under the ceiling that no box
+/// reaches (boxes end 1.5 below it).
+fn hall_lamps(w: f64, h: f64) -> Vec<PointLight> {
+    let count = ((w / 10.0).round() as usize).max(1);
+    (0..count)
+        .map(|i| {
+            let x = w * (i as f64 + 0.5) / count as f64;
+            PointLight::new(DVec2::new(x, h - 0.5), HALL_LAMP_POWER)
+        })
+        .collect()
 }
 
 /// Boxes filed by the square buckets they touch, for overlap tests in large halls.
