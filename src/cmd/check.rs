@@ -120,6 +120,7 @@ pub fn summary(name: &str, scene: &Scene) -> String {
 /// The first [`MAX_NAMED`] of `items`, comma-separated, and how many more there are.
 /// The emitters, the point lights, and a warning when nothing (or only lights) lights the scene.
 fn lighting(w: &mut String, scene: &Scene, emitters: &[usize]) {
+    use std::fmt::Write;
     let edges = scene.edges();
     let list = named(
         emitters
