@@ -414,6 +414,42 @@ mod tests {
         );
     }
 
+    /// The same on scenes drawn by hand: each bundled floor plan and maze with its emitters
+    /// turned off and a lamp 0.05 in front of the middle of each.
+    #[test]
+    fn hand_drawn_levels_lit_by_lamps_are_lit_alike_by_the_solve_and_the_tracer() {
+        for name in ["floorplan", "maze"] {
+            let scene = bundled::scene(name).unwrap();
+            let mut edges = scene.edges().to_vec();
+            let mut lamps = Vec::new();
+            for e in &mut edges {
+                if e.emission > 0.0 {
+                    let at = e.a.midpoint(e.b) + e.normal() * 0.05;
+                    lamps.push(flatland_geom::PointLight::new(at, e.emission * e.length()));
+                    e.emission = 0.0;
+                }
+            }
+            let scene = flatland_geom::Scene::new(edges)
+                .unwrap()
+                .with_lights(lamps)
+                .unwrap();
+            let kernel = Kernel::new(scene);
+            let mesh = Mesh::new(&kernel, Mesh::default_elements(kernel.scene()).min(600)).unwrap();
+            let traced = trace(&kernel, &mesh, &photons(1_000_000, 7), &never).unwrap();
+            let exact = exact_means(&kernel, &mesh);
+            let diff = norm(&mesh, |i| traced.radiosity[i] - exact[i]);
+            let (size, noise) = (
+                norm(&mesh, |i| exact[i]),
+                norm(&mesh, |i| traced.std_error[i]),
+            );
+            assert!(noise < 0.01 * size, "{name}: noise {noise} of {size}");
+            assert!(
+                diff <= 0.01 * size + 3.0 * noise,
+                "{name}: |traced − exact| = {diff}, |B| = {size}, noise {noise}"
+            );
+        }
+    }
+
     #[test]
     fn a_closed_uniform_room_gives_e_over_one_minus_rho() {
         // Every direction from a wall of a closed room meets a wall, so H = B and
