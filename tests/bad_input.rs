@@ -257,7 +257,8 @@ fn wrong_types_and_shapes_are_parse_errors_naming_the_position() {
         format!(r#"{{"edges": [{{{edge}, "two_sided": "yes"}}]}}"#),
         format!(r#"{{"edges": [{{{edge}, "emission": null}}]}}"#),
         format!(r#"{{"edges": [{{{edge}, "colour": 1}}]}}"#),
-        format!(r#"{{"edges": [{{{edge}}}], "lights": []}}"#),
+        format!(r#"{{"edges": [{{{edge}}}], "lights": [{{"at": "here", "power": 1}}]}}"#),
+        format!(r#"{{"edges": [{{{edge}}}], "lights": [{{"at": [0, 1], "watts": 1}}]}}"#),
         r#"{"edges": [{"a": [NaN, 0], "b": [1, 0], "reflectance": 0.5}]}"#.to_owned(),
         format!(r#"{{"edges": [{{{edge}}}]}} trailing"#),
     ];
