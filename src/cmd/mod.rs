@@ -54,6 +54,19 @@ impl SceneArgs {
         Ok((scene, label))
     }
 
+    /// The scene a model is used on: `--scene` (subdivided), checked to be the model's, or the
+    /// model's own scene when none is given.
+    pub fn load_for_model(&self, model: &Path) -> Result<(Scene, String)> {
+        let file = kernel_fit::ModelFile::load(model)?;
+        let Some(scene_path) = &self.scene else {
+            let label = format!("{} (model's scene)", model.display());
+            return Ok((file.model.scene().clone(), label));
+        };
+        let (scene, label) = self.load()?;
+        file.check_scene(&scene, scene_path)?;
+        Ok((scene, label))
+    }
+
     /// The input file, if any (outputs must never overwrite it).
     pub fn path(&self) -> Option<&Path> {
         self.scene.as_deref()
@@ -130,6 +143,33 @@ pub fn progress_bar(len: u64, unit: &str) -> ProgressBar {
     let template = format!("{{elapsed_precise}} [{{bar:40}}] {{pos}}/{{len}} {unit} {{msg}}");
     bar.set_style(ProgressStyle::with_template(&template).expect("static template"));
     bar
+}
+
+/// A bar's updates from a method's build: a network's cells of its target, the light-driven
+/// learner's probes and estimate.
+pub fn learning(bar: &ProgressBar) -> impl FnMut(flatland_methods::Progress) + '_ {
+    move |p| match p {
+        flatland_methods::Progress::Cells { cells, target } => {
+            bar.set_length(target as u64);
+            bar.set_position(cells as u64);
+        }
+        flatland_methods::Progress::Probes { cells, estimate } => {
+            bar.set_position(cells as u64);
+            if let Some(e) = estimate {
+                bar.set_message(format!("estimated error {e:.4}"));
+            }
+        }
+    }
+}
+
+/// A build's interruption as the command's (what was kept, exit code 130), anything else as
+/// it is.
+pub fn interrupted(e: flatland_methods::MethodError) -> anyhow::Error {
+    if e.is_interrupted() {
+        flatland_lab::interrupt::stopped().into()
+    } else {
+        e.into()
+    }
 }
 
 /// What `cargo run --release` does with no arguments: the viewer, or, without a display, the

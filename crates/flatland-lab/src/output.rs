@@ -42,6 +42,24 @@ pub fn folder(dir: &Path, files: &[&str], inputs: &[&Path]) -> Result<()> {
     folder_ready(dir)
 }
 
+/// Which of `formats` (lower-case extensions, e.g. `["csv", "png"]`) a file output is, by its
+/// extension in any case; any other is refused naming the valid ones, before any work.
+pub fn format(out: &Path, formats: &[&'static str]) -> Result<&'static str> {
+    let extension = out
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    if let Some(found) = formats.iter().find(|f| extension.as_deref() == Some(**f)) {
+        return Ok(found);
+    }
+    let valid: Vec<String> = formats.iter().map(|f| format!(".{f}")).collect();
+    bail!(
+        "{}: unknown output format (expected a {} file name)",
+        out.display(),
+        valid.join(" or ")
+    )
+}
+
 /// Two outputs of one command must differ.
 pub fn distinct(a: &Path, b: &Path, what: &str) -> Result<()> {
     if same_file(a, b) {

@@ -123,6 +123,19 @@ pub enum LightStop {
     Time,
 }
 
+impl LightStop {
+    /// Its name in reports and JSON: `tolerance`, `exact`, `cells` or `time`.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            LightStop::Tolerance => "tolerance",
+            LightStop::Exact => "exact",
+            LightStop::Cells => "cells",
+            LightStop::Time => "time",
+        }
+    }
+}
+
 /// One round as it ended.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Round {

@@ -180,7 +180,7 @@ impl Recipes {
         let seed = ask.seed;
         let mut built = match ask.method {
             Method::Exact => plain(ask.method, Arc::clone(kernel)),
-            Method::Light => self.light(ask, kernel, mesh, stop, progress)?,
+            Method::Light => self.light_driven(ask, kernel, mesh, stop, progress)?,
             Method::Visibility | Method::Paper | Method::PaperNorefit => {
                 self.network(ask, kernel, zeta, stop, progress)?
             }
@@ -214,7 +214,7 @@ impl Recipes {
     }
 
     /// The light-driven learner on `mesh`, to the tolerance or the cell budget asked.
-    fn light(
+    fn light_driven(
         &self,
         ask: Ask,
         kernel: &Arc<Kernel>,

@@ -11,7 +11,9 @@
 //! [`Recipes::build`] builds any of them from an [`Ask`] (the method, its basis functions or
 //! tolerance, its seed): the one place a method's parameters become a representation, so
 //! `flatland solve`, the bench, the experiments and the viewer all build the same thing under
-//! the same name.
+//! the same name. [`Recipes::light`] lights a [`flatland_solve::LitScene`] with a method or a
+//! model file ([`KernelArg`]) and scores it: the exact solve the lit scene already made is
+//! reused, the tracer traces, everything else is built and solved on the lit scene's mesh.
 //!
 //! ```
 //! use std::sync::Arc;
@@ -35,10 +37,12 @@
 
 mod build;
 mod error;
+mod light;
 mod method;
 
 pub use build::{
     Account, Ask, Built, DEFAULT_BASIS, LightAccount, NetworkAccount, Progress, Recipes,
 };
 pub use error::MethodError;
+pub use light::{KernelArg, Lit, TRACER_PHOTONS};
 pub use method::{Family, Knob, Method, Retired};

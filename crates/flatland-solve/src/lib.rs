@@ -91,6 +91,7 @@ mod settings;
 mod solve;
 mod sparse;
 mod sweep;
+mod table;
 mod transfer;
 
 pub mod seeds;
@@ -108,8 +109,8 @@ pub use exact::{
     ExactMethod, SWEEP_FROM_EDGES, check_scene, exact_block_means, exact_operator, receiver, sender,
 };
 pub use frame::InputFrame;
-pub use lit::{Elements, LitParams, LitScene, ReferenceMesh, check_elements};
 pub use lights::{DirectLight, LightBuffers, LitSurfaces};
+pub use lit::{Elements, LitParams, LitScene, ReferenceMesh, check_elements};
 pub use mesh::{
     DEFAULT_ELEMENTS, Element, MAX_ELEMENTS, MAX_MESH_ELEMENTS, MIN_PER_EDGE, Mesh, MeshEdge,
 };
@@ -130,4 +131,5 @@ pub use solve::{
 };
 pub use sparse::{MAX_NONZEROS, SparseOperator};
 pub use sweep::{ProbeBuffers, SeenSpan, Sweep, sweep_operator};
+pub use table::radiosity_csv;
 pub use transfer::{Receiver, Sender, point_to_segment, point_to_segment_visible};

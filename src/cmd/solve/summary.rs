@@ -1,134 +1,91 @@
 //! What `flatland solve` reports: the table, or one JSON object.
 
-use flatland_light::LightStop;
-use flatland_methods::Account;
-use flatland_solve::{Comparison, LitScene};
+use flatland_lab::memory::peak_bytes;
+use flatland_methods::{Account, Lit};
+use flatland_solve::LitScene;
 
-use super::BuiltInfo;
-
-/// What `flatland solve` reports.
-pub(super) struct Summary<'a> {
-    scene: &'a str,
-    kernel: &'a str,
-    lit: &'a LitScene,
-    c: &'a Comparison,
-    built: &'a BuiltInfo,
+/// The `--json` object; `note` only when the method built a count other than asked (or
+/// traced), the learner's keys only for the light-driven learner.
+pub fn json(scene: &str, kernel: &str, lit: &LitScene, l: &Lit) -> serde_json::Value {
+    let c = &l.comparison;
+    let mut json = serde_json::json!({
+        "scene": scene,
+        "kernel": kernel,
+        "elements": lit.mesh().len(),
+        "basis_functions": l.basis,
+        "kernel_bytes": l.bytes,
+        "rel_l2_b": c.errors.rel_l2_b,
+        "rel_l2_reflected": c.errors.rel_l2_reflected,
+        "iterations": c.solution.iterations,
+        "residual": c.solution.residual,
+        "wall_s": c.solution.wall_s(),
+        "peak_memory_bytes": peak_bytes(),
+        "build_s": l.build_s,
+        "reference_elements": lit.reference().mesh().len(),
+        "discretization_error_estimate": lit.estimate().map(|e| e.estimate),
+    });
+    if let Some(note) = &l.note {
+        json["note"] = note.as_str().into();
+    }
+    if let Account::Light(a) = &l.account {
+        json["estimated_rel_l2_reflected"] = a.estimated_error.unwrap_or(f64::INFINITY).into();
+        json["rounds"] = a.rounds.into();
+        json["probes"] = a.probes.into();
+        json["stopped"] = a.stopped.name().into();
+    }
+    json
 }
 
-impl<'a> Summary<'a> {
-    pub fn new(
-        scene: &'a str,
-        kernel: &'a str,
-        lit: &'a LitScene,
-        c: &'a Comparison,
-        built: &'a BuiltInfo,
-    ) -> Summary<'a> {
-        Summary {
-            scene,
-            kernel,
-            lit,
-            c,
-            built,
-        }
+/// The human-readable table.
+pub fn print(scene: &str, kernel: &str, lit: &LitScene, l: &Lit) {
+    let (c, s) = (&l.comparison, &l.comparison.solution);
+    let mut rows = vec![(
+        "basis functions",
+        l.basis.map_or("exact (none)".into(), |n| n.to_string()),
+    )];
+    rows.extend(l.note.clone().map(|note| ("note", note)));
+    let (n, reference) = (lit.mesh().len(), lit.reference().mesh().len());
+    rows.push(("elements", format!("{n} (exact reference: {reference})")));
+    if let Some(e) = lit.estimate() {
+        let (estimate, finer) = (e.estimate, e.finer_elements);
+        let text = format!("≈ {estimate:.1e} (estimated from a solve on 2N = {finer} elements)");
+        rows.push(("discretization error", text));
     }
-
-    /// The `--json` object; `note` is there only when the method built a count other than
-    /// asked (or traced).
-    pub fn json(&self) -> serde_json::Value {
-        let (c, b) = (self.c, self.built);
-        let mut json = serde_json::json!({
-            "scene": self.scene,
-            "kernel": self.kernel,
-            "elements": self.lit.mesh().len(),
-            "basis_functions": b.basis,
-            "kernel_bytes": b.bytes,
-            "rel_l2_b": c.errors.rel_l2_b,
-            "rel_l2_reflected": c.errors.rel_l2_reflected,
-            "iterations": c.solution.iterations,
-            "residual": c.solution.residual,
-            "wall_s": c.solution.wall_s(),
-            "peak_memory_bytes": flatland_lab::memory::peak_bytes(),
-            "build_s": b.build_s,
-            "reference_elements": self.lit.reference().mesh().len(),
-            "discretization_error_estimate": self.lit.estimate().map(|e| e.estimate),
-        });
-        if let Some(note) = &b.note {
-            json["note"] = note.as_str().into();
-        }
-        if let Account::Light(l) = &b.account {
-            json["estimated_rel_l2_reflected"] = l.estimated_error.unwrap_or(f64::INFINITY).into();
-            json["rounds"] = l.rounds.into();
-            json["probes"] = l.probes.into();
-            json["stopped"] = stop_name(l.stopped).into();
-        }
-        json
+    rows.push(("rel. L2 of B", format!("{:.5}", c.errors.rel_l2_b)));
+    let reflected = c.errors.rel_l2_reflected;
+    rows.push((
+        "rel. L2 of B − E",
+        format!("{reflected:.5}   (the reflected part)"),
+    ));
+    if let Account::Light(a) = &l.account {
+        let estimate = a.estimated_error.unwrap_or(f64::INFINITY);
+        let (rounds, probes, why) = (a.rounds, a.probes, a.stopped.name());
+        let text = format!(
+            "{estimate:.5}   (against the exact kernel on these elements; {rounds} rounds, \
+             {probes} probes, stopped: {why})"
+        );
+        rows.push(("  estimated by the learner", text));
     }
-
-    /// The human-readable summary.
-    pub fn print(&self) {
-        let (c, b) = (self.c, self.built);
-        let row = |k: &str, v: String| println!("  {k:<26} {v}");
-        println!("solve of {} with the {} kernel", self.scene, self.kernel);
-        let basis = b.basis.map_or("exact (none)".to_owned(), |n| n.to_string());
-        row("basis functions", basis);
-        if let Some(note) = &b.note {
-            row("note", note.clone());
-        }
-        let reference = self.lit.reference().mesh().len();
-        let elements = self.lit.mesh().len();
-        row(
-            "elements",
-            format!("{elements} (exact reference: {reference})"),
-        );
-        if let Some(e) = self.lit.estimate() {
-            let (estimate, finer) = (e.estimate, e.finer_elements);
-            let text =
-                format!("≈ {estimate:.1e} (estimated from a solve on 2N = {finer} elements)");
-            row("discretization error", text);
-        }
-        row("rel. L2 of B", format!("{:.5}", c.errors.rel_l2_b));
-        let reflected = c.errors.rel_l2_reflected;
-        row(
-            "rel. L2 of B − E",
-            format!("{reflected:.5}   (the reflected part)"),
-        );
-        if let Account::Light(l) = &b.account {
-            let estimate = l.estimated_error.unwrap_or(f64::INFINITY);
-            let (rounds, probes, why) = (l.rounds, l.probes, stop_name(l.stopped));
-            let text = format!(
-                "{estimate:.5}   (against the exact kernel on these elements; {rounds} rounds, \
-                 {probes} probes, stopped: {why})"
-            );
-            row("  estimated by the learner", text);
-        }
-        let (iterations, residual) = (c.solution.iterations, c.solution.residual);
-        row(
-            "iterations",
-            format!("{iterations} (residual {residual:.1e})"),
-        );
-        let s = &c.solution;
-        let (wall, assembly, solve) = (s.wall_s(), s.assembly_s, s.solve_s);
-        let text = format!("{wall:.3} s (operator {assembly:.3} s, linear solve {solve:.3} s)");
-        row("wall time", text);
-        row("building the kernel", format!("{:.3} s", b.build_s));
-        let mb = b.bytes as f64 / 1e6;
-        row(
-            "kernel's memory",
-            format!("{mb:.1} MB (the representation)"),
-        );
-        if let Some(peak) = flatland_lab::memory::peak_bytes() {
-            let mb = peak as f64 / 1e6;
-            row("peak memory", format!("{mb:.0} MB (the whole command)"));
-        }
+    let (iterations, residual) = (s.iterations, s.residual);
+    rows.push((
+        "iterations",
+        format!("{iterations} (residual {residual:.1e})"),
+    ));
+    let (wall, assembly, solve) = (s.wall_s(), s.assembly_s, s.solve_s);
+    let text = format!("{wall:.3} s (operator {assembly:.3} s, linear solve {solve:.3} s)");
+    rows.push(("wall time", text));
+    rows.push(("building the kernel", format!("{:.3} s", l.build_s)));
+    let mb = l.bytes as f64 / 1e6;
+    rows.push((
+        "kernel's memory",
+        format!("{mb:.1} MB (the representation)"),
+    ));
+    if let Some(peak) = peak_bytes() {
+        let mb = peak as f64 / 1e6;
+        rows.push(("peak memory", format!("{mb:.0} MB (the whole command)")));
     }
-}
-
-/// How `--json` and the table name why the light-driven learner stopped.
-fn stop_name(stop: LightStop) -> &'static str {
-    match stop {
-        LightStop::Tolerance => "tolerance",
-        LightStop::Exact => "exact",
-        LightStop::Cells => "cells",
-        LightStop::Time => "time",
+    println!("solve of {scene} with the {kernel} kernel");
+    for (key, value) in rows {
+        println!("  {key:<26} {value}");
     }
 }
