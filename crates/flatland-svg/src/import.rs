@@ -1,0 +1,217 @@
+//! The importer: usvg's tree of a drawing walked into edges, lights, warnings and counts.
+
+use std::path::Path;
+
+use flatland_geom::{DVec2, Edge};
+use kurbo::Affine;
+use usvg::{FillRule, Node};
+
+use crate::attributes::{ElementRole, Faces, Material};
+use crate::drawing::{Drawing, MarkedLight, Pending};
+use crate::faces::{FillProblem, fill_edges};
+use crate::outline::outline;
+use crate::source::{self, Source};
+use crate::{ImportParams, SvgError, WarningKind};
+
+/// The default flattening tolerance, as a share of the drawing's diagonal.
+const DEFAULT_FLATTEN: f64 = 1e-3;
+
+/// Reads an SVG drawing into a [`Drawing`]: its edges as a validated scene, its marked lights,
+/// and warnings naming what was skipped or odd. The crate docs describe the rules.
+pub fn import(bytes: &[u8], params: &ImportParams) -> Result<Drawing, SvgError> {
+    params.check()?;
+    let source = source::read(bytes)?;
+    let root = root_transform(&source);
+    // Plan = unit × (x, −y) in the root's user units.
+    let to_plan = Affine::new([params.unit, 0.0, 0.0, -params.unit, 0.0, 0.0])
+        * root.inverse();
+    let size = source.tree.size();
+    let diagonal = (root.inverse() * kurbo::Point::new(f64::from(size.width()), f64::from(size.height()))
+        - root.inverse() * kurbo::Point::ORIGIN)
+        .hypot();
+    let flatten = params.flatten.unwrap_or(DEFAULT_FLATTEN * diagonal) * params.unit;
+    let mut walk = Walk {
+        source: &source,
+        to_plan,
+        flatten,
+        pending: Pending::new(&source),
+    };
+    walk.group(source.tree.root(), Material::root(params.reflectance), None);
+    walk.pending.finish(&source)
+}
+
+/// [`import`] of a file; errors name the file.
+pub fn import_file(path: impl AsRef<Path>, params: &ImportParams) -> Result<Drawing, SvgError> {
+    let path = path.as_ref();
+    std::fs::read(path)
+        .map_err(SvgError::from)
+        .and_then(|bytes| import(&bytes, params))
+        .map_err(|e| e.in_file(path))
+}
+
+/// The root's transform (its viewBox mapping and `transform`): the transform usvg gave the empty
+/// group placed first in the root.
+fn root_transform(source: &Source) -> Affine {
+    match source.tree.node_by_id(&source.origin_id) {
+        Some(Node::Group(g)) if is_invertible(affine(g.abs_transform())) => affine(g.abs_transform()),
+        _ => Affine::IDENTITY,
+    }
+}
+
+fn is_invertible(a: Affine) -> bool {
+    let d = a.determinant();
+    d.is_finite() && d != 0.0
+}
+
+/// A usvg transform in f64.
+fn affine(t: usvg::Transform) -> Affine {
+    let c = [t.sx, t.ky, t.kx, t.sy, t.tx, t.ty].map(f64::from);
+    Affine::new(c)
+}
+
+struct Walk<'a> {
+    source: &'a Source,
+    to_plan: Affine,
+    flatten: f64,
+    pending: Pending,
+}
+
+impl Walk<'_> {
+    /// Walks `group` whose material is `material`; `instance` is the innermost `use` it is
+    /// inside (usvg drops the ids of what a `use` copies, so the `use` names those paths).
+    fn group(&mut self, group: &usvg::Group, material: Material, instance: Option<usize>) {
+        for child in group.children() {
+            match child {
+                Node::Group(g) => {
+                    let (mut material, mut instance) = (material, instance);
+                    if let Some(&e) = self.source.by_id.get(g.id()) {
+                        let element = &self.source.elements[e];
+                        material = material.with(&element.own);
+                        if element.name.tag == "use" {
+                            instance = Some(e);
+                            if let Some(r) = element.referenced {
+                                material = material.with(&self.source.elements[r].own);
+                            }
+                        }
+                    }
+                    self.group(g, material, instance);
+                }
+                Node::Path(p) => self.path(p, material, instance),
+                // Counted from the document: text and images are skipped wherever they are.
+                Node::Image(_) | Node::Text(_) => {}
+            }
+        }
+    }
+
+    fn path(&mut self, path: &usvg::Path, material: Material, instance: Option<usize>) {
+        let own = self.source.by_id.get(path.id()).copied();
+        let Some(element) = own.or(instance) else {
+            self.pending.skipped.unsourced += 1;
+            return;
+        };
+        self.pending.drawn[element] = true;
+        let source = &self.source.elements[element];
+        let material = match own {
+            Some(e) => material.with(&self.source.elements[e].own),
+            None => material,
+        };
+        // A light is the marked circle itself, or the marked circle a `use` refers to.
+        let light = match own {
+            Some(e) => self.source.elements[e].own.light,
+            None => source.referenced.and_then(|r| self.source.elements[r].own.light),
+        };
+        if material.role == ElementRole::Ignore {
+            self.pending.skipped.ignored += 1;
+            return;
+        }
+        if !path.is_visible() {
+            self.pending.skip(element, WarningKind::Hidden, |s| &mut s.hidden);
+            return;
+        }
+        let to_plan = self.to_plan * affine(path.abs_transform());
+        if let Some(power) = light {
+            let b = path.data().bounds();
+            let centre = kurbo::Point::new(
+                f64::from(b.left() + b.right()) / 2.0,
+                f64::from(b.top() + b.bottom()) / 2.0,
+            );
+            let at = to_plan * centre;
+            self.pending.lights.push(MarkedLight {
+                element: source.name.clone(),
+                at: DVec2::new(at.x, at.y),
+                power,
+            });
+            return;
+        }
+        let Ok(out) = outline(path.data(), to_plan, self.flatten) else {
+            self.pending.skip(element, WarningKind::NonFinite, |s| &mut s.invalid);
+            return;
+        };
+        if out.merged > 0 {
+            self.pending.warn(element, WarningKind::Merged { pieces: out.merged });
+        }
+        if out.polylines.is_empty() {
+            self.pending.skip(element, WarningKind::Degenerate, |s| &mut s.invalid);
+            return;
+        }
+        let faces = material.faces.unwrap_or(if path.fill().is_some() {
+            Faces::Out
+        } else {
+            Faces::Both
+        });
+        let pieces = || out.polylines.iter().flat_map(|p| p.pieces());
+        if material.role == ElementRole::Blocker {
+            for (a, b) in pieces() {
+                let (a, b) = if faces == Faces::Right { (b, a) } else { (a, b) };
+                let two_sided = !matches!(faces, Faces::Left | Faces::Right);
+                let edge = Edge::blocker(a, b).with_two_sided(two_sided);
+                self.pending.push(edge, element, false);
+            }
+            return;
+        }
+        let surface = |a, b| Edge::surface(a, b, material.reflectance).with_emission(material.emission);
+        match faces {
+            Faces::Out | Faces::In => {
+                let rule = path.fill().map_or(FillRule::NonZero, usvg::Fill::rule);
+                match fill_edges(&out.polylines, rule, faces == Faces::In) {
+                    Ok(fill) => {
+                        if fill.flat + fill.inside > 0 {
+                            let kind = WarningKind::LoopsLeftOut {
+                                flat: fill.flat,
+                                inside: fill.inside,
+                            };
+                            self.pending.warn(element, kind);
+                        }
+                        for (a, b) in fill.edges {
+                            self.pending.push(surface(a, b), element, faces == Faces::Out);
+                        }
+                    }
+                    Err(FillProblem::Crosses(at)) => {
+                        self.pending.skip(element, WarningKind::Crosses { at }, |s| &mut s.invalid);
+                    }
+                    Err(FillProblem::NoArea) => {
+                        self.pending.skip(element, WarningKind::Degenerate, |s| &mut s.invalid);
+                    }
+                }
+            }
+            Faces::Left => {
+                for (a, b) in pieces() {
+                    self.pending.push(surface(a, b), element, false);
+                }
+            }
+            Faces::Right => {
+                let all: Vec<_> = pieces().collect();
+                for &(a, b) in all.iter().rev() {
+                    self.pending.push(surface(b, a), element, false);
+                }
+            }
+            Faces::Both => {
+                for (a, b) in pieces() {
+                    self.pending.push(surface(a, b), element, false);
+                    self.pending.push(surface(b, a), element, false);
+                }
+            }
+        }
+    }
+}
+

@@ -1,0 +1,211 @@
+//! The drawing's text before usvg reads it: every element without an `id` is given one (usvg
+//! keeps ids, and drops the `data-flatland-*` attributes and classes this crate reads), so each
+//! path of usvg's tree leads back to its element, its attributes and its line. An empty group
+//! is placed first inside the root: its transform in usvg's tree is the root's (viewBox and
+//! `transform`), which the importer undoes to work in the root's user units.
+
+use std::collections::{HashMap, HashSet};
+
+use usvg::roxmltree::{Document, Node, ParsingOptions};
+
+use crate::attributes::{self, OwnAttributes};
+use crate::{ElementName, SvgError};
+
+/// Elements whose content is drawn only where something refers to it.
+const NOT_DRAWN_HERE: [&str; 6] = ["defs", "symbol", "clipPath", "mask", "pattern", "marker"];
+/// Elements usvg turns into paths.
+const SHAPES: [&str; 7] = [
+    "rect", "circle", "ellipse", "line", "polyline", "polygon", "path",
+];
+
+/// One element of the drawing.
+#[derive(Clone, Debug)]
+pub struct SourceElement {
+    /// How messages name it.
+    pub name: ElementName,
+    /// Its own `data-flatland-*` attributes.
+    pub own: OwnAttributes,
+    /// For a `use`: the element it refers to.
+    pub referenced: Option<usize>,
+    /// A shape drawn where it stands (not inside `defs`, a `symbol`, a clip path, ...).
+    pub drawn_here: bool,
+}
+
+/// The elements of a drawing and usvg's tree of it.
+pub struct Source {
+    /// Every element, in document order.
+    pub elements: Vec<SourceElement>,
+    /// Element index by id (the drawing's own ids and the ones given here).
+    pub by_id: HashMap<String, usize>,
+    /// The id of the empty group whose transform is the root's.
+    pub origin_id: String,
+    /// `text` elements drawn (skipped by the importer).
+    pub texts: Vec<ElementName>,
+    /// `image` elements drawn (skipped by the importer).
+    pub images: Vec<ElementName>,
+    /// usvg's tree of the drawing.
+    pub tree: usvg::Tree,
+}
+
+/// Reads `bytes` as SVG text: XML errors and invalid attributes are errors with a position.
+pub fn read(bytes: &[u8]) -> Result<Source, SvgError> {
+    let text = std::str::from_utf8(bytes).map_err(|e| SvgError::NotText {
+        line: 1 + bytes[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count(),
+    })?;
+    let options = || ParsingOptions {
+        allow_dtd: true,
+        ..ParsingOptions::default()
+    };
+    let doc = Document::parse_with_options(text, options()).map_err(xml_error)?;
+    let (annotated, prefix) = annotate(text, &doc);
+    let doc = Document::parse_with_options(&annotated, options()).map_err(xml_error)?;
+    let mut elements = Vec::new();
+    let mut by_id = HashMap::new();
+    let mut nth: HashMap<String, usize> = HashMap::new();
+    let (mut texts, mut images) = (Vec::new(), Vec::new());
+    let mut index_of = HashMap::new();
+    for node in doc.descendants().filter(Node::is_element) {
+        let tag = node.tag_name().name().to_string();
+        let count = nth.entry(tag.clone()).or_default();
+        *count += 1;
+        let id = node.attribute("id").map(str::to_string);
+        let name = ElementName {
+            tag: tag.clone(),
+            id: id.clone().filter(|id| !id.starts_with(&prefix)),
+            nth: *count,
+            line: doc.text_pos_at(node.range().start).row,
+        };
+        let own = attributes::read(node, &name)?;
+        let hidden_here = node
+            .ancestors()
+            .any(|a| NOT_DRAWN_HERE.contains(&a.tag_name().name()));
+        match tag.as_str() {
+            "text" if !hidden_here => texts.push(name.clone()),
+            "image" if !hidden_here => images.push(name.clone()),
+            _ => {}
+        }
+        if let Some(id) = id {
+            // The first element with an id wins, as in usvg.
+            by_id.entry(id).or_insert(elements.len());
+        }
+        index_of.insert(node.id(), elements.len());
+        elements.push(SourceElement {
+            name,
+            own,
+            referenced: None,
+            drawn_here: SHAPES.contains(&tag.as_str()) && !hidden_here,
+        });
+    }
+    for node in doc.descendants().filter(|n| n.has_tag_name("use")) {
+        let href = node
+            .attributes()
+            .find(|a| a.name() == "href")
+            .map(|a| a.value().trim());
+        if let Some(target) = href.and_then(|h| h.strip_prefix('#')) {
+            elements[index_of[&node.id()]].referenced = by_id.get(target).copied();
+        }
+    }
+    let tree = usvg::Tree::from_xmltree(&doc, &usvg::Options::default())
+        .map_err(|e| SvgError::NotSvg(e.to_string()))?;
+    Ok(Source {
+        elements,
+        by_id,
+        origin_id: format!("{prefix}origin"),
+        texts,
+        images,
+        tree,
+    })
+}
+
+fn xml_error(e: usvg::roxmltree::Error) -> SvgError {
+    let pos = e.pos();
+    let message = e.to_string();
+    // roxmltree ends its messages with " at LINE:COLUMN"; the position leads ours.
+    let message = message
+        .rsplit_once(" at ")
+        .map_or(message.as_str(), |(m, _)| m)
+        .to_string();
+    SvgError::Xml {
+        line: pos.row,
+        column: pos.col,
+        message,
+    }
+}
+
+/// `text` with an `id` added to every element without one (`PREFIX` and its index) and an empty
+/// group `PREFIXorigin` first in the root; the prefix is one no id of the drawing starts with.
+fn annotate(text: &str, doc: &Document<'_>) -> (String, String) {
+    let ids: HashSet<&str> = doc
+        .descendants()
+        .filter_map(|n| n.attribute("id"))
+        .collect();
+    let mut prefix = String::from("flatland-");
+    while ids.iter().any(|id| id.starts_with(&prefix)) {
+        prefix.push('x');
+    }
+    let mut inserts: Vec<(usize, String)> = Vec::new();
+    for (index, node) in doc.descendants().filter(Node::is_element).enumerate() {
+        if node.attribute("id").is_some() {
+            continue;
+        }
+        let start = node.range().start;
+        // Elements expanded from a DTD entity have no start tag of their own here.
+        let Some(tag) = text.get(start..).and_then(|t| t.strip_prefix('<')) else {
+            continue;
+        };
+        let qname_len = tag
+            .find(|c: char| c.is_whitespace() || c == '/' || c == '>')
+            .unwrap_or(tag.len());
+        if !tag[..qname_len].ends_with(node.tag_name().name()) {
+            continue;
+        }
+        inserts.push((start + 1 + qname_len, format!(" id=\"{prefix}{index}\"")));
+    }
+    if let Some(first) = doc.root_element().first_child() {
+        inserts.push((first.range().start, format!("<g id=\"{prefix}origin\"/>")));
+    }
+    inserts.sort_by_key(|&(at, _)| at);
+    let mut out = String::with_capacity(text.len() + inserts.len() * 24);
+    let mut from = 0;
+    for (at, insert) in inserts {
+        out.push_str(&text[from..at]);
+        out.push_str(&insert);
+        from = at;
+    }
+    out.push_str(&text[from..]);
+    (out, prefix)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_element_gets_an_id_and_keeps_its_name() {
+        let svg = "<svg xmlns=\"http://www.w3.org/2000/svg\">\n<rect width=\"1\" height=\"1\"/>\n<svg:rect xmlns:svg=\"http://www.w3.org/2000/svg\" id=\"flatland-1\"/><line/></svg>";
+        let source = read(svg.as_bytes()).unwrap();
+        let names: Vec<String> = source.elements.iter().map(|e| e.name.to_string()).collect();
+        // The drawing's own id starts with "flatland-", so the given ones start "flatland-x".
+        assert_eq!(source.origin_id, "flatland-xorigin");
+        assert_eq!(
+            names,
+            [
+                "svg[1] (line 1)",
+                "g[1] (line 1)",
+                "rect[1] (line 2)",
+                "rect#flatland-1 (line 3)",
+                "line[1] (line 3)"
+            ]
+        );
+        assert_eq!(source.by_id.len(), 5);
+    }
+
+    #[test]
+    fn xml_errors_give_the_position_once() {
+        let err = read(b"<svg><rect></svg>").err().unwrap().to_string();
+        assert!(err.starts_with("1:"), "{err}");
+        assert!(!err.contains(" at 1:"), "{err}");
+        let err = read(b"<svg>\n\xff</svg>").err().unwrap().to_string();
+        assert_eq!(err, "line 2: the drawing is not UTF-8 text (an .svgz must be unpacked first)");
+    }
+}
