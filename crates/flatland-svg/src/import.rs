@@ -9,7 +9,7 @@ use usvg::{FillRule, Node};
 use crate::attributes::{ElementRole, Faces, Material};
 use crate::drawing::{Drawing, MarkedLight, Pending};
 use crate::faces::{FillProblem, fill_edges};
-use crate::outline::outline;
+use crate::outline::{outline, widen};
 use crate::source::{self, Source};
 use crate::{ImportParams, SvgError, WarningKind};
 
@@ -22,9 +22,6 @@ pub fn import(bytes: &[u8], params: &ImportParams) -> Result<Drawing, SvgError> 
     params.check()?;
     let source = source::read(bytes)?;
     let root = root_transform(&source);
-    // Plan = unit × (x, −y) in the root's user units.
-    let to_plan = Affine::new([params.unit, 0.0, 0.0, -params.unit, 0.0, 0.0])
-        * root.inverse();
     let size = source.tree.size();
     let diagonal = (root.inverse() * kurbo::Point::new(f64::from(size.width()), f64::from(size.height()))
         - root.inverse() * kurbo::Point::ORIGIN)
@@ -32,11 +29,17 @@ pub fn import(bytes: &[u8], params: &ImportParams) -> Result<Drawing, SvgError> 
     let flatten = params.flatten.unwrap_or(DEFAULT_FLATTEN * diagonal) * params.unit;
     let mut walk = Walk {
         source: &source,
-        to_plan,
         flatten,
         pending: Pending::new(&source),
     };
-    walk.group(source.tree.root(), Material::root(params.reflectance), None);
+    // Plan = unit × (x, −y) in the root's user units.
+    let to_plan = Affine::new([params.unit, 0.0, 0.0, -params.unit, 0.0, 0.0]);
+    let top = Context {
+        material: Material::root(params.reflectance),
+        instance: None,
+        to_plan,
+    };
+    walk.group(source.tree.root(), top);
     walk.pending.finish(&source)
 }
 
@@ -49,8 +52,8 @@ pub fn import_file(path: impl AsRef<Path>, params: &ImportParams) -> Result<Draw
         .map_err(|e| e.in_file(path))
 }
 
-/// The root's transform (its viewBox mapping and `transform`): the transform usvg gave the empty
-/// group placed first in the root.
+/// The root's transform (its viewBox mapping and `transform`), in f32: the transform usvg gave
+/// the empty group placed first in the root.
 fn root_transform(source: &Source) -> Affine {
     match source.tree.node_by_id(&source.origin_id) {
         Some(Node::Group(g)) if is_invertible(affine(g.abs_transform())) => affine(g.abs_transform()),
@@ -63,47 +66,71 @@ fn is_invertible(a: Affine) -> bool {
     d.is_finite() && d != 0.0
 }
 
-/// A usvg transform in f64.
+/// A usvg transform in f64, its numbers as the drawing wrote them.
 fn affine(t: usvg::Transform) -> Affine {
-    let c = [t.sx, t.ky, t.kx, t.sy, t.tx, t.ty].map(f64::from);
+    let c = [t.sx, t.ky, t.kx, t.sy, t.tx, t.ty].map(widen);
     Affine::new(c)
 }
 
 struct Walk<'a> {
     source: &'a Source,
-    to_plan: Affine,
     flatten: f64,
     pending: Pending,
 }
 
+/// What a group passes down to its children.
+#[derive(Clone, Copy)]
+struct Context {
+    material: Material,
+    /// The innermost `use` (usvg drops the ids of what a `use` copies, so the `use` names
+    /// those paths).
+    instance: Option<usize>,
+    /// From the group's coordinates to the plan, composed in f64 from each group's own
+    /// transform (usvg's absolute transforms are products in f32, off by rounding).
+    to_plan: Affine,
+}
+
 impl Walk<'_> {
-    /// Walks `group` whose material is `material`; `instance` is the innermost `use` it is
-    /// inside (usvg drops the ids of what a `use` copies, so the `use` names those paths).
-    fn group(&mut self, group: &usvg::Group, material: Material, instance: Option<usize>) {
+    /// Walks the children of `group`, whose context is `context`.
+    fn group(&mut self, group: &usvg::Group, context: Context) {
         for child in group.children() {
             match child {
                 Node::Group(g) => {
-                    let (mut material, mut instance) = (material, instance);
+                    let mut inner = context;
+                    // The group usvg wraps the root's content in holds the root's transform:
+                    // the plan is in the root's user units, inside it.
+                    if !self.wraps_root(g) {
+                        inner.to_plan = context.to_plan * affine(g.transform());
+                    }
                     if let Some(&e) = self.source.by_id.get(g.id()) {
                         let element = &self.source.elements[e];
-                        material = material.with(&element.own);
+                        inner.material = inner.material.with(&element.own);
                         if element.name.tag == "use" {
-                            instance = Some(e);
+                            inner.instance = Some(e);
                             if let Some(r) = element.referenced {
-                                material = material.with(&self.source.elements[r].own);
+                                inner.material = inner.material.with(&self.source.elements[r].own);
                             }
                         }
                     }
-                    self.group(g, material, instance);
+                    self.group(g, inner);
                 }
-                Node::Path(p) => self.path(p, material, instance),
+                Node::Path(p) => self.path(p, context),
                 // Counted from the document: text and images are skipped wherever they are.
                 Node::Image(_) | Node::Text(_) => {}
             }
         }
     }
 
-    fn path(&mut self, path: &usvg::Path, material: Material, instance: Option<usize>) {
+    fn wraps_root(&self, g: &usvg::Group) -> bool {
+        matches!(g.children().first(), Some(Node::Group(o)) if o.id() == self.source.origin_id)
+    }
+
+    fn path(&mut self, path: &usvg::Path, context: Context) {
+        let Context {
+            material,
+            instance,
+            to_plan,
+        } = context;
         let own = self.source.by_id.get(path.id()).copied();
         let Some(element) = own.or(instance) else {
             self.pending.skipped.unsourced += 1;
@@ -128,7 +155,6 @@ impl Walk<'_> {
             self.pending.skip(element, WarningKind::Hidden, |s| &mut s.hidden);
             return;
         }
-        let to_plan = self.to_plan * affine(path.abs_transform());
         if let Some(power) = light {
             let b = path.data().bounds();
             let centre = kurbo::Point::new(
@@ -147,12 +173,12 @@ impl Walk<'_> {
             self.pending.skip(element, WarningKind::NonFinite, |s| &mut s.invalid);
             return;
         };
-        if out.merged > 0 {
-            self.pending.warn(element, WarningKind::Merged { pieces: out.merged });
-        }
         if out.polylines.is_empty() {
             self.pending.skip(element, WarningKind::Degenerate, |s| &mut s.invalid);
             return;
+        }
+        if out.merged > 0 {
+            self.pending.warn(element, WarningKind::Merged { pieces: out.merged });
         }
         let faces = material.faces.unwrap_or(if path.fill().is_some() {
             Faces::Out

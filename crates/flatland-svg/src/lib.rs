@@ -11,8 +11,10 @@ mod import;
 mod name;
 mod outline;
 mod params;
+mod render;
 mod source;
 mod warning;
+mod write;
 
 pub use attributes::{ElementRole, Faces, LIGHT_CLASS};
 pub use drawing::{Drawing, MarkedLight};
@@ -21,3 +23,5 @@ pub use import::{import, import_file};
 pub use name::ElementName;
 pub use params::ImportParams;
 pub use warning::{Skipped, Warning, WarningKind};
+pub use write::lit::{ColourScale, LitPlan, LitSegment, LitSvg, lit_svg};
+pub use write::scene_svg;

@@ -25,7 +25,8 @@ impl Polyline {
     /// The pieces `(p, q)` in order, the closing one last when closed.
     pub fn pieces(&self) -> impl Iterator<Item = (DVec2, DVec2)> + '_ {
         let n = self.points.len();
-        let count = if self.closed && n > 2 { n } else { n - 1 };
+        // A closed outline of two points is a piece there and back.
+        let count = if self.closed { n } else { n - 1 };
         (0..count).map(move |i| (self.points[i], self.points[(i + 1) % n]))
     }
 }
@@ -46,7 +47,7 @@ pub fn outline(
     to_plan: Affine,
     tolerance: f64,
 ) -> Result<Outline, DVec2> {
-    let map = |p: tiny_skia_path::Point| to_plan * Point::new(f64::from(p.x), f64::from(p.y));
+    let map = |p: tiny_skia_path::Point| to_plan * Point::new(widen(p.x), widen(p.y));
     let elements: Vec<PathEl> = path
         .segments()
         .map(|segment| match segment {
@@ -99,6 +100,14 @@ pub fn outline(
     Ok(result)
 }
 
+/// The f64 nearest the shortest decimal that reads as `x`: usvg keeps numbers as f32, so the
+/// drawing's `7.8` arrives as 7.80000019; this gives back 7.8. Exact for numbers written with up
+/// to seven significant digits, and never further from `x` than f32 rounding.
+pub fn widen(x: f32) -> f64 {
+    // Display prints the shortest decimal that reads back as the same f32.
+    x.to_string().parse().unwrap_or(f64::from(x))
+}
+
 fn el_points(el: &PathEl) -> Vec<Point> {
     match *el {
         PathEl::MoveTo(p) | PathEl::LineTo(p) => vec![p],
@@ -117,15 +126,14 @@ fn merge(polyline: Polyline, tiny: f64, merged: &mut usize) -> Option<Polyline> 
             _ => points.push(p),
         }
     }
-    // A closed outline that returns to its start: the closing piece is implied by `Z`.
-    if polyline.closed && points.len() > 1 && (points[points.len() - 1] - points[0]).length() <= tiny
-    {
+    // An outline that returns to its start is closed, with or without `Z`; the closing piece
+    // is implied.
+    let mut closed = polyline.closed;
+    if points.len() > 2 && (points[points.len() - 1] - points[0]).length() <= tiny {
         points.pop();
+        closed = true;
     }
-    (points.len() >= 2).then_some(Polyline {
-        points,
-        closed: polyline.closed,
-    })
+    (points.len() >= 2).then_some(Polyline { points, closed })
 }
 
 #[cfg(test)]
@@ -189,6 +197,17 @@ mod tests {
         // Nothing but one point: no polyline.
         let dot = outline(&path("M1 1 L1 1"), Affine::IDENTITY, 0.1).unwrap();
         assert!(dot.polylines.is_empty());
+    }
+
+    #[test]
+    fn numbers_come_back_as_written() {
+        assert_eq!(widen(7.8), 7.8);
+        assert_eq!(widen(-0.2), -0.2);
+        assert_eq!(widen(12345.67), 12345.67);
+        assert_eq!(widen(1.0e-30), 1.0e-30);
+        assert_eq!(widen(f32::MAX), 3.4028235e38);
+        assert!(widen(f32::NAN).is_nan());
+        assert_eq!(widen(f32::INFINITY), f64::INFINITY);
     }
 
     #[test]

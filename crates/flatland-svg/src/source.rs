@@ -119,12 +119,10 @@ pub fn read(bytes: &[u8]) -> Result<Source, SvgError> {
 
 fn xml_error(e: usvg::roxmltree::Error) -> SvgError {
     let pos = e.pos();
-    let message = e.to_string();
-    // roxmltree ends its messages with " at LINE:COLUMN"; the position leads ours.
-    let message = message
-        .rsplit_once(" at ")
-        .map_or(message.as_str(), |(m, _)| m)
-        .to_string();
+    // roxmltree's messages hold the position ("... at 2:1 ..."); ours leads with it.
+    let message = e
+        .to_string()
+        .replace(&format!(" at {}:{}", pos.row, pos.col), "");
     SvgError::Xml {
         line: pos.row,
         column: pos.col,
