@@ -8,7 +8,7 @@
 
 use std::fmt::Write as _;
 
-use flatland_geom::DVec2;
+use flatland_geom::{DVec2, EdgeId};
 
 use super::{escape, hex};
 use crate::SvgError;
@@ -27,9 +27,11 @@ pub trait ColourScale {
 }
 
 /// One element of the lit plan: a segment in plan coordinates (front to the left of `a → b`),
-/// its radiosity and its emission.
+/// the scene edge it lies on, its radiosity and its emission.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LitSegment {
+    /// The scene edge it lies on (emitters are marked once per edge; written as `data-edge`).
+    pub edge: EdgeId,
     /// Start.
     pub a: DVec2,
     /// End.
@@ -166,26 +168,34 @@ fn write_plan(out: &mut String, plan: &LitPlan<'_>, picture: &LitSvg) {
         // On its front side, so the two faces of a thin wall both show.
         let shift = DVec2::new(-d.y, d.x) / d.length() * (width / 2.0);
         let class = if seg.emission > 0.0 { " class=\"emitter\"" } else { "" };
+        if seg.emission > 0.0 {
+            // Emitters are brighter than the scale's top: outlined, so they show on white.
+            let _ = writeln!(
+                out,
+                "<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" transform=\"translate({} {})\" stroke=\"#000000\" stroke-width=\"{}\"/>",
+                seg.a.x, seg.a.y, seg.b.x, seg.b.y, shift.x, shift.y, width + 2.0 / s
+            );
+        }
         let _ = writeln!(
             out,
-            "<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" transform=\"translate({} {})\" stroke=\"{}\" stroke-width=\"{width}\" data-b=\"{}\"{class}/>",
+            "<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" transform=\"translate({} {})\" stroke=\"{}\" stroke-width=\"{width}\" data-b=\"{}\" data-edge=\"{}\"{class}/>",
             seg.a.x, seg.a.y, seg.b.x, seg.b.y, shift.x, shift.y,
-            hex(plan.colours.colour(seg.value)), seg.value
+            hex(plan.colours.colour(seg.value)), seg.value, seg.edge.index()
         );
     }
     out.push_str("</g>\n");
-    // Markers in pixels, so they keep their size.
-    for seg in plan.segments.iter().filter(|s| s.emission > 0.0) {
-        let d = seg.b - seg.a;
+    // Markers in pixels, so they keep their size: one per emitting edge, at its middle.
+    for (start, end, emission) in emitting_edges(plan.segments) {
+        let d = end - start;
         if !(d.length() > 0.0) {
             continue;
         }
         let front = DVec2::new(-d.y, d.x) / d.length();
-        let at = picture.to_pixel((seg.a + seg.b) * 0.5 + front * (14.0 / s));
+        let at = picture.to_pixel((start + end) * 0.5 + front * (14.0 / s));
         let _ = writeln!(
             out,
             "<circle class=\"emitter-mark\" cx=\"{}\" cy=\"{}\" r=\"5\" fill=\"#ffc800\" stroke=\"#000000\" stroke-width=\"1\"><title>E = {}</title></circle>",
-            at.x, at.y, seg.emission
+            at.x, at.y, emission
         );
     }
     for &light in plan.lights {
@@ -196,6 +206,19 @@ fn write_plan(out: &mut String, plan: &LitPlan<'_>, picture: &LitSvg) {
             p.x, p.y
         );
     }
+}
+
+/// Each emitting edge's extent (the first of its segments' starts to the last's end) and
+/// emission, in the order the segments list them.
+fn emitting_edges(segments: &[LitSegment]) -> Vec<(DVec2, DVec2, f64)> {
+    let mut out: Vec<(EdgeId, DVec2, DVec2, f64)> = Vec::new();
+    for seg in segments.iter().filter(|s| s.emission > 0.0) {
+        match out.iter_mut().find(|(edge, ..)| *edge == seg.edge) {
+            Some(found) => found.2 = seg.b,
+            None => out.push((seg.edge, seg.a, seg.b, seg.emission)),
+        }
+    }
+    out.into_iter().map(|(_, a, b, e)| (a, b, e)).collect()
 }
 
 /// The colour bar at `x`, from `top` down `length` pixels, with its marks and caption.
