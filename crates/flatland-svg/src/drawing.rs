@@ -106,6 +106,12 @@ impl Pending {
             skipped: Skipped::default(),
             drawn: vec![false; source.elements.len()],
         }
+        .with_warnings(&source.warnings)
+    }
+
+    fn with_warnings(mut self, warnings: &[(usize, WarningKind)]) -> Pending {
+        self.warnings.extend(warnings.iter().cloned());
+        self
     }
 
     pub fn push(&mut self, edge: Edge, element: usize, from_fill: bool) {
@@ -132,6 +138,8 @@ impl Pending {
             }
         }
         self.remove_hidden_faces();
+        self.skipped.texts = source.texts.len();
+        self.skipped.images = source.images.len();
         let names: Vec<ElementName> = source.elements.iter().map(|e| e.name.clone()).collect();
         let scene = Scene::new(std::mem::take(&mut self.edges)).map_err(|error| {
             self.scene_error(error, &names)
@@ -146,12 +154,10 @@ impl Pending {
             })
             .collect();
         warnings.extend(overlaps(&scene, &self.source_of, &names));
-        let skipped_files = [
-            (&source.texts, WarningKind::Text, &mut self.skipped.texts),
-            (&source.images, WarningKind::Image, &mut self.skipped.images),
-        ];
-        for (list, kind, count) in skipped_files {
-            *count = list.len();
+        for (list, kind) in [
+            (&source.texts, WarningKind::Text),
+            (&source.images, WarningKind::Image),
+        ] {
             warnings.extend(list.iter().map(|name| Warning {
                 element: Some(name.clone()),
                 kind: kind.clone(),

@@ -50,7 +50,7 @@ pub enum SvgError {
     },
     /// Nothing in the drawing became a surface: there is no scene to light.
     #[error(
-        "the drawing has no surface: {edges} edges imported ({skipped}); draw walls as filled shapes or strokes, and mark no more than obstacles with data-flatland-role=\"blocker\""
+        "the drawing has no surface: {edges} blocker edges imported ({skipped}); draw walls as filled shapes or strokes not marked data-flatland-role=\"blocker\""
     )]
     NoSurface {
         /// Edges imported (all blockers).

@@ -94,7 +94,7 @@ pub fn fill_edges(
 }
 
 /// Whether `points` (any number) lie on one line: such a loop encloses nothing. Exact.
-fn collinear(points: &[DVec2]) -> bool {
+pub fn collinear(points: &[DVec2]) -> bool {
     let coord = |v: DVec2| Coord { x: v.x, y: v.y };
     let Some(&a) = points.first() else {
         return true;

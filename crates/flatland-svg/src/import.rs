@@ -8,7 +8,7 @@ use usvg::{FillRule, Node};
 
 use crate::attributes::{ElementRole, Faces, Material};
 use crate::drawing::{Drawing, MarkedLight, Pending};
-use crate::faces::{FillProblem, fill_edges};
+use crate::faces::{FillProblem, collinear, fill_edges};
 use crate::outline::{outline, widen};
 use crate::source::{self, Source};
 use crate::{ImportParams, SvgError, WarningKind};
@@ -180,7 +180,10 @@ impl Walk<'_> {
         if out.merged > 0 {
             self.pending.warn(element, WarningKind::Merged { pieces: out.merged });
         }
-        let faces = material.faces.unwrap_or(if path.fill().is_some() {
+        // What is seen: a fill that paints an area (a `<line>` keeps SVG's default fill, which
+        // paints nothing), else a stroke.
+        let paints_area = path.fill().is_some() && out.polylines.iter().any(|p| !collinear(&p.points));
+        let faces = material.faces.unwrap_or(if paints_area || path.stroke().is_none() {
             Faces::Out
         } else {
             Faces::Both

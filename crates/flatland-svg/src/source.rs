@@ -9,7 +9,7 @@ use std::collections::{HashMap, HashSet};
 use usvg::roxmltree::{Document, Node, ParsingOptions};
 
 use crate::attributes::{self, OwnAttributes};
-use crate::{ElementName, SvgError};
+use crate::{ElementName, SvgError, WarningKind};
 
 /// Elements whose content is drawn only where something refers to it.
 const NOT_DRAWN_HERE: [&str; 6] = ["defs", "symbol", "clipPath", "mask", "pattern", "marker"];
@@ -43,6 +43,8 @@ pub struct Source {
     pub texts: Vec<ElementName>,
     /// `image` elements drawn (skipped by the importer).
     pub images: Vec<ElementName>,
+    /// What the document itself gets wrong (bad transforms, broken references, repeated ids).
+    pub warnings: Vec<(usize, WarningKind)>,
     /// usvg's tree of the drawing.
     pub tree: usvg::Tree,
 }
@@ -63,6 +65,7 @@ pub fn read(bytes: &[u8]) -> Result<Source, SvgError> {
     let mut by_id = HashMap::new();
     let mut nth: HashMap<String, usize> = HashMap::new();
     let (mut texts, mut images) = (Vec::new(), Vec::new());
+    let mut warnings = Vec::new();
     let mut index_of = HashMap::new();
     for node in doc.descendants().filter(Node::is_element) {
         let tag = node.tag_name().name().to_string();
@@ -86,7 +89,15 @@ pub fn read(bytes: &[u8]) -> Result<Source, SvgError> {
         }
         if let Some(id) = id {
             // The first element with an id wins, as in usvg.
-            by_id.entry(id).or_insert(elements.len());
+            if by_id.contains_key(&id) {
+                warnings.push((elements.len(), WarningKind::DuplicateId));
+            } else {
+                by_id.insert(id, elements.len());
+            }
+        }
+        if let Some(value) = node.attribute("transform").filter(|v| !usable_transform(v)) {
+            let value = value.to_string();
+            warnings.push((elements.len(), WarningKind::BadTransform { value }));
         }
         index_of.insert(node.id(), elements.len());
         elements.push(SourceElement {
@@ -101,8 +112,14 @@ pub fn read(bytes: &[u8]) -> Result<Source, SvgError> {
             .attributes()
             .find(|a| a.name() == "href")
             .map(|a| a.value().trim());
-        if let Some(target) = href.and_then(|h| h.strip_prefix('#')) {
-            elements[index_of[&node.id()]].referenced = by_id.get(target).copied();
+        let e = index_of[&node.id()];
+        let target = href.and_then(|h| h.strip_prefix('#')).and_then(|t| by_id.get(t));
+        match target {
+            Some(&target) => elements[e].referenced = Some(target),
+            None => {
+                let href = href.unwrap_or_default().to_string();
+                warnings.push((e, WarningKind::BrokenReference { href }));
+            }
         }
     }
     let tree = usvg::Tree::from_xmltree(&doc, &usvg::Options::default())
@@ -113,7 +130,20 @@ pub fn read(bytes: &[u8]) -> Result<Source, SvgError> {
         origin_id: format!("{prefix}origin"),
         texts,
         images,
+        warnings,
         tree,
+    })
+}
+
+/// Whether usvg takes `value` as the transform it says and it keeps shapes shapes: it parses,
+/// and in f32 (as usvg keeps it) it is finite and invertible. usvg reads one that does not
+/// parse, is not finite or scales an axis to nothing as no transform at all.
+fn usable_transform(value: &str) -> bool {
+    value.parse::<svgtypes::Transform>().is_ok_and(|t| {
+        let c = [t.a, t.b, t.c, t.d, t.e, t.f].map(|x| f64::from(x as f32));
+        let det = c[0] * c[3] - c[1] * c[2];
+        let axis = |x: f64, y: f64| x.hypot(y) > f64::from(f32::EPSILON);
+        c.iter().all(|x| x.is_finite()) && axis(c[0], c[1]) && axis(c[2], c[3]) && det != 0.0
     })
 }
 

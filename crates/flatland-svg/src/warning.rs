@@ -24,7 +24,8 @@ pub enum WarningKind {
     /// A shape that usvg did not draw: hidden (`display: none`), zero size, numbers it could
     /// not read, or neither fill nor stroke. Skipped.
     NotDrawn,
-    /// A shape with `visibility: hidden`. Skipped.
+    /// A shape usvg keeps but does not show: `visibility: hidden`, or neither fill nor stroke.
+    /// Skipped.
     Hidden,
     /// A `text` element. Skipped: text is not geometry.
     Text,
@@ -67,6 +68,20 @@ pub enum WarningKind {
     },
     /// Nothing emits and no light is marked: the plan would be dark.
     NothingLights,
+    /// A `transform` that does not parse, or is not finite and invertible: the SVG reader
+    /// ignores the first kind and flattens with the second, so the element and what it holds
+    /// may be misplaced.
+    BadTransform {
+        /// The attribute's text.
+        value: String,
+    },
+    /// A `use` whose `href` names no element of the drawing: it draws nothing.
+    BrokenReference {
+        /// The `href`.
+        href: String,
+    },
+    /// An id an earlier element already has: references and messages mean the first.
+    DuplicateId,
 }
 
 impl fmt::Display for Warning {
@@ -79,7 +94,10 @@ impl fmt::Display for Warning {
                 f,
                 "not drawn (display: none, zero size, numbers that do not parse, or neither fill nor stroke); skipped"
             ),
-            WarningKind::Hidden => write!(f, "visibility: hidden; skipped"),
+            WarningKind::Hidden => write!(
+                f,
+                "not visible (visibility: hidden, or neither fill nor stroke); skipped"
+            ),
             WarningKind::Text => write!(f, "text is not geometry; skipped"),
             WarningKind::Image => write!(f, "an image is not geometry; skipped"),
             WarningKind::Crosses { at } => write!(
@@ -109,6 +127,17 @@ impl fmt::Display for Warning {
                 f,
                 "{paths} path(s) drawn by markers or patterns skipped (they have no element of their own)"
             ),
+            WarningKind::BadTransform { value } => write!(
+                f,
+                "transform={value:?} does not parse, or is not finite and invertible; this element may be misplaced or flattened"
+            ),
+            WarningKind::BrokenReference { href } => {
+                write!(f, "href={href:?} names no element; it draws nothing")
+            }
+            WarningKind::DuplicateId => write!(
+                f,
+                "an earlier element has the same id; references and messages mean that one"
+            ),
             WarningKind::NothingLights => write!(
                 f,
                 "nothing emits: mark an element data-flatland-emission=\"E\" (E > 0) or the plan stays dark"
@@ -126,7 +155,7 @@ pub struct Skipped {
     pub images: usize,
     /// Shapes usvg did not draw.
     pub not_drawn: usize,
-    /// Shapes with `visibility: hidden`.
+    /// Shapes not visible (`visibility: hidden`, or neither fill nor stroke).
     pub hidden: usize,
     /// Shapes marked (or inside a group marked) `data-flatland-role="ignore"`.
     pub ignored: usize,
