@@ -67,6 +67,8 @@ pub fn read(bytes: &[u8]) -> Result<Source, SvgError> {
     let (mut texts, mut images) = (Vec::new(), Vec::new());
     let mut warnings = Vec::new();
     let mut index_of = HashMap::new();
+    // Where each line starts (roxmltree's own position lookup scans from the top each time).
+    let newlines: Vec<usize> = annotated.match_indices('\n').map(|(at, _)| at).collect();
     for node in doc.descendants().filter(Node::is_element) {
         let tag = node.tag_name().name().to_string();
         let count = nth.entry(tag.clone()).or_default();
@@ -76,7 +78,7 @@ pub fn read(bytes: &[u8]) -> Result<Source, SvgError> {
             tag: tag.clone(),
             id: id.clone().filter(|id| !id.starts_with(&prefix)),
             nth: *count,
-            line: doc.text_pos_at(node.range().start).row,
+            line: 1 + newlines.partition_point(|&at| at < node.range().start) as u32,
         };
         let own = attributes::read(node, &name)?;
         let hidden_here = node
