@@ -35,9 +35,17 @@ fn star(n: usize) -> String {
     for k in 0..n {
         let a = std::f64::consts::TAU * k as f64 / n as f64;
         let r = if k % 2 == 0 { 400.0 } else { 380.0 };
-        let _ = write!(d, "{}{} {} ", if k == 0 { 'M' } else { 'L' }, 500.0 + r * a.cos(), 500.0 + r * a.sin());
+        let _ = write!(
+            d,
+            "{}{} {} ",
+            if k == 0 { 'M' } else { 'L' },
+            500.0 + r * a.cos(),
+            500.0 + r * a.sin()
+        );
     }
-    format!("<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 1000 1000\"><path d=\"{d}Z\" data-flatland-emission=\"1\"/></svg>")
+    format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 1000 1000\"><path d=\"{d}Z\" data-flatland-emission=\"1\"/></svg>"
+    )
 }
 
 fn bench(c: &mut Criterion) {
@@ -49,15 +57,23 @@ fn bench(c: &mut Criterion) {
     ];
     let params = ImportParams::default();
     for (name, svg) in &cases {
-        let edges = import(svg.as_bytes(), &params).unwrap().scene().edges().len();
+        let edges = import(svg.as_bytes(), &params)
+            .unwrap()
+            .scene()
+            .edges()
+            .len();
         eprintln!("{name}: {} bytes, {edges} edges", svg.len());
-        c.bench_function(name, |b| b.iter(|| import(black_box(svg.as_bytes()), &params).unwrap()));
+        c.bench_function(name, |b| {
+            b.iter(|| import(black_box(svg.as_bytes()), &params).unwrap())
+        });
     }
     // What the SVG reader alone takes, for comparison.
     let options = usvg::Options::default();
     for (name, svg) in &cases {
         let name = name.replace("import/", "usvg_only/");
-        c.bench_function(&name, |b| b.iter(|| usvg::Tree::from_str(black_box(svg), &options).unwrap()));
+        c.bench_function(&name, |b| {
+            b.iter(|| usvg::Tree::from_str(black_box(svg), &options).unwrap())
+        });
     }
 }
 

@@ -77,6 +77,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         colours: &Grey { top },
     });
     std::fs::write(output, picture.svg())?;
-    std::fs::write(std::path::Path::new(output).with_extension("png"), picture.png()?)?;
+    std::fs::write(
+        std::path::Path::new(output).with_extension("png"),
+        picture.png()?,
+    )?;
     Ok(())
 }

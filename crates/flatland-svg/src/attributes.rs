@@ -104,21 +104,15 @@ pub fn read(node: Node<'_, '_>, name: &ElementName) -> Result<OwnAttributes, Svg
             })
             .transpose()
     };
-    let reflectance = number(
-        "data-flatland-reflectance",
-        "a number in [0, 1]",
-        |v| (0.0..=1.0).contains(&v),
-    )?;
-    let emission = number(
-        "data-flatland-emission",
-        "a finite number >= 0",
-        |v| v.is_finite() && v >= 0.0,
-    )?;
-    let power = number(
-        "data-flatland-power",
-        "a finite number > 0",
-        |v| v.is_finite() && v > 0.0,
-    )?;
+    let reflectance = number("data-flatland-reflectance", "a number in [0, 1]", |v| {
+        (0.0..=1.0).contains(&v)
+    })?;
+    let emission = number("data-flatland-emission", "a finite number >= 0", |v| {
+        v.is_finite() && v >= 0.0
+    })?;
+    let power = number("data-flatland-power", "a finite number > 0", |v| {
+        v.is_finite() && v > 0.0
+    })?;
     let role = node
         .attribute("data-flatland-role")
         .map(|text| match text.trim() {
@@ -197,8 +191,9 @@ mod tests {
         assert_eq!(own.role, Some(ElementRole::Blocker));
         assert_eq!(own.faces, Some(Faces::In));
         assert_eq!(own.light, None);
-        let lamp = read_first(r#"<svg><circle class="a flatland-light" data-flatland-power="3"/></svg>"#)
-            .unwrap();
+        let lamp =
+            read_first(r#"<svg><circle class="a flatland-light" data-flatland-power="3"/></svg>"#)
+                .unwrap();
         assert_eq!(lamp.light, Some(3.0));
         let plain = read_first(r#"<svg><circle class="flatland-light"/></svg>"#).unwrap();
         assert_eq!(plain.light, Some(1.0));
@@ -207,17 +202,43 @@ mod tests {
     #[test]
     fn invalid_values_name_the_element_the_attribute_and_the_range() {
         let cases = [
-            (r#"<rect id="r" data-flatland-reflectance="1.5"/>"#, "rect#r (line 1): data-flatland-reflectance must be a number in [0, 1], but is \"1.5\""),
-            (r#"<rect data-flatland-emission="-1"/>"#, "rect[1] (line 1): data-flatland-emission must be a finite number >= 0"),
-            (r#"<rect data-flatland-emission="NaN"/>"#, "data-flatland-emission must be a finite number >= 0"),
-            (r#"<rect data-flatland-role="wall"/>"#, "data-flatland-role must be surface, blocker or ignore"),
-            (r#"<rect data-flatland-faces="up"/>"#, "data-flatland-faces must be out, in, left, right or both"),
-            (r#"<rect class="flatland-light"/>"#, "which must be <circle> elements"),
-            (r#"<circle data-flatland-power="2"/>"#, "only a circle of class"),
-            (r#"<circle class="flatland-light" data-flatland-power="0"/>"#, "must be a finite number > 0"),
+            (
+                r#"<rect id="r" data-flatland-reflectance="1.5"/>"#,
+                "rect#r (line 1): data-flatland-reflectance must be a number in [0, 1], but is \"1.5\"",
+            ),
+            (
+                r#"<rect data-flatland-emission="-1"/>"#,
+                "rect[1] (line 1): data-flatland-emission must be a finite number >= 0",
+            ),
+            (
+                r#"<rect data-flatland-emission="NaN"/>"#,
+                "data-flatland-emission must be a finite number >= 0",
+            ),
+            (
+                r#"<rect data-flatland-role="wall"/>"#,
+                "data-flatland-role must be surface, blocker or ignore",
+            ),
+            (
+                r#"<rect data-flatland-faces="up"/>"#,
+                "data-flatland-faces must be out, in, left, right or both",
+            ),
+            (
+                r#"<rect class="flatland-light"/>"#,
+                "which must be <circle> elements",
+            ),
+            (
+                r#"<circle data-flatland-power="2"/>"#,
+                "only a circle of class",
+            ),
+            (
+                r#"<circle class="flatland-light" data-flatland-power="0"/>"#,
+                "must be a finite number > 0",
+            ),
         ];
         for (element, expected) in cases {
-            let err = read_first(&format!("<svg>{element}</svg>")).unwrap_err().to_string();
+            let err = read_first(&format!("<svg>{element}</svg>"))
+                .unwrap_err()
+                .to_string();
             assert!(err.contains(expected), "{err}");
             assert!(!err.contains('\n'));
         }

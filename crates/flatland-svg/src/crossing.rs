@@ -37,7 +37,9 @@ pub fn first_contact(rings: &[Polyline]) -> Option<DVec2> {
         for (k, &a) in cell.iter().enumerate() {
             for &b in &cell[k + 1..] {
                 let (x, y) = (pieces[a], pieces[b]);
-                if grid.owns(&x, &y, c) && let Some(at) = contact(&x, &y, &sizes) {
+                if grid.owns(&x, &y, c)
+                    && let Some(at) = contact(&x, &y, &sizes)
+                {
                     return Some(at);
                 }
             }
@@ -49,10 +51,15 @@ pub fn first_contact(rings: &[Polyline]) -> Option<DVec2> {
 /// Where pieces `x` and `y` meet in a way a simple outline does not allow.
 fn contact(x: &Piece, y: &Piece, sizes: &[usize]) -> Option<DVec2> {
     let n = sizes[x.ring];
-    let adjacent = x.ring == y.ring && ((x.index + 1) % n == y.index || (y.index + 1) % n == x.index);
+    let adjacent =
+        x.ring == y.ring && ((x.index + 1) % n == y.index || (y.index + 1) % n == x.index);
     if adjacent {
         // They share a vertex; they may only meet there, unless the outline doubles back.
-        let (shared, a, b) = if x.q == y.p { (x.q, x.p, y.q) } else { (x.p, x.q, y.p) };
+        let (shared, a, b) = if x.q == y.p {
+            (x.q, x.p, y.q)
+        } else {
+            (x.p, x.q, y.p)
+        };
         let back = orient(a, shared, b) == 0.0 && (a - shared).dot(b - shared) > 0.0;
         return back.then_some(shared);
     }
@@ -99,8 +106,12 @@ struct Grid {
 
 impl Grid {
     fn new(pieces: &[Piece]) -> Grid {
-        let lo = pieces.iter().fold(DVec2::INFINITY, |m, s| m.min(s.p).min(s.q));
-        let hi = pieces.iter().fold(DVec2::NEG_INFINITY, |m, s| m.max(s.p).max(s.q));
+        let lo = pieces
+            .iter()
+            .fold(DVec2::INFINITY, |m, s| m.min(s.p).min(s.q));
+        let hi = pieces
+            .iter()
+            .fold(DVec2::NEG_INFINITY, |m, s| m.max(s.p).max(s.q));
         let mean = pieces
             .iter()
             .map(|s| (s.q - s.p).abs().max_element())
@@ -111,7 +122,8 @@ impl Grid {
         let along = |extent: f64| (extent / mean.max(f64::MIN_POSITIVE)).clamp(1.0, limit) as usize;
         let span = hi - lo;
         let dims = (along(span.x), along(span.y));
-        let cell = DVec2::new(span.x / dims.0 as f64, span.y / dims.1 as f64).max(DVec2::splat(f64::MIN_POSITIVE));
+        let cell = DVec2::new(span.x / dims.0 as f64, span.y / dims.1 as f64)
+            .max(DVec2::splat(f64::MIN_POSITIVE));
         let mut grid = Grid {
             lo,
             cell,

@@ -125,7 +125,12 @@ impl Pending {
     }
 
     /// Warns about `element` and counts it where `count` says.
-    pub fn skip(&mut self, element: usize, kind: WarningKind, count: fn(&mut Skipped) -> &mut usize) {
+    pub fn skip(
+        &mut self,
+        element: usize,
+        kind: WarningKind,
+        count: fn(&mut Skipped) -> &mut usize,
+    ) {
         *count(&mut self.skipped) += 1;
         self.warn(element, kind);
     }
@@ -141,9 +146,8 @@ impl Pending {
         self.skipped.texts = source.texts.len();
         self.skipped.images = source.images.len();
         let names: Vec<ElementName> = source.elements.iter().map(|e| e.name.clone()).collect();
-        let scene = Scene::new(std::mem::take(&mut self.edges)).map_err(|error| {
-            self.scene_error(error, &names)
-        })?;
+        let scene = Scene::new(std::mem::take(&mut self.edges))
+            .map_err(|error| self.scene_error(error, &names))?;
         self.warnings.sort_by_key(|&(e, _)| e);
         let mut warnings: Vec<Warning> = self
             .warnings
@@ -198,7 +202,9 @@ impl Pending {
                 continue;
             }
             let twin = open.get_mut(&key(e.b, e.a)).and_then(|list| {
-                let k = list.iter().position(|&j| self.source_of[j] != self.source_of[i])?;
+                let k = list
+                    .iter()
+                    .position(|&j| self.source_of[j] != self.source_of[i])?;
                 Some(list.swap_remove(k))
             });
             match twin {
@@ -232,12 +238,20 @@ impl Pending {
             _ => 0,
         };
         let element = names[self.source_of.get(edge).copied().unwrap_or(0)].clone();
-        SvgError::Edge { element, error }
+        SvgError::Edge {
+            element,
+            error: Box::new(error),
+        }
     }
 }
 
 fn kept<T: Copy>(items: &[T], gone: &[bool]) -> Vec<T> {
-    items.iter().zip(gone).filter(|&(_, &g)| !g).map(|(&x, _)| x).collect()
+    items
+        .iter()
+        .zip(gone)
+        .filter(|&(_, &g)| !g)
+        .map(|(&x, _)| x)
+        .collect()
 }
 
 /// One warning per pair of elements whose surfaces overlap (the scene's check, `O(n log n)`).

@@ -74,7 +74,7 @@ pub enum SvgError {
         /// The element the edge came from.
         element: ElementName,
         /// The scene's rule.
-        error: flatland_geom::GeomError,
+        error: Box<flatland_geom::GeomError>,
     },
     /// Reading or writing a file failed, or one of the errors above in a named file.
     #[error("{}: {error}", path.display())]

@@ -123,9 +123,11 @@ pub fn counter_clockwise(points: &[DVec2]) -> bool {
 }
 
 fn bounds(points: &[DVec2]) -> (DVec2, DVec2) {
-    points.iter().fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(lo, hi), &p| {
-        (lo.min(p), hi.max(p))
-    })
+    points
+        .iter()
+        .fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(lo, hi), &p| {
+            (lo.min(p), hi.max(p))
+        })
 }
 
 fn inside_box(p: DVec2, (lo, hi): (DVec2, DVec2)) -> bool {

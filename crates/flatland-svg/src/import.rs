@@ -9,7 +9,7 @@ use usvg::{FillRule, Node};
 use crate::attributes::{ElementRole, Faces, Material};
 use crate::drawing::{Drawing, MarkedLight, Pending};
 use crate::faces::{FillProblem, collinear, fill_edges};
-use crate::outline::{outline, widen};
+use crate::outline::{Outline, outline, widen};
 use crate::source::{self, Source};
 use crate::{ImportParams, SvgError, WarningKind};
 
@@ -23,7 +23,8 @@ pub fn import(bytes: &[u8], params: &ImportParams) -> Result<Drawing, SvgError> 
     let source = source::read(bytes)?;
     let root = root_transform(&source);
     let size = source.tree.size();
-    let diagonal = (root.inverse() * kurbo::Point::new(f64::from(size.width()), f64::from(size.height()))
+    let diagonal = (root.inverse()
+        * kurbo::Point::new(f64::from(size.width()), f64::from(size.height()))
         - root.inverse() * kurbo::Point::ORIGIN)
         .hypot();
     let flatten = params.flatten.unwrap_or(DEFAULT_FLATTEN * diagonal) * params.unit;
@@ -56,7 +57,9 @@ pub fn import_file(path: impl AsRef<Path>, params: &ImportParams) -> Result<Draw
 /// the empty group placed first in the root.
 fn root_transform(source: &Source) -> Affine {
     match source.tree.node_by_id(&source.origin_id) {
-        Some(Node::Group(g)) if is_invertible(affine(g.abs_transform())) => affine(g.abs_transform()),
+        Some(Node::Group(g)) if is_invertible(affine(g.abs_transform())) => {
+            affine(g.abs_transform())
+        }
         _ => Affine::IDENTITY,
     }
 }
@@ -126,121 +129,148 @@ impl Walk<'_> {
     }
 
     fn path(&mut self, path: &usvg::Path, context: Context) {
-        let Context {
-            material,
-            instance,
-            to_plan,
-        } = context;
         let own = self.source.by_id.get(path.id()).copied();
-        let Some(element) = own.or(instance) else {
+        let Some(element) = own.or(context.instance) else {
             self.pending.skipped.unsourced += 1;
             return;
         };
         self.pending.drawn[element] = true;
-        let source = &self.source.elements[element];
-        let material = match own {
-            Some(e) => material.with(&self.source.elements[e].own),
-            None => material,
-        };
-        // A light is the marked circle itself, or the marked circle a `use` refers to.
-        let light = match own {
-            Some(e) => self.source.elements[e].own.light,
-            None => source.referenced.and_then(|r| self.source.elements[r].own.light),
+        let (material, light) = match own {
+            Some(e) => {
+                let attributes = &self.source.elements[e].own;
+                (context.material.with(attributes), attributes.light)
+            }
+            // Inside a `use`: the marked circle it refers to is a light.
+            None => {
+                let referenced = self.source.elements[element].referenced;
+                let light = referenced.and_then(|r| self.source.elements[r].own.light);
+                (context.material, light)
+            }
         };
         if material.role == ElementRole::Ignore {
             self.pending.skipped.ignored += 1;
-            return;
+        } else if !path.is_visible() {
+            self.pending
+                .skip(element, WarningKind::Hidden, |s| &mut s.hidden);
+        } else if let Some(power) = light {
+            self.light(path, element, power, context.to_plan);
+        } else {
+            match outline(path.data(), context.to_plan, self.flatten) {
+                Err(_) => self
+                    .pending
+                    .skip(element, WarningKind::NonFinite, |s| &mut s.invalid),
+                Ok(out) if out.polylines.is_empty() => {
+                    self.pending
+                        .skip(element, WarningKind::Degenerate, |s| &mut s.invalid);
+                }
+                Ok(out) => self.edges(path, element, material, &out),
+            }
         }
-        if !path.is_visible() {
-            self.pending.skip(element, WarningKind::Hidden, |s| &mut s.hidden);
-            return;
-        }
-        if let Some(power) = light {
-            let b = path.data().bounds();
-            let centre = kurbo::Point::new(
-                f64::from(b.left() + b.right()) / 2.0,
-                f64::from(b.top() + b.bottom()) / 2.0,
-            );
-            let at = to_plan * centre;
-            self.pending.lights.push(MarkedLight {
-                element: source.name.clone(),
-                at: DVec2::new(at.x, at.y),
-                power,
-            });
-            return;
-        }
-        let Ok(out) = outline(path.data(), to_plan, self.flatten) else {
-            self.pending.skip(element, WarningKind::NonFinite, |s| &mut s.invalid);
-            return;
-        };
-        if out.polylines.is_empty() {
-            self.pending.skip(element, WarningKind::Degenerate, |s| &mut s.invalid);
-            return;
-        }
+    }
+
+    /// A marked circle: a light at its centre.
+    fn light(&mut self, path: &usvg::Path, element: usize, power: f64, to_plan: Affine) {
+        let b = path.data().bounds();
+        let centre = kurbo::Point::new(
+            f64::from(b.left() + b.right()) / 2.0,
+            f64::from(b.top() + b.bottom()) / 2.0,
+        );
+        let at = to_plan * centre;
+        self.pending.lights.push(MarkedLight {
+            element: self.source.elements[element].name.clone(),
+            at: DVec2::new(at.x, at.y),
+            power,
+        });
+    }
+
+    /// The edges of `path`, whose outline is `out`.
+    fn edges(&mut self, path: &usvg::Path, element: usize, material: Material, out: &Outline) {
         if out.merged > 0 {
-            self.pending.warn(element, WarningKind::Merged { pieces: out.merged });
+            self.pending
+                .warn(element, WarningKind::Merged { pieces: out.merged });
         }
         // What is seen: a fill that paints an area (a `<line>` keeps SVG's default fill, which
         // paints nothing), else a stroke.
-        let paints_area = path.fill().is_some() && out.polylines.iter().any(|p| !collinear(&p.points));
-        let faces = material.faces.unwrap_or(if paints_area || path.stroke().is_none() {
-            Faces::Out
-        } else {
-            Faces::Both
-        });
-        let pieces = || out.polylines.iter().flat_map(|p| p.pieces());
+        let paints_area =
+            path.fill().is_some() && out.polylines.iter().any(|p| !collinear(&p.points));
+        let faces = material
+            .faces
+            .unwrap_or(if paints_area || path.stroke().is_none() {
+                Faces::Out
+            } else {
+                Faces::Both
+            });
+        let pieces: Vec<(DVec2, DVec2)> = out.polylines.iter().flat_map(|p| p.pieces()).collect();
         if material.role == ElementRole::Blocker {
-            for (a, b) in pieces() {
-                let (a, b) = if faces == Faces::Right { (b, a) } else { (a, b) };
-                let two_sided = !matches!(faces, Faces::Left | Faces::Right);
+            let two_sided = !matches!(faces, Faces::Left | Faces::Right);
+            for &(a, b) in &pieces {
+                let (a, b) = if faces == Faces::Right {
+                    (b, a)
+                } else {
+                    (a, b)
+                };
                 let edge = Edge::blocker(a, b).with_two_sided(two_sided);
                 self.pending.push(edge, element, false);
             }
             return;
         }
-        let surface = |a, b| Edge::surface(a, b, material.reflectance).with_emission(material.emission);
+        let surface =
+            |a, b| Edge::surface(a, b, material.reflectance).with_emission(material.emission);
         match faces {
             Faces::Out | Faces::In => {
                 let rule = path.fill().map_or(FillRule::NonZero, usvg::Fill::rule);
-                match fill_edges(&out.polylines, rule, faces == Faces::In) {
-                    Ok(fill) => {
-                        if fill.flat + fill.inside > 0 {
-                            let kind = WarningKind::LoopsLeftOut {
-                                flat: fill.flat,
-                                inside: fill.inside,
-                            };
-                            self.pending.warn(element, kind);
-                        }
-                        for (a, b) in fill.edges {
-                            self.pending.push(surface(a, b), element, faces == Faces::Out);
-                        }
-                    }
-                    Err(FillProblem::Crosses(at)) => {
-                        self.pending.skip(element, WarningKind::Crosses { at }, |s| &mut s.invalid);
-                    }
-                    Err(FillProblem::NoArea) => {
-                        self.pending.skip(element, WarningKind::Degenerate, |s| &mut s.invalid);
-                    }
-                }
+                self.fill(element, out, rule, faces == Faces::In, surface);
             }
             Faces::Left => {
-                for (a, b) in pieces() {
+                for &(a, b) in &pieces {
                     self.pending.push(surface(a, b), element, false);
                 }
             }
             Faces::Right => {
-                let all: Vec<_> = pieces().collect();
-                for &(a, b) in all.iter().rev() {
+                for &(a, b) in pieces.iter().rev() {
                     self.pending.push(surface(b, a), element, false);
                 }
             }
             Faces::Both => {
-                for (a, b) in pieces() {
+                for &(a, b) in &pieces {
                     self.pending.push(surface(a, b), element, false);
                     self.pending.push(surface(b, a), element, false);
                 }
             }
         }
     }
-}
 
+    /// The edges of the region `out` fills under `rule`, facing out of it (into it when
+    /// `inward`).
+    fn fill(
+        &mut self,
+        element: usize,
+        out: &Outline,
+        rule: FillRule,
+        inward: bool,
+        surface: impl Fn(DVec2, DVec2) -> Edge,
+    ) {
+        match fill_edges(&out.polylines, rule, inward) {
+            Ok(fill) => {
+                if fill.flat + fill.inside > 0 {
+                    let kind = WarningKind::LoopsLeftOut {
+                        flat: fill.flat,
+                        inside: fill.inside,
+                    };
+                    self.pending.warn(element, kind);
+                }
+                for (a, b) in fill.edges {
+                    self.pending.push(surface(a, b), element, !inward);
+                }
+            }
+            Err(FillProblem::Crosses(at)) => {
+                self.pending
+                    .skip(element, WarningKind::Crosses { at }, |s| &mut s.invalid);
+            }
+            Err(FillProblem::NoArea) => {
+                self.pending
+                    .skip(element, WarningKind::Degenerate, |s| &mut s.invalid);
+            }
+        }
+    }
+}

@@ -185,14 +185,26 @@ mod tests {
             }
             // Not far finer than asked: the sagitta of a chord 2r·sin(π/n) is r(1 − cos(π/n)).
             let needed = std::f64::consts::PI / (1.0 - tolerance / r).acos();
-            assert!((points.len() as f64) < 2.0 * needed + 8.0, "{} points", points.len());
+            assert!(
+                (points.len() as f64) < 2.0 * needed + 8.0,
+                "{} points",
+                points.len()
+            );
         }
     }
 
     #[test]
     fn zero_length_pieces_are_merged_and_counted() {
-        let out = outline(&path("M0 0 L0 0 L5 0 L5 0 L5 5 L0 0 Z"), Affine::IDENTITY, 0.1).unwrap();
-        assert_eq!(out.polylines[0].points, [v(0.0, 0.0), v(5.0, 0.0), v(5.0, 5.0)]);
+        let out = outline(
+            &path("M0 0 L0 0 L5 0 L5 0 L5 5 L0 0 Z"),
+            Affine::IDENTITY,
+            0.1,
+        )
+        .unwrap();
+        assert_eq!(
+            out.polylines[0].points,
+            [v(0.0, 0.0), v(5.0, 0.0), v(5.0, 5.0)]
+        );
         assert_eq!(out.merged, 2);
         // Nothing but one point: no polyline.
         let dot = outline(&path("M1 1 L1 1"), Affine::IDENTITY, 0.1).unwrap();

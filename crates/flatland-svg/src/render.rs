@@ -29,9 +29,16 @@ pub fn png(svg: &str) -> Result<Vec<u8>, SvgError> {
     };
     let tree = usvg::Tree::from_str(svg, &options).map_err(|e| SvgError::Render(e.to_string()))?;
     let size = tree.size().to_int_size();
-    let mut pixmap = resvg::tiny_skia::Pixmap::new(size.width(), size.height()).ok_or_else(|| {
-        SvgError::Render(format!("a {}x{} picture has no pixels", size.width(), size.height()))
-    })?;
+    let mut pixmap =
+        resvg::tiny_skia::Pixmap::new(size.width(), size.height()).ok_or_else(|| {
+            SvgError::Render(format!(
+                "a {}x{} picture has no pixels",
+                size.width(),
+                size.height()
+            ))
+        })?;
     resvg::render(&tree, usvg::Transform::identity(), &mut pixmap.as_mut());
-    pixmap.encode_png().map_err(|e| SvgError::Render(e.to_string()))
+    pixmap
+        .encode_png()
+        .map_err(|e| SvgError::Render(e.to_string()))
 }

@@ -4,6 +4,7 @@
 //! is placed first inside the root: its transform in usvg's tree is the root's (viewBox and
 //! `transform`), which the importer undoes to work in the root's user units.
 
+use std::collections::hash_map::Entry;
 use std::collections::{HashMap, HashSet};
 
 use usvg::roxmltree::{Document, Node, ParsingOptions};
@@ -52,7 +53,10 @@ pub struct Source {
 /// Reads `bytes` as SVG text: XML errors and invalid attributes are errors with a position.
 pub fn read(bytes: &[u8]) -> Result<Source, SvgError> {
     let text = std::str::from_utf8(bytes).map_err(|e| SvgError::NotText {
-        line: 1 + bytes[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count(),
+        line: 1 + bytes[..e.valid_up_to()]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count(),
     })?;
     let options = || ParsingOptions {
         allow_dtd: true,
@@ -61,80 +65,110 @@ pub fn read(bytes: &[u8]) -> Result<Source, SvgError> {
     let doc = Document::parse_with_options(text, options()).map_err(xml_error)?;
     let (annotated, prefix) = annotate(text, &doc);
     let doc = Document::parse_with_options(&annotated, options()).map_err(xml_error)?;
-    let mut elements = Vec::new();
-    let mut by_id = HashMap::new();
-    let mut nth: HashMap<String, usize> = HashMap::new();
-    let (mut texts, mut images) = (Vec::new(), Vec::new());
-    let mut warnings = Vec::new();
-    let mut index_of = HashMap::new();
+    let mut catalogue = Catalogue::default();
     // Where each line starts (roxmltree's own position lookup scans from the top each time).
     let newlines: Vec<usize> = annotated.match_indices('\n').map(|(at, _)| at).collect();
     for node in doc.descendants().filter(Node::is_element) {
+        let line = 1 + newlines.partition_point(|&at| at < node.range().start) as u32;
+        catalogue.add(node, line, &prefix)?;
+    }
+    catalogue.link_uses(&doc);
+    let tree = usvg::Tree::from_xmltree(&doc, &usvg::Options::default())
+        .map_err(|e| SvgError::NotSvg(e.to_string()))?;
+    Ok(Source {
+        elements: catalogue.elements,
+        by_id: catalogue.by_id,
+        origin_id: format!("{prefix}origin"),
+        texts: catalogue.texts,
+        images: catalogue.images,
+        warnings: catalogue.warnings,
+        tree,
+    })
+}
+
+/// The elements met so far and what they get wrong.
+#[derive(Default)]
+struct Catalogue {
+    elements: Vec<SourceElement>,
+    by_id: HashMap<String, usize>,
+    /// Elements so far per tag.
+    nth: HashMap<String, usize>,
+    /// Element index by roxmltree node.
+    index_of: HashMap<usize, usize>,
+    texts: Vec<ElementName>,
+    images: Vec<ElementName>,
+    warnings: Vec<(usize, WarningKind)>,
+}
+
+impl Catalogue {
+    /// Adds `node`, on `line`; ids starting with `prefix` are the importer's, not the
+    /// drawing's.
+    fn add(&mut self, node: Node<'_, '_>, line: u32, prefix: &str) -> Result<(), SvgError> {
+        let index = self.elements.len();
         let tag = node.tag_name().name().to_string();
-        let count = nth.entry(tag.clone()).or_default();
+        let count = self.nth.entry(tag.clone()).or_default();
         *count += 1;
         let id = node.attribute("id").map(str::to_string);
         let name = ElementName {
             tag: tag.clone(),
-            id: id.clone().filter(|id| !id.starts_with(&prefix)),
+            id: id.clone().filter(|id| !id.starts_with(prefix)),
             nth: *count,
-            line: 1 + newlines.partition_point(|&at| at < node.range().start) as u32,
+            line,
         };
         let own = attributes::read(node, &name)?;
         let hidden_here = node
             .ancestors()
             .any(|a| NOT_DRAWN_HERE.contains(&a.tag_name().name()));
         match tag.as_str() {
-            "text" if !hidden_here => texts.push(name.clone()),
-            "image" if !hidden_here => images.push(name.clone()),
+            "text" if !hidden_here => self.texts.push(name.clone()),
+            "image" if !hidden_here => self.images.push(name.clone()),
             _ => {}
         }
         if let Some(id) = id {
             // The first element with an id wins, as in usvg.
-            if by_id.contains_key(&id) {
-                warnings.push((elements.len(), WarningKind::DuplicateId));
-            } else {
-                by_id.insert(id, elements.len());
+            match self.by_id.entry(id) {
+                Entry::Occupied(_) => self.warnings.push((index, WarningKind::DuplicateId)),
+                Entry::Vacant(slot) => {
+                    slot.insert(index);
+                }
             }
         }
         if let Some(value) = node.attribute("transform").filter(|v| !usable_transform(v)) {
             let value = value.to_string();
-            warnings.push((elements.len(), WarningKind::BadTransform { value }));
+            self.warnings
+                .push((index, WarningKind::BadTransform { value }));
         }
-        index_of.insert(node.id(), elements.len());
-        elements.push(SourceElement {
+        self.index_of.insert(node.id().get_usize(), index);
+        self.elements.push(SourceElement {
             name,
             own,
             referenced: None,
             drawn_here: SHAPES.contains(&tag.as_str()) && !hidden_here,
         });
+        Ok(())
     }
-    for node in doc.descendants().filter(|n| n.has_tag_name("use")) {
-        let href = node
-            .attributes()
-            .find(|a| a.name() == "href")
-            .map(|a| a.value().trim());
-        let e = index_of[&node.id()];
-        let target = href.and_then(|h| h.strip_prefix('#')).and_then(|t| by_id.get(t));
-        match target {
-            Some(&target) => elements[e].referenced = Some(target),
-            None => {
-                let href = href.unwrap_or_default().to_string();
-                warnings.push((e, WarningKind::BrokenReference { href }));
+
+    /// Each `use` to the element it refers to; a warning for those that refer to nothing.
+    fn link_uses(&mut self, doc: &Document<'_>) {
+        for node in doc.descendants().filter(|n| n.has_tag_name("use")) {
+            let href = node
+                .attributes()
+                .find(|a| a.name() == "href")
+                .map(|a| a.value().trim());
+            let e = self.index_of[&node.id().get_usize()];
+            let target = href
+                .and_then(|h| h.strip_prefix('#'))
+                .and_then(|t| self.by_id.get(t));
+            match target {
+                Some(&target) => self.elements[e].referenced = Some(target),
+                None => {
+                    let href = href.unwrap_or_default().to_string();
+                    self.warnings
+                        .push((e, WarningKind::BrokenReference { href }));
+                }
             }
         }
     }
-    let tree = usvg::Tree::from_xmltree(&doc, &usvg::Options::default())
-        .map_err(|e| SvgError::NotSvg(e.to_string()))?;
-    Ok(Source {
-        elements,
-        by_id,
-        origin_id: format!("{prefix}origin"),
-        texts,
-        images,
-        warnings,
-        tree,
-    })
 }
 
 /// Whether usvg takes `value` as the transform it says and it keeps shapes shapes: it parses,
@@ -236,6 +270,9 @@ mod tests {
         assert!(err.starts_with("1:"), "{err}");
         assert!(!err.contains(" at 1:"), "{err}");
         let err = read(b"<svg>\n\xff</svg>").err().unwrap().to_string();
-        assert_eq!(err, "line 2: the drawing is not UTF-8 text (an .svgz must be unpacked first)");
+        assert_eq!(
+            err,
+            "line 2: the drawing is not UTF-8 text (an .svgz must be unpacked first)"
+        );
     }
 }

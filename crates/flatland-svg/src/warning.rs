@@ -117,7 +117,10 @@ impl fmt::Display for Warning {
                 "{flat} subpath(s) with no area and {inside} lying inside the fill left out"
             ),
             WarningKind::Merged { pieces } => {
-                write!(f, "{pieces} zero-length piece(s) merged into their neighbours")
+                write!(
+                    f,
+                    "{pieces} zero-length piece(s) merged into their neighbours"
+                )
             }
             WarningKind::Overlaps { other } => write!(
                 f,

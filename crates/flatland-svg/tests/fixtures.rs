@@ -35,11 +35,17 @@ fn the_floor_plan_imports_as_drawn_and_lights_with_default_arguments() {
     // octagonal table 8, bed 4, wardrobe 4, two lamps 4 each; the door swing is ignored.
     assert_eq!(scene.edges().len(), 46);
     // The viewBox is in metres; y flipped.
-    assert_eq!(scene.bounds(), (DVec2::new(0.0, -8.0), DVec2::new(12.0, 0.0)));
+    assert_eq!(
+        scene.bounds(),
+        (DVec2::new(0.0, -8.0), DVec2::new(12.0, 0.0))
+    );
     assert_eq!(drawing.skipped().texts, 2);
     assert_eq!(drawing.skipped().ignored, 1);
     assert!(
-        drawing.warnings().iter().all(|w| w.kind == WarningKind::Text),
+        drawing
+            .warnings()
+            .iter()
+            .all(|w| w.kind == WarningKind::Text),
         "{:?}",
         kinds(&drawing)
     );
@@ -63,8 +69,15 @@ fn the_floor_plan_imports_as_drawn_and_lights_with_default_arguments() {
     // Furniture faces out of its fill, lamps emit.
     let sofa = edges_of(&drawing, "sofa");
     let centre = sofa.iter().map(|e| e.a).sum::<DVec2>() / 4.0;
-    assert!(sofa.iter().all(|e| e.normal().dot((e.a + e.b) * 0.5 - centre) > 0.0));
-    assert!(edges_of(&drawing, "lamp-living").iter().all(|e| e.emission == 5.0));
+    assert!(
+        sofa.iter()
+            .all(|e| e.normal().dot((e.a + e.b) * 0.5 - centre) > 0.0)
+    );
+    assert!(
+        edges_of(&drawing, "lamp-living")
+            .iter()
+            .all(|e| e.emission == 5.0)
+    );
     assert_eq!(sofa[0].reflectance, 0.5);
 
     let scene = drawing.into_scene().unwrap();
@@ -94,8 +107,11 @@ fn the_floor_plan_imports_as_drawn_and_lights_with_default_arguments() {
 /// The elements of the default mesh and their B, solved with default parameters.
 fn solve_default(scene: Scene) -> (Vec<flatland_solve::Element>, Vec<f64>) {
     let kernel = flatland_geom::Kernel::new(scene);
-    let mesh = flatland_solve::Mesh::new(&kernel, flatland_solve::Mesh::default_elements(kernel.scene()))
-        .unwrap();
+    let mesh = flatland_solve::Mesh::new(
+        &kernel,
+        flatland_solve::Mesh::default_elements(kernel.scene()),
+    )
+    .unwrap();
     let params = flatland_solve::SolveParams::default();
     let b = flatland_solve::solve(&kernel, &mesh, &params, &flatland_solve::never)
         .unwrap()
@@ -131,7 +147,10 @@ fn the_vector_editor_drawing_resolves_layers_transforms_styles_and_symbols() {
     let chords = |r: f64, turn: f64| turn / (2.0 * (1.0 - tolerance / r).acos());
     let arcs = edges_of(&drawing, "path-walls").len() - 10;
     let needed = 2.0 * chords(20.0, std::f64::consts::PI);
-    assert!((arcs as f64) >= needed && (arcs as f64) < 2.0 * needed + 8.0, "{arcs} for {needed}");
+    assert!(
+        (arcs as f64) >= needed && (arcs as f64) < 2.0 * needed + 8.0,
+        "{arcs} for {needed}"
+    );
     let table = edges_of(&drawing, "round-table");
     let needed = chords(12.0, std::f64::consts::TAU);
     assert!((table.len() as f64) >= needed && (table.len() as f64) < 2.0 * needed + 8.0);
@@ -144,8 +163,16 @@ fn the_vector_editor_drawing_resolves_layers_transforms_styles_and_symbols() {
     assert!(plant.len() > 6);
     assert_eq!((drawing.skipped().texts, drawing.skipped().images), (1, 1));
     let warnings = kinds(&drawing);
-    assert!(warnings.iter().any(|w| w.starts_with("text#text-title (line ")), "{warnings:?}");
-    assert!(warnings.iter().any(|w| w.starts_with("image#scan (line ")), "{warnings:?}");
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.starts_with("text#text-title (line ")),
+        "{warnings:?}"
+    );
+    assert!(
+        warnings.iter().any(|w| w.starts_with("image#scan (line ")),
+        "{warnings:?}"
+    );
     assert_eq!(warnings.len(), 2, "{warnings:?}");
 }
 
@@ -167,7 +194,13 @@ fn the_cad_export_is_in_millimetres_or_metres_with_y_up() {
     let text = fixture("cad-export.svg");
     let lines = cad_lines(&text);
     for (unit, size) in [(1.0, 12000.0), (1e-3, 12.0)] {
-        let drawing = read("cad-export.svg", &ImportParams { unit, ..ImportParams::default() });
+        let drawing = read(
+            "cad-export.svg",
+            &ImportParams {
+                unit,
+                ..ImportParams::default()
+            },
+        );
         let scene = drawing.scene();
         // Every line a thin wall: two one-sided edges back to back.
         assert_eq!(scene.edges().len(), 2 * lines.len());
@@ -181,7 +214,10 @@ fn the_cad_export_is_in_millimetres_or_metres_with_y_up() {
             let close = |p: DVec2, q: DVec2| (p - q).length() <= 1e-12 * size;
             assert!(close(e.a, DVec2::new(*x1, y1 - 8000.0) * unit), "{e:?}");
             assert!(close(e.b, DVec2::new(*x2, y2 - 8000.0) * unit), "{e:?}");
-            assert_eq!((scene.edges()[2 * i + 1].a, scene.edges()[2 * i + 1].b), (e.b, e.a));
+            assert_eq!(
+                (scene.edges()[2 * i + 1].a, scene.edges()[2 * i + 1].b),
+                (e.b, e.a)
+            );
         }
         let lights = scene.edges().iter().filter(|e| e.emission == 2.0).count();
         assert_eq!(lights, 2 * 12);
@@ -193,8 +229,16 @@ fn the_cad_export_is_in_millimetres_or_metres_with_y_up() {
             .map(ToString::to_string)
             .collect();
         assert_eq!(overlaps.len(), 1, "{overlaps:?}");
-        assert!(overlaps[0].starts_with("line[1] (line 10): "), "{}", overlaps[0]);
-        assert!(overlaps[0].contains("line#dup-south-face (line "), "{}", overlaps[0]);
+        assert!(
+            overlaps[0].starts_with("line[1] (line 10): "),
+            "{}",
+            overlaps[0]
+        );
+        assert!(
+            overlaps[0].contains("line#dup-south-face (line "),
+            "{}",
+            overlaps[0]
+        );
         assert_eq!(drawing.skipped().ignored, 2 + 6);
     }
 }
@@ -233,14 +277,23 @@ fn the_tile_map_becomes_one_solid_of_its_exposed_tile_sides() {
     assert_eq!(scene.edges().len(), exposed + 4 * lamps);
     assert_eq!(drawing.skipped().hidden_faces, shared);
     assert_eq!(drawing.skipped().ignored, tiles("Floor").len());
-    assert_eq!(scene.bounds(), (DVec2::new(0.0, -480.0), DVec2::new(640.0, 0.0)));
+    assert_eq!(
+        scene.bounds(),
+        (DVec2::new(0.0, -480.0), DVec2::new(640.0, 0.0))
+    );
     assert!(scene.edges().iter().all(|e| e.role == Role::Surface));
     assert!(drawing.warnings().is_empty(), "{:?}", kinds(&drawing));
     // No face lies inside the solid: every wall face has open floor in front of it (or is the
     // map's outer border, facing away from it).
     for e in scene.edges().iter().filter(|e| e.emission == 0.0) {
         let probe = (e.a + e.b) * 0.5 + e.normal() * 16.0;
-        let cell = ((probe.x / 32.0).floor() as i64, (-probe.y / 32.0).floor() as i64);
-        assert!(!walls.contains(&cell), "{e:?} faces into the wall at {cell:?}");
+        let cell = (
+            (probe.x / 32.0).floor() as i64,
+            (-probe.y / 32.0).floor() as i64,
+        );
+        assert!(
+            !walls.contains(&cell),
+            "{e:?} faces into the wall at {cell:?}"
+        );
     }
 }

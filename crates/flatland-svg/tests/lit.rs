@@ -15,10 +15,18 @@ impl ColourScale for Ramp {
     }
     fn bar(&self, x: f64) -> [u8; 3] {
         let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
-        [(255.0 * x) as u8, (64.0 + 96.0 * x) as u8, (255.0 * (1.0 - x)) as u8]
+        [
+            (255.0 * x) as u8,
+            (64.0 + 96.0 * x) as u8,
+            (255.0 * (1.0 - x)) as u8,
+        ]
     }
     fn ticks(&self) -> Vec<(f64, String)> {
-        vec![(0.0, "0".into()), (0.5, format!("{:.2}", self.top / 2.0)), (1.0, format!("{:.2}", self.top))]
+        vec![
+            (0.0, "0".into()),
+            (0.5, format!("{:.2}", self.top / 2.0)),
+            (1.0, format!("{:.2}", self.top)),
+        ]
     }
     fn caption(&self) -> String {
         "B (linear)".into()
@@ -26,12 +34,17 @@ impl ColourScale for Ramp {
 }
 
 fn floor_plan() -> (Vec<LitSegment>, Vec<(DVec2, DVec2)>) {
-    let path = format!("{}/../../scenes/svg/floorplan.svg", env!("CARGO_MANIFEST_DIR"));
+    let path = format!(
+        "{}/../../scenes/svg/floorplan.svg",
+        env!("CARGO_MANIFEST_DIR")
+    );
     let drawing = import(&std::fs::read(path).unwrap(), &ImportParams::default()).unwrap();
     let kernel = flatland_geom::Kernel::new(drawing.into_scene().unwrap());
-    let mesh =
-        flatland_solve::Mesh::new(&kernel, flatland_solve::Mesh::default_elements(kernel.scene()))
-            .unwrap();
+    let mesh = flatland_solve::Mesh::new(
+        &kernel,
+        flatland_solve::Mesh::default_elements(kernel.scene()),
+    )
+    .unwrap();
     let params = flatland_solve::SolveParams::default();
     let b = flatland_solve::solve(&kernel, &mesh, &params, &flatland_solve::never)
         .unwrap()
@@ -61,7 +74,11 @@ fn floor_plan() -> (Vec<LitSegment>, Vec<(DVec2, DVec2)>) {
 #[test]
 fn each_element_carries_its_b_and_is_drawn_in_its_colour() {
     let (segments, blockers) = floor_plan();
-    let top = segments.iter().filter(|s| s.emission == 0.0).map(|s| s.value).fold(0.0, f64::max);
+    let top = segments
+        .iter()
+        .filter(|s| s.emission == 0.0)
+        .map(|s| s.value)
+        .fold(0.0, f64::max);
     let colours = Ramp { top };
     let picture = lit_svg(&LitPlan {
         title: "Two-room flat: exact solve",
@@ -97,7 +114,10 @@ fn each_element_carries_its_b_and_is_drawn_in_its_colour() {
     let mut rendered = resvg::tiny_skia::Pixmap::new(w, h).unwrap();
     resvg::render(&tree, usvg::Transform::identity(), &mut rendered.as_mut());
     assert_eq!((decoded.width(), decoded.height()), (w, h));
-    assert!(decoded.data() == rendered.data(), "the PNG is not the SVG rendered");
+    assert!(
+        decoded.data() == rendered.data(),
+        "the PNG is not the SVG rendered"
+    );
 
     // And it shows the plan in its B colours: at the middle of each long element, on its
     // front side where its stroke lies, the pixel has the element's colour.
@@ -114,7 +134,10 @@ fn each_element_carries_its_b_and_is_drawn_in_its_colour() {
         let want = colours.colour(s.value);
         let got = [pixel.red(), pixel.green(), pixel.blue()];
         let off = (0..3).map(|c| got[c].abs_diff(want[c])).max().unwrap();
-        assert!(off <= 2, "{s:?}: pixel {got:?} at {centre}, colour {want:?}");
+        assert!(
+            off <= 2,
+            "{s:?}: pixel {got:?} at {centre}, colour {want:?}"
+        );
         checked += 1;
     }
     assert!(checked > 50, "{checked} elements checked");

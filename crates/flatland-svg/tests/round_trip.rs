@@ -8,8 +8,8 @@ use flatland_svg::{ImportParams, WarningKind, import, scene_svg};
 /// f32 rounding of the scene's size (usvg keeps coordinates as f32), everything else equal.
 fn assert_round_trip(name: &str, scene: &Scene) {
     let svg = scene_svg(scene, name);
-    let drawing = import(svg.as_bytes(), &ImportParams::default())
-        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    let drawing =
+        import(svg.as_bytes(), &ImportParams::default()).unwrap_or_else(|e| panic!("{name}: {e}"));
     let (lo, hi) = scene.bounds();
     let tolerance = 2.0 * f64::from(f32::EPSILON) * lo.abs().max(hi.abs()).max_element();
     let back = drawing.scene().edges();
@@ -57,6 +57,9 @@ fn solids_are_written_as_filled_polygons_and_walls_as_faced_lines() {
     assert!(svg.contains("<title>plan &amp; &lt;co&gt;</title>"));
     // Furniture boxes are solids; the walls' faces are lines facing left.
     assert!(svg.contains("<polygon points=") && svg.contains("data-flatland-faces=\"left\""));
-    let solids = svg.lines().filter(|l| l.starts_with("<polygon") && !l.contains("fill=\"none\"")).count();
+    let solids = svg
+        .lines()
+        .filter(|l| l.starts_with("<polygon") && !l.contains("fill=\"none\""))
+        .count();
     assert!(solids > 0);
 }

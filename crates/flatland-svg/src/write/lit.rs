@@ -90,7 +90,10 @@ impl LitSvg {
     /// Where plan point `p` is drawn, in pixels (y down).
     #[must_use]
     pub fn to_pixel(&self, p: DVec2) -> DVec2 {
-        DVec2::new(self.offset.x + self.scale * p.x, self.offset.y - self.scale * p.y)
+        DVec2::new(
+            self.offset.x + self.scale * p.x,
+            self.offset.y - self.scale * p.y,
+        )
     }
 
     /// The same picture as PNG: the SVG rendered by resvg.
@@ -112,8 +115,14 @@ pub fn lit_svg(plan: &LitPlan<'_>) -> LitSvg {
     let (lo, hi) = points.fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(lo, hi), p| {
         (lo.min(p), hi.max(p))
     });
-    let (lo, hi) = if lo.cmple(hi).all() { (lo, hi) } else { (DVec2::ZERO, DVec2::ONE) };
-    let span = (hi - lo).max(DVec2::splat((hi - lo).max_element() * 1e-3)).max(DVec2::splat(1e-300));
+    let (lo, hi) = if lo.cmple(hi).all() {
+        (lo, hi)
+    } else {
+        (DVec2::ZERO, DVec2::ONE)
+    };
+    let span = (hi - lo)
+        .max(DVec2::splat((hi - lo).max_element() * 1e-3))
+        .max(DVec2::splat(1e-300));
     let scale = PLAN / span.max_element();
     let plan_size = span * scale;
     let height = (TITLE + plan_size.y + 2.0 * MARGIN).max(420.0).ceil();
@@ -131,7 +140,10 @@ pub fn lit_svg(plan: &LitPlan<'_>) -> LitSvg {
         "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{width}\" height=\"{height}\" viewBox=\"0 0 {width} {height}\" font-family=\"Ubuntu, sans-serif\">"
     );
     let _ = writeln!(out, "<title>{}</title>", escape(plan.title));
-    let _ = writeln!(out, "<rect width=\"100%\" height=\"100%\" fill=\"#ffffff\"/>");
+    let _ = writeln!(
+        out,
+        "<rect width=\"100%\" height=\"100%\" fill=\"#ffffff\"/>"
+    );
     let _ = writeln!(
         out,
         "<text x=\"{MARGIN}\" y=\"{}\" font-size=\"18\" fill=\"#000000\">{}</text>",
@@ -139,9 +151,18 @@ pub fn lit_svg(plan: &LitPlan<'_>) -> LitSvg {
         escape(plan.title)
     );
     write_plan(&mut out, plan, &picture);
-    write_bar(&mut out, plan.colours, width - PANEL + 20.0, TITLE + MARGIN, height - TITLE - 3.0 * MARGIN);
+    write_bar(
+        &mut out,
+        plan.colours,
+        width - PANEL + 20.0,
+        TITLE + MARGIN,
+        height - TITLE - 3.0 * MARGIN,
+    );
     out.push_str("</svg>\n");
-    LitSvg { svg: out, ..picture }
+    LitSvg {
+        svg: out,
+        ..picture
+    }
 }
 
 /// The segments, blockers and lights, in a group whose transform maps plan units to pixels.
@@ -157,37 +178,65 @@ fn write_plan(out: &mut String, plan: &LitPlan<'_>, picture: &LitSvg) {
         let _ = writeln!(
             out,
             "<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" stroke=\"#8c8c8c\" stroke-width=\"{}\" class=\"blocker\"/>",
-            a.x, a.y, b.x, b.y, 0.75 * width
+            a.x,
+            a.y,
+            b.x,
+            b.y,
+            0.75 * width
         );
     }
     for seg in plan.segments {
         let d = seg.b - seg.a;
-        if !(d.length() > 0.0) || !seg.a.is_finite() || !seg.b.is_finite() {
+        // A piece of no length or not finite has no front to draw on.
+        if d.length().is_nan() || d.length() <= 0.0 || !seg.a.is_finite() || !seg.b.is_finite() {
             continue;
         }
         // On its front side, so the two faces of a thin wall both show.
         let shift = DVec2::new(-d.y, d.x) / d.length() * (width / 2.0);
-        let class = if seg.emission > 0.0 { " class=\"emitter\"" } else { "" };
+        let class = if seg.emission > 0.0 {
+            " class=\"emitter\""
+        } else {
+            ""
+        };
         if seg.emission > 0.0 {
             // Emitters are brighter than the scale's top: outlined, so they show on white.
             let _ = writeln!(
                 out,
                 "<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" transform=\"translate({} {})\" stroke=\"#000000\" stroke-width=\"{}\"/>",
-                seg.a.x, seg.a.y, seg.b.x, seg.b.y, shift.x, shift.y, width + 2.0 / s
+                seg.a.x,
+                seg.a.y,
+                seg.b.x,
+                seg.b.y,
+                shift.x,
+                shift.y,
+                width + 2.0 / s
             );
         }
         let _ = writeln!(
             out,
             "<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" transform=\"translate({} {})\" stroke=\"{}\" stroke-width=\"{width}\" data-b=\"{}\" data-edge=\"{}\"{class}/>",
-            seg.a.x, seg.a.y, seg.b.x, seg.b.y, shift.x, shift.y,
-            hex(plan.colours.colour(seg.value)), seg.value, seg.edge.index()
+            seg.a.x,
+            seg.a.y,
+            seg.b.x,
+            seg.b.y,
+            shift.x,
+            shift.y,
+            hex(plan.colours.colour(seg.value)),
+            seg.value,
+            seg.edge.index()
         );
     }
     out.push_str("</g>\n");
-    // Markers in pixels, so they keep their size: one per emitting edge, at its middle.
+    write_marks(out, plan, picture);
+}
+
+/// The emitters' and point lights' marks, in pixels so they keep their size.
+fn write_marks(out: &mut String, plan: &LitPlan<'_>, picture: &LitSvg) {
+    let s = picture.scale;
+    // One per emitting edge, at its middle, in front of it.
     for (start, end, emission) in emitting_edges(plan.segments) {
         let d = end - start;
-        if !(d.length() > 0.0) {
+        if d.length().is_nan() || d.length() <= 0.0 {
             continue;
         }
         let front = DVec2::new(-d.y, d.x) / d.length();
@@ -227,7 +276,11 @@ fn write_bar(out: &mut String, colours: &dyn ColourScale, x: f64, top: f64, leng
     out.push_str("<defs><linearGradient id=\"bar\" x1=\"0\" y1=\"1\" x2=\"0\" y2=\"0\">");
     for k in 0..STOPS {
         let t = k as f64 / (STOPS - 1) as f64;
-        let _ = write!(out, "<stop offset=\"{t}\" stop-color=\"{}\"/>", hex(colours.bar(t)));
+        let _ = write!(
+            out,
+            "<stop offset=\"{t}\" stop-color=\"{}\"/>",
+            hex(colours.bar(t))
+        );
     }
     out.push_str("</linearGradient></defs>\n");
     let _ = writeln!(

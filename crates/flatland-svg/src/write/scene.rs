@@ -31,7 +31,10 @@ pub fn scene_svg(scene: &Scene, title: &str) -> String {
     let solid = without_twins(edges, &runs, solid);
     let (lo, hi) = scene.bounds();
     let margin = 0.05 * (hi - lo).max_element();
-    let (corner, size) = (svg_point(DVec2::new(lo.x, hi.y)) - margin, hi - lo + 2.0 * margin);
+    let (corner, size) = (
+        svg_point(DVec2::new(lo.x, hi.y)) - margin,
+        hi - lo + 2.0 * margin,
+    );
     let stroke = 0.004 * (hi - lo).length();
     let mut out = String::new();
     let _ = writeln!(
@@ -130,9 +133,11 @@ fn runs(edges: &[Edge]) -> Vec<std::ops::Range<usize>> {
 }
 
 fn size_of(run: &[Edge]) -> f64 {
-    let (lo, hi) = run.iter().fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(lo, hi), e| {
-        (lo.min(e.a).min(e.b), hi.max(e.a).max(e.b))
-    });
+    let (lo, hi) = run
+        .iter()
+        .fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(lo, hi), e| {
+            (lo.min(e.a).min(e.b), hi.max(e.a).max(e.b))
+        });
     (hi - lo).length()
 }
 
@@ -159,7 +164,11 @@ fn is_solid(run: &[Edge]) -> bool {
 
 /// `solid` with the runs that hold an edge lying back to back with an edge of another solid
 /// written as lines: the importer would remove such a pair as faces hidden inside the fills.
-fn without_twins(edges: &[Edge], runs: &[std::ops::Range<usize>], mut solid: Vec<bool>) -> Vec<bool> {
+fn without_twins(
+    edges: &[Edge],
+    runs: &[std::ops::Range<usize>],
+    mut solid: Vec<bool>,
+) -> Vec<bool> {
     use std::collections::HashMap;
     // On the f32 coordinates the importer sees.
     let key = |a: DVec2, b: DVec2| {
@@ -177,7 +186,9 @@ fn without_twins(edges: &[Edge], runs: &[std::ops::Range<usize>], mut solid: Vec
             continue;
         }
         for e in &edges[run.clone()] {
-            if let Some(&other) = owner.get(&key(e.b, e.a)) && other != r {
+            if let Some(&other) = owner.get(&key(e.b, e.a))
+                && other != r
+            {
                 solid[r] = false;
                 solid[other] = false;
             }
