@@ -195,3 +195,46 @@ impl fmt::Display for Skipped {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn skipped_lists_only_what_was_skipped() {
+        assert_eq!(Skipped::default().to_string(), "nothing skipped");
+        let skipped = Skipped {
+            texts: 2,
+            hidden_faces: 6,
+            ..Skipped::default()
+        };
+        assert_eq!(skipped.to_string(), "skipped: 2 text, 6 hidden face");
+    }
+
+    #[test]
+    fn a_warning_names_its_element_first() {
+        let element = ElementName {
+            tag: "polygon".into(),
+            id: Some("bow".into()),
+            nth: 1,
+            line: 3,
+        };
+        let warning = Warning {
+            element: Some(element),
+            kind: WarningKind::Crosses {
+                at: DVec2::new(1.5, -2.0),
+            },
+        };
+        let text = warning.to_string();
+        assert!(
+            text.starts_with("polygon#bow (line 3): its fill's outline crosses"),
+            "{text}"
+        );
+        assert!(text.contains("(1.500000, -2.000000)"));
+        let drawing = Warning {
+            element: None,
+            kind: WarningKind::NothingLights,
+        };
+        assert!(drawing.to_string().starts_with("nothing emits"));
+    }
+}

@@ -419,7 +419,7 @@ fn pieces() -> Vec<&'static str> {
 
 proptest! {
     // Bounded so that it runs in CI in a few seconds.
-    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 1000, ..ProptestConfig::default() })]
 
     /// Whatever is spliced together — and then cut at any byte — the importer answers with a
     /// one-line error, or a valid scene whose warnings are one line each; it never panics.
