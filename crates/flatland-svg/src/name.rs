@@ -16,10 +16,25 @@ pub struct ElementName {
     pub line: u32,
 }
 
+/// `text` with its control characters escaped (`\n` as the two characters `\` `n`): every
+/// message is one line, whatever the drawing's ids or the XML parser's words hold.
+pub fn one_line(text: &str) -> String {
+    text.chars()
+        .map(|c| {
+            if c.is_control() {
+                c.escape_default().to_string()
+            } else {
+                c.to_string()
+            }
+        })
+        .collect()
+}
+
 impl fmt::Display for ElementName {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match &self.id {
-            Some(id) => write!(f, "{}#{} (line {})", self.tag, id, self.line),
+            // An id may hold a line break (`&#10;`).
+            Some(id) => write!(f, "{}#{} (line {})", self.tag, one_line(id), self.line),
             None => write!(f, "{}[{}] (line {})", self.tag, self.nth, self.line),
         }
     }
@@ -40,5 +55,7 @@ mod tests {
         assert_eq!(name.to_string(), "path#wall-3 (line 12)");
         name.id = None;
         assert_eq!(name.to_string(), "path[4] (line 12)");
+        name.id = Some("two\nlines".into());
+        assert_eq!(name.to_string(), "path#two\\nlines (line 12)");
     }
 }

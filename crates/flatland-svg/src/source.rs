@@ -10,6 +10,7 @@ use std::collections::{HashMap, HashSet};
 use usvg::roxmltree::{Document, Node, ParsingOptions};
 
 use crate::attributes::{self, OwnAttributes};
+use crate::name::one_line;
 use crate::{ElementName, SvgError, WarningKind};
 
 /// Elements whose content is drawn only where something refers to it.
@@ -186,9 +187,11 @@ fn usable_transform(value: &str) -> bool {
 fn xml_error(e: usvg::roxmltree::Error) -> SvgError {
     let pos = e.pos();
     // roxmltree's messages hold the position ("... at 2:1 ..."); ours leads with it.
-    let message = e
-        .to_string()
-        .replace(&format!(" at {}:{}", pos.row, pos.col), "");
+    // It may also quote the character it met, a line break included.
+    let message = one_line(
+        &e.to_string()
+            .replace(&format!(" at {}:{}", pos.row, pos.col), ""),
+    );
     SvgError::Xml {
         line: pos.row,
         column: pos.col,

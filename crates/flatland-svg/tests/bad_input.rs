@@ -61,6 +61,19 @@ fn broken_documents_are_one_line_errors_with_a_position() {
             Error("3:"),
         ),
         ("binary", "\u{0}\u{1}garbage", Error("not well-formed XML")),
+        // Found by the fuzz target: roxmltree quotes the line break it met.
+        (
+            "line break quoted",
+            "<svg xmlns=\"http://www.w3.org/2000/svg\"><rect/\n></svg>",
+            Error("1:47: not well-formed XML: expected '>' not '\\n'"),
+        ),
+        (
+            "line break in an id",
+            &in_room(
+                r#"<rect id="two&#10;lines" width="5" height="5" data-flatland-reflectance="7"/>"#,
+            ),
+            Error("rect#two\\nlines (line 3): data-flatland-reflectance"),
+        ),
         (
             "not svg",
             "<html><body/></html>",
