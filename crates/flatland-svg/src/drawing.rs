@@ -235,9 +235,13 @@ impl Pending {
             | GeomError::Reflectance { edge, .. }
             | GeomError::Emission { edge, .. }
             | GeomError::TwoSidedSurface { edge } => *edge,
-            _ => 0,
+            _ => {
+                return SvgError::Scene {
+                    error: Box::new(error),
+                };
+            }
         };
-        let element = names[self.source_of.get(edge).copied().unwrap_or(0)].clone();
+        let element = names[self.source_of[edge]].clone();
         SvgError::Edge {
             element,
             error: Box::new(error),

@@ -76,6 +76,12 @@ pub enum SvgError {
         /// The scene's rule.
         error: Box<flatland_geom::GeomError>,
     },
+    /// The imported edges broke a scene rule no one edge is to blame for (should not happen).
+    #[error("the imported scene: {error}")]
+    Scene {
+        /// The scene's rule.
+        error: Box<flatland_geom::GeomError>,
+    },
     /// Reading or writing a file failed, or one of the errors above in a named file.
     #[error("{}: {error}", path.display())]
     File {
