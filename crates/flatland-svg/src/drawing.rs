@@ -3,7 +3,7 @@
 
 use std::collections::{BTreeSet, HashMap};
 
-use flatland_geom::{DVec2, Edge, EdgeId, GeomError, Scene};
+use flatland_geom::{DVec2, Edge, EdgeId, GeomError, PointLight, Scene};
 
 use crate::source::Source;
 use crate::{ElementName, Skipped, SvgError, Warning, WarningKind};
@@ -67,18 +67,31 @@ impl Drawing {
         self.skipped
     }
 
-    /// The scene to light. Refused while the drawing marks point lights, which flatland-geom
-    /// cannot hold yet.
+    /// The scene to light: the edges with the marked circles as its point lights. A light
+    /// the scene refuses (on a wall, a power that is not finite) is an error naming its circle.
     pub fn into_scene(self) -> Result<Scene, SvgError> {
-        // Point lights: once flatland-geom has them, this becomes the scene with
-        // `self.lights` as `PointLight { at, power }`.
-        if let Some(first) = self.lights.first() {
-            return Err(SvgError::PointLightsUnsupported {
-                element: first.element.clone(),
-                count: self.lights.len(),
-            });
-        }
-        Ok(self.scene)
+        let lights = self
+            .lights
+            .iter()
+            .map(|l| PointLight::new(l.at, l.power))
+            .collect();
+        self.scene.with_lights(lights).map_err(|error| {
+            let light = match &error {
+                GeomError::LightNonFinite { light, .. }
+                | GeomError::LightPower { light, .. }
+                | GeomError::LightOnEdge { light, .. } => Some(*light),
+                _ => None,
+            };
+            match light.and_then(|i| self.lights.get(i)) {
+                Some(marked) => SvgError::Light {
+                    element: marked.element.clone(),
+                    error: Box::new(error),
+                },
+                None => SvgError::Scene {
+                    error: Box::new(error),
+                },
+            }
+        })
     }
 }
 

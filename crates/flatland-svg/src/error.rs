@@ -58,15 +58,13 @@ pub enum SvgError {
         /// What was skipped, in words.
         skipped: String,
     },
-    /// The drawing marks point lights, which flatland-geom cannot hold yet.
-    #[error(
-        "{element}: point lights are not supported yet ({count} marked with class \"flatland-light\"); light the plan with an emitting element (data-flatland-emission) until they land"
-    )]
-    PointLightsUnsupported {
-        /// The first marked light.
+    /// A circle marked as a point light that the scene refuses (on a wall, a bad power).
+    #[error("{element}: {error}")]
+    Light {
+        /// The circle.
         element: ElementName,
-        /// How many lights the drawing marks.
-        count: usize,
+        /// What the scene said.
+        error: Box<flatland_geom::GeomError>,
     },
     /// An imported edge broke a scene rule (should not happen: the importer checks first).
     #[error("{element}: {error}")]

@@ -368,7 +368,7 @@ fn odd_but_valid_drawings_import() {
 }
 
 #[test]
-fn a_marked_light_is_kept_and_refused_as_a_scene_until_point_lights_land() {
+fn a_marked_light_becomes_a_point_light_and_one_on_a_wall_is_refused_naming_its_circle() {
     let svg = in_room(
         r#"<g transform="translate(50 50)"><circle id="lamp" class="lamp flatland-light" r="2" cx="10" data-flatland-power="40"/></g>"#,
     );
@@ -382,15 +382,27 @@ fn a_marked_light_is_kept_and_refused_as_a_scene_until_point_lights_land() {
     );
     // The circle is a light, not a column.
     assert_eq!(drawing.scene().edges().len(), 4);
-    let err = drawing.into_scene().unwrap_err();
-    assert!(matches!(
-        err,
-        SvgError::PointLightsUnsupported { count: 1, .. }
-    ));
-    assert!(
-        err.to_string()
-            .starts_with("circle#lamp (line 3): point lights are not supported yet")
+    let scene = drawing.into_scene().unwrap();
+    assert_eq!(scene.lights().len(), 1);
+    assert_eq!(
+        (
+            scene.lights()[0].at.x,
+            scene.lights()[0].at.y,
+            scene.lights()[0].power
+        ),
+        (60.0, -50.0, 40.0)
     );
+    // A lamp drawn on a wall: the error names the circle and the wall.
+    let svg = in_room(r#"<circle id="sconce" class="flatland-light" r="1" cx="1" cy="50"/>"#);
+    let drawing = import(svg.as_bytes(), &ImportParams::default()).unwrap();
+    let err = drawing.into_scene().unwrap_err();
+    assert!(matches!(err, SvgError::Light { .. }), "{err}");
+    let text = err.to_string();
+    assert!(
+        text.starts_with("circle#sconce (line 3): light 0"),
+        "{text}"
+    );
+    assert!(text.contains("edge"), "{text}");
 }
 
 #[test]

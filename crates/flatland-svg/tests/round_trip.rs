@@ -24,8 +24,24 @@ fn assert_round_trip(name: &str, scene: &Scene) {
             "{name}: edge {i}"
         );
     }
+    let lights = drawing
+        .clone()
+        .into_scene()
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    assert_eq!(
+        lights.lights().len(),
+        scene.lights().len(),
+        "{name}: lights"
+    );
+    for (l, m) in scene.lights().iter().zip(lights.lights()) {
+        let near = (l.at - m.at).abs().max_element() <= tolerance;
+        assert!(
+            near && l.power == m.power,
+            "{name}: light {l:?} came back as {m:?}"
+        );
+    }
     let expected = |kind: &WarningKind| match kind {
-        WarningKind::NothingLights => scene.max_emission() == 0.0,
+        WarningKind::NothingLights => !scene.is_lit(),
         WarningKind::Overlaps { .. } => !scene.overlapping_surface_edges().is_empty(),
         _ => false,
     };
@@ -48,6 +64,9 @@ fn generated_plans_and_halls_come_back() {
         assert_round_trip("hall", &generate::hall(300, seed).unwrap());
     }
     assert_round_trip("large floor plan", &generate::floor_plan(5000, 7).unwrap());
+    // Lit by lamps instead of emitters: the lights come back with their power.
+    assert_round_trip("lit plan", &generate::floor_plan_lit(400, 3).unwrap());
+    assert_round_trip("lit hall", &generate::hall_lit(300, 4).unwrap());
 }
 
 #[test]

@@ -7,7 +7,8 @@
 //! its edges face out) is a filled `<polygon>`; every other run is a `<polyline>` (or a
 //! `<polygon>` when closed) with `fill="none"` and `data-flatland-faces="left"`, so each piece
 //! is one edge facing as it did. Blockers carry `data-flatland-role="blocker"` and faces `both`
-//! when two-sided. Every element carries its reflectance, and its emission when not 0.
+//! when two-sided. Every element carries its reflectance, and its emission when not 0. Point
+//! lights are circles of class `flatland-light` with their power.
 
 use std::fmt::Write as _;
 
@@ -66,7 +67,20 @@ pub fn scene_svg(scene: &Scene, title: &str) -> String {
             write_run(&mut out, run, is_solid);
         }
     }
-    out.push_str("</g>\n</svg>\n");
+    out.push_str("</g>\n");
+    // Point lights: marked circles (their radius only draws them).
+    for light in scene.lights() {
+        let p = svg_point(light.at);
+        let _ = writeln!(
+            out,
+            "<circle class=\"flatland-light\" cx=\"{}\" cy=\"{}\" r=\"{}\" fill=\"#f5b800\" data-flatland-power=\"{}\"/>",
+            p.x,
+            p.y,
+            3.0 * stroke,
+            light.power
+        );
+    }
+    out.push_str("</svg>\n");
     out
 }
 
