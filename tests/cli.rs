@@ -1388,3 +1388,65 @@ fn bench_scaling_writes_its_tables_with_the_heap_peak_of_every_method() {
     ]);
     assert_one_line_error(&out, &["--scaling", "--scene"]);
 }
+
+/// An SVG drawing is a scene in every command: `scene --from-svg` converts it once to the same
+/// scene the commands import, `check` and `solve` read it directly (its skipped text on
+/// stderr), and `--unit` scales it.
+#[test]
+fn an_svg_drawing_converts_checks_and_lights() {
+    let dir = temp_dir("svg");
+    let drawing = root().join("scenes/svg/floorplan.svg");
+    let json = dir.join("plan.json");
+    let out = flatland(&[
+        "scene",
+        "--from-svg",
+        as_str(&drawing),
+        "--out",
+        as_str(&json),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("text is not geometry"),
+        "{}",
+        stderr(&out)
+    );
+    let converted = Scene::load(&json).unwrap();
+    let out = flatland(&["check", "--scene", as_str(&drawing)]);
+    let edges = format!("edges: {} ", converted.edges().len());
+    assert!(stdout(&out).contains(&edges), "{}", stdout(&out));
+    let direct = solve_json(&["--scene", as_str(&drawing)]);
+    let from_json = solve_json(&["--scene", as_str(&json)]);
+    for field in ["elements", "rel_l2_b", "rel_l2_reflected", "iterations"] {
+        assert_eq!(direct[field], from_json[field], "{field}");
+    }
+    let halved = solve_json(&["--scene", as_str(&drawing), "--unit", "0.5"]);
+    assert!(halved["rel_l2_reflected"].as_f64().unwrap().is_finite());
+    // A scene file is not a drawing: --unit is refused naming the file.
+    let out = flatland(&["check", "--scene", as_str(&json), "--unit", "2"]);
+    assert_one_line_error(&out, &["--unit", "plan.json"]);
+}
+
+/// `scene --lamps` lights a generated plan by point lights, no edge emitting, and the file
+/// keeps them.
+#[test]
+fn a_plan_lit_by_lamps_keeps_its_point_lights() {
+    let dir = temp_dir("lamps");
+    let plan = dir.join("lit.json");
+    let out = flatland(&[
+        "scene",
+        "floorplan",
+        "--lamps",
+        "--size",
+        "200",
+        "--seed",
+        "4",
+        "--out",
+        as_str(&plan),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let scene = Scene::load(&plan).unwrap();
+    assert!(!scene.lights().is_empty());
+    assert!(scene.edges().iter().all(|e| e.emission == 0.0));
+    let json = solve_json(&["--scene", as_str(&plan), "--elements", "2048"]);
+    assert!(json["rel_l2_b"].as_f64().unwrap() < 0.2, "{json}");
+}

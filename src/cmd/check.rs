@@ -1,7 +1,5 @@
 //! `flatland check`: validate a scene file and print a summary.
 
-use std::path::PathBuf;
-
 use flatland_geom::{Kernel, PairClass, Role, Scene};
 
 /// Pairs listed one by one at most; larger scenes print counts only.
@@ -15,20 +13,13 @@ const MAX_CLASSIFIED: usize = 512;
 /// Arguments of `flatland check`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Scene file (.ron or .json). Default: the bundled `fig3` scene.
-    #[arg(long, value_name = "FILE")]
-    pub scene: Option<PathBuf>,
+    #[command(flatten)]
+    pub scene: super::SceneArgs,
 }
 
 /// Loads and validates the scene, then prints the summary to stdout.
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    let (scene, label) = match &args.scene {
-        Some(path) => (Scene::load(path)?, path.display().to_string()),
-        None => (
-            flatland_geom::bundled::scene(flatland_geom::bundled::DEFAULT)?,
-            "fig3 (bundled)".to_owned(),
-        ),
-    };
+    let (scene, label) = args.scene.load()?;
     print!("{}", summary(&label, &scene));
     Ok(())
 }

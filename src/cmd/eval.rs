@@ -41,7 +41,7 @@ pub fn run(args: &Args) -> Result<()> {
     let file = ModelFile::load(&args.model)?;
     let scene: Scene = match &args.scene {
         Some(path) => {
-            let mut scene = Scene::load(path)?;
+            let mut scene = super::scene_file(path)?;
             if args.subdivide != 1 {
                 scene = super::subdivide(&scene, args.subdivide)?;
             }

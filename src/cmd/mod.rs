@@ -24,9 +24,17 @@ pub mod view;
 /// The scene a command works on: a file, or the bundled default, optionally subdivided.
 #[derive(clap::Args, Debug, Clone)]
 pub struct SceneArgs {
-    /// Scene file (.ron or .json). Default: the bundled `fig3` scene.
+    /// Scene file: .ron, .json, or an .svg drawing (imported: docs/SVG.md). Default: the
+    /// bundled `fig3` scene.
     #[arg(long, value_name = "FILE")]
     pub scene: Option<PathBuf>,
+    /// An SVG scene's curves become segments no farther than this from them, in drawing units
+    /// (default: a thousandth of the drawing's diagonal).
+    #[arg(long, value_name = "T")]
+    pub flatten: Option<f64>,
+    /// Scene units per SVG drawing unit (0.001 reads a drawing in millimetres as metres).
+    #[arg(long, value_name = "U")]
+    pub unit: Option<f64>,
     /// Split every surface edge into M equal edges (the kernel over (s, t) does not change);
     /// at most 1 000 000 edges in all.
     #[arg(long, value_name = "M", default_value_t = 1)]
@@ -38,7 +46,15 @@ impl SceneArgs {
     /// stderr about overlapping surface edges.
     pub fn load(&self) -> Result<(Scene, String)> {
         let (scene, mut label) = match &self.scene {
-            Some(path) => (Scene::load(path)?, path.display().to_string()),
+            Some(path) if is_svg(path) => (self.import(path)?, path.display().to_string()),
+            Some(path) => {
+                anyhow::ensure!(
+                    self.flatten.is_none() && self.unit.is_none(),
+                    "--flatten and --unit apply to SVG drawings, and {} is not one",
+                    path.display()
+                );
+                (Scene::load(path)?, path.display().to_string())
+            }
             None => (
                 flatland_geom::bundled::scene(flatland_geom::bundled::DEFAULT)
                     .context("the bundled fig3 scene")?,
@@ -67,6 +83,20 @@ impl SceneArgs {
         Ok((scene, label))
     }
 
+    /// An SVG drawing as a scene; its warnings on stderr, a few of each kind.
+    fn import(&self, path: &Path) -> Result<Scene> {
+        let params = flatland_svg::ImportParams {
+            flatten: self.flatten,
+            unit: self.unit.unwrap_or(1.0),
+            ..flatland_svg::ImportParams::default()
+        };
+        let drawing = flatland_svg::import_file(path, &params)?;
+        print_warnings(path, drawing.warnings());
+        Ok(drawing
+            .into_scene()
+            .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?)
+    }
+
     /// The input file, if any (outputs must never overwrite it).
     pub fn path(&self) -> Option<&Path> {
         self.scene.as_deref()
@@ -76,6 +106,50 @@ impl SceneArgs {
     pub fn kernel(&self) -> Result<(Kernel, String)> {
         let (scene, label) = self.load()?;
         Ok((Kernel::new(scene), label))
+    }
+}
+
+/// A scene file as it is: .ron, .json, or an SVG drawing imported with default settings.
+pub fn scene_file(path: &Path) -> Result<Scene> {
+    let args = SceneArgs {
+        scene: Some(path.to_owned()),
+        flatten: None,
+        unit: None,
+        subdivide: 1,
+    };
+    Ok(args.load()?.0)
+}
+
+/// Whether `path` names an SVG drawing (by its extension, in any case).
+pub fn is_svg(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("svg"))
+}
+
+/// Most warnings of one kind printed for a drawing; the rest are counted.
+const WARNINGS_PER_KIND: usize = 3;
+
+/// An import's warnings on stderr, one line each, at most [`WARNINGS_PER_KIND`] of a kind.
+fn print_warnings(path: &Path, warnings: &[flatland_svg::Warning]) {
+    let mut seen = std::collections::HashMap::new();
+    for w in warnings {
+        let count = seen
+            .entry(std::mem::discriminant(&w.kind))
+            .or_insert(0usize);
+        *count += 1;
+        if *count <= WARNINGS_PER_KIND {
+            eprintln!("warning: {}: {w}", path.display());
+        }
+    }
+    let hidden: usize = seen
+        .values()
+        .map(|n| n.saturating_sub(WARNINGS_PER_KIND))
+        .sum();
+    if hidden > 0 {
+        eprintln!(
+            "warning: {}: {hidden} more warnings like these",
+            path.display()
+        );
     }
 }
 
