@@ -92,9 +92,9 @@ impl SceneArgs {
         };
         let drawing = flatland_svg::import_file(path, &params)?;
         print_warnings(path, drawing.warnings());
-        Ok(drawing
+        drawing
             .into_scene()
-            .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
     }
 
     /// The input file, if any (outputs must never overwrite it).
