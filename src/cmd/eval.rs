@@ -69,7 +69,7 @@ pub fn run(args: &Args) -> Result<()> {
         args.model.display(),
         r = args.res
     );
-    let map = flatland_lab::report::grid::heatmap(
+    let map = flatland_pictures::plot::heatmap(
         title,
         "learned ζ",
         kernel.scene(),

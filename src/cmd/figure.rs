@@ -8,8 +8,9 @@ use anyhow::Result;
 use kernel_fit::{Fit, FitParams};
 
 use super::SceneArgs;
-use flatland_lab::report::figure::{PANELS, panels};
+use flatland_lab::report::figure::panels;
 use flatland_lab::{interrupt, output};
+use flatland_pictures::figure::PANELS;
 
 /// Arguments of `flatland figure`.
 #[derive(clap::Args, Debug)]

@@ -6,9 +6,10 @@ use flatland_geom::Kernel;
 use rayon::prelude::*;
 
 use super::SceneArgs;
-use flatland_lab::colormap::Scale;
-use flatland_lab::report::grid::{heatmap, output_of, write_grid};
+use flatland_lab::report::grid::{output_of, write_grid};
 use flatland_lab::{interrupt, output};
+use flatland_pictures::colormap::Scale;
+use flatland_pictures::plot::heatmap;
 
 /// Arguments of `flatland kernel`.
 #[derive(clap::Args, Debug)]

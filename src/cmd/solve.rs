@@ -143,7 +143,7 @@ fn light(args: &Args, lit: &LitScene, stop: &Stop) -> Result<Lit> {
 /// The lit scene beside B(s) against the exact solution, as a PNG.
 fn picture(path: &Path, lit: &LitScene, label: &str, kernel: &str, lighting: &Lit) -> Result<()> {
     let c = &lighting.comparison;
-    let picture = flatland_lab::report::lit::Picture {
+    let picture = flatland_pictures::lit::Picture {
         scene: lit.kernel().scene(),
         label,
         kernel,
@@ -152,5 +152,6 @@ fn picture(path: &Path, lit: &LitScene, label: &str, kernel: &str, lighting: &Li
         reference: lit.reference(),
         rel_l2_reflected: c.errors.rel_l2_reflected,
     };
-    flatland_lab::report::lit::lit_scene_png(path, &picture)
+    let png = flatland_pictures::lit::lit_scene_png(&picture)?;
+    interrupt::writing(|| write_atomic(path, &png))
 }

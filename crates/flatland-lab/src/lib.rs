@@ -6,9 +6,10 @@
 //!   ([`bench`](mod@bench)), the learner's ideas on and off ([`ablation`]), random validation
 //!   rooms ([`rooms`]), the adversarial stability suite ([`stress`]), and RESULTS.md with its
 //!   plots, all of them run and rendered ([`results`]).
-//! - The pictures and tables: the one colour map and scale rule of every picture, CLI and viewer
-//!   ([`colormap`]); log–log charts and heatmaps ([`plot`]); the bench's CSV, plots and tables,
-//!   the Fig. 3 panels, grid images and the lit scene ([`report`]).
+//! - The outputs: the bench's CSV, plots and tables, the Fig. 3 panels of a fit, grids as CSV or
+//!   heatmaps ([`report`]). The pictures themselves (the colour map, charts, heatmaps, the lit
+//!   scene) are drawn by `flatland_pictures`, below this crate; here they get their data and are
+//!   written where they go.
 //! - What every command shares with the experiments: the one reference rule and when an error is
 //!   defined ([`reference()`], [`Defined`]), Ctrl-C that keeps what is done ([`interrupt`]), the
 //!   rule for output paths ([`output`]), and the process's peak memory ([`memory`]).
@@ -34,13 +35,11 @@
 
 pub mod ablation;
 pub mod bench;
-pub mod colormap;
 mod error;
 pub mod interrupt;
 mod measure;
 pub mod memory;
 pub mod output;
-pub mod plot;
 pub mod report;
 pub mod results;
 pub mod rooms;

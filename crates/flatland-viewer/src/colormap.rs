@@ -1,10 +1,10 @@
 //! Value → colour on screen: the project's one colour map and scale rule
-//! ([`flatland_lab::colormap`], the same as the CLI's pictures) as egui colours, and the images
-//! built from grids and sample points. Pure functions, so they are cheap to test and run only
-//! when the data they show has changed.
+//! ([`flatland_pictures::colormap`], the same as the CLI's pictures) as egui colours, and the
+//! images built from grids and sample points. Pure functions, so they are cheap to test and run
+//! only when the data they show has changed.
 
 use egui::{Color32, ColorImage};
-use flatland_lab::colormap::{Scale, inferno};
+use flatland_pictures::colormap::{Scale, inferno};
 
 /// The colour of `x ∈ [0, 1]` (clamped; NaN is 0): the heatmaps' and the lit scene's.
 #[must_use]

@@ -5,6 +5,8 @@
 //! scrub back through the run afterwards.
 //!
 //! An eframe (glow) desktop app on top of [`kernel_fit`]; the library crates never depend on it.
+//! Its colours are the project's one colour map and scale rule ([`flatland_pictures::colormap`]),
+//! so a plot here looks like the CLI's picture of the same grid.
 //!
 //! - **Kernel plot**: the exact `ζ(s, t)` as a heatmap (`t`, the receiver, to the right; `s`,
 //!   the sender, upwards; linear or log colour scale), the surface edges' boundaries on both

@@ -154,7 +154,7 @@ pub struct LitPoint {
 /// nothing is lit; never 0.
 #[must_use]
 pub fn colour_top(mesh: &Mesh, b: &[f64]) -> f64 {
-    flatland_lab::colormap::radiosity_top(mesh, b)
+    flatland_pictures::colormap::radiosity_top(mesh, b)
 }
 
 #[cfg(test)]

@@ -8,9 +8,9 @@ use std::sync::Arc;
 
 use crate::bench::{BenchPlan, BenchRow, Method, run_bench};
 use anyhow::Result;
+use flatland_pictures::plot::{Series, log_log};
 use flatland_solve::Reference;
 
-use crate::plot::{Series, log_log};
 use crate::{Defined, error_text, interrupt};
 
 /// Files `flatland bench` writes into its folder.
@@ -121,13 +121,8 @@ pub fn write_outputs(dir: &Path, scene: &str, rows: &[BenchRow], defined: Define
     for (file, x_label, x) in axes {
         let series = series(rows, x, |r| Some(r.errors.heldout));
         let title = format!("{scene}: relative L2 (held out) vs {x_label}");
-        log_log(
-            &dir.join(file),
-            &title,
-            x_label,
-            "relative L2 error (held out)",
-            &series,
-        )?;
+        let png = log_log(&title, x_label, "relative L2 error (held out)", &series)?;
+        interrupt::writing(|| flatland_geom::write_atomic(&dir.join(file), &png))?;
     }
     if rows.iter().any(|r| r.solve.is_some()) {
         let solved: [(&str, &str, XAxis); 2] = [
@@ -139,13 +134,8 @@ pub fn write_outputs(dir: &Path, scene: &str, rows: &[BenchRow], defined: Define
         for (file, x_label, x) in solved {
             let series = series(rows, x, |r| r.solve.map(|e| e.rel_l2_reflected));
             let title = format!("{scene}: solved radiosity, reflected part, vs {x_label}");
-            log_log(
-                &dir.join(file),
-                &title,
-                x_label,
-                "relative L2 error of B − E",
-                &series,
-            )?;
+            let png = log_log(&title, x_label, "relative L2 error of B − E", &series)?;
+            interrupt::writing(|| flatland_geom::write_atomic(&dir.join(file), &png))?;
         }
     }
     Ok(())

@@ -1,14 +1,13 @@
-//! A grid of values written as CSV or as a PNG heatmap, chosen by the file name: what
-//! `flatland kernel` and `flatland eval` write.
+//! A grid of values written as CSV or as a PNG heatmap ([`flatland_pictures::plot::heatmap_png`]),
+//! chosen by the file name: what `flatland kernel` and `flatland eval` write.
 
 use std::path::Path;
 
-use crate::colormap::Scale;
 use anyhow::{Context, bail};
 use flatland_geom::write_atomic;
+use flatland_pictures::plot::{Heatmap, heatmap_png};
 
 use crate::interrupt;
-use crate::plot::{Heatmap, heatmap_png};
 
 /// The output formats.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -33,24 +32,6 @@ pub fn output_of(path: &Path) -> anyhow::Result<Output> {
             "{}: unknown output format (expected a .csv or .png file name)",
             path.display()
         ),
-    }
-}
-
-/// A heatmap of `grid` over `scene`, scaled by the project's one rule ([`Scale::fit`]).
-pub fn heatmap<'a>(
-    title: String,
-    quantity: &'a str,
-    scene: &'a flatland_geom::Scene,
-    grid: &[f64],
-    log: bool,
-) -> Heatmap<'a> {
-    Heatmap {
-        title,
-        quantity,
-        scene,
-        log,
-        top: Scale::fit(grid, log).top,
-        overlay: None,
     }
 }
 

@@ -6,8 +6,8 @@ use std::path::Path;
 
 use anyhow::Result;
 use flatland_geom::write_atomic;
+use flatland_pictures::plot::{Series, log_log};
 
-use crate::plot::{Series, log_log};
 use crate::scaling::{Scaling, ScalingRow, kind_name, slopes};
 
 /// The rows so far, rewritten after each (removed once the results are written).
@@ -208,7 +208,8 @@ pub fn write_plots(dir: &Path, all: &Scaling) -> Result<()> {
             s.points.sort_by(|a, b| a.0.total_cmp(&b.0));
         }
         if !series.is_empty() {
-            log_log(&dir.join(file), title, "edges", y_label, &series)?;
+            let png = log_log(title, "edges", y_label, &series)?;
+            crate::interrupt::writing(|| write_atomic(&dir.join(file), &png))?;
         }
     }
     Ok(())

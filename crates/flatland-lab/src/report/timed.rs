@@ -8,8 +8,9 @@ use std::path::Path;
 
 use anyhow::Result;
 
+use flatland_pictures::plot::{Series, log_log};
+
 use crate::interrupt;
-use crate::plot::{Series, log_log};
 use crate::timed::relight::{RelightRow, summaries};
 use crate::timed::{Method, TimedRow};
 
@@ -167,13 +168,8 @@ pub fn write_plots(dir: &Path, scene: &str, rows: &[TimedRow]) -> Result<()> {
     for (file, x_label, x) in solved {
         let title = format!("{scene}: solved radiosity, reflected part, vs {x_label}");
         let series = series(rows, x, TimedRow::reflected_error);
-        log_log(
-            &dir.join(file),
-            &title,
-            x_label,
-            "relative L2 error of B − E",
-            &series,
-        )?;
+        let png = log_log(&title, x_label, "relative L2 error of B − E", &series)?;
+        interrupt::writing(|| flatland_geom::write_atomic(&dir.join(file), &png))?;
     }
     let zeta = series(
         rows,
@@ -181,13 +177,13 @@ pub fn write_plots(dir: &Path, scene: &str, rows: &[TimedRow]) -> Result<()> {
         |r| r.zeta_error,
     );
     if zeta.iter().any(|s| !s.points.is_empty()) {
-        log_log(
-            &dir.join("zeta_vs_basis.png"),
+        let png = log_log(
             &format!("{scene}: relative L2 of ζ̃ (held out) vs basis functions"),
             "basis functions",
             "relative L2 error (held out)",
             &zeta,
         )?;
+        interrupt::writing(|| flatland_geom::write_atomic(&dir.join("zeta_vs_basis.png"), &png))?;
     }
     Ok(())
 }

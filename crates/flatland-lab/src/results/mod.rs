@@ -12,11 +12,11 @@ use std::time::Instant;
 
 use anyhow::Result;
 use flatland_geom::{Kernel, Scene};
+use flatland_pictures::figure::PANELS;
 use flatland_solve::Reference;
 use kernel_fit::Preset;
 
 use crate::report::bench::{OUTPUTS, write_outputs};
-use crate::report::figure::PANELS;
 use crate::{interrupt, output};
 use experiments::{Ablation, Density, SceneBench, Subdivision, ThetaRow, fit, preset_params};
 

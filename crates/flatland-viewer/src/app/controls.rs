@@ -305,7 +305,7 @@ impl ViewerApp {
             &mut self.settings.log_scale,
             format!(
                 "log colour scale ({} decades)",
-                flatland_lab::colormap::LOG_DECADES
+                flatland_pictures::colormap::LOG_DECADES
             ),
         );
         ui.checkbox(

@@ -8,7 +8,7 @@
 use std::sync::Arc;
 
 use egui::{ColorImage, TextureHandle, TextureId, TextureOptions};
-use flatland_lab::colormap::Scale;
+use flatland_pictures::colormap::Scale;
 
 use super::Shown;
 use crate::colormap::{grid_image, samples_image};

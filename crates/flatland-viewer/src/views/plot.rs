@@ -8,7 +8,7 @@ use egui::{
     epaint::TextShape, pos2, vec2,
 };
 use flatland_geom::Scene;
-use flatland_lab::colormap::Scale;
+use flatland_pictures::colormap::Scale;
 
 use super::widgets::{gradient, short, uv};
 use super::{CELL, CRITICAL, FACE_VISIBLE, NET_EDGE, NEW_CELL, SCENE_MARK, SEEN, TITLE_H};
@@ -321,7 +321,7 @@ fn scale_bar(painter: &Painter, frame: &PlotFrame, scale: Scale, text: Color32) 
         text,
     );
     let ticks: Vec<f64> = if scale.log {
-        let decades = flatland_lab::colormap::LOG_DECADES;
+        let decades = flatland_pictures::colormap::LOG_DECADES;
         (0..=decades as usize).map(|d| d as f64 / decades).collect()
     } else {
         vec![0.0, 0.5, 1.0]

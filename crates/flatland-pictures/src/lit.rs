@@ -1,14 +1,12 @@
 //! The picture of `flatland solve`: the scene lit by a solved radiosity (each element in the
 //! colour of its B, emitters marked, a colour bar) beside B(s) against the exact solution.
 
-use std::path::Path;
-
-use anyhow::{Result, anyhow};
 use flatland_geom::{Role, Scene};
 use flatland_solve::{ExactReference, Mesh};
 use plotters::prelude::*;
 
-use crate::plot::{register_font, write_rgb_png};
+use crate::PictureError;
+use crate::plot::{encode_png, register_font};
 
 /// What the PNG shows.
 pub struct Picture<'a> {
@@ -37,19 +35,19 @@ fn inferno(x: f64) -> RGBColor {
     RGBColor(r, g, b)
 }
 
-/// Draws `p` and writes it to `path` as a PNG (atomically, under Ctrl-C protection).
-pub fn lit_scene_png(path: &Path, p: &Picture<'_>) -> Result<()> {
+/// The picture `p`, PNG-encoded.
+pub fn lit_scene_png(p: &Picture<'_>) -> Result<Vec<u8>, PictureError> {
     register_font();
     let mut rgb = vec![255u8; (WIDTH * HEIGHT * 3) as usize];
     {
         let root = BitMapBackend::with_buffer(&mut rgb, (WIDTH, HEIGHT)).into_drawing_area();
         let (left, right) = root.split_horizontally(SCENE_WIDTH);
-        draw_scene(&left, p).map_err(|e| anyhow!("drawing the lit scene: {e}"))?;
-        draw_curves(&right, p).map_err(|e| anyhow!("drawing B(s): {e}"))?;
+        draw_scene(&left, p).map_err(PictureError::draw("the lit scene"))?;
+        draw_curves(&right, p).map_err(PictureError::draw("B(s)"))?;
         root.present()
-            .map_err(|e| anyhow!("drawing {}: {e}", path.display()))?;
+            .map_err(PictureError::draw("the lit scene's picture"))?;
     }
-    write_rgb_png(path, &rgb, WIDTH, HEIGHT)
+    encode_png(&rgb, WIDTH, HEIGHT)
 }
 
 type Area<'a> = DrawingArea<BitMapBackend<'a>, plotters::coord::Shift>;
@@ -101,7 +99,11 @@ fn draw_scene(area: &Area<'_>, p: &Picture<'_>) -> DrawResult {
             ("sans-serif", 16).into_font(),
         )])?;
     }
-    // The colour bar: 0 at the bottom, the brightest non-emitter at the top.
+    draw_colour_bar(&bar, top)
+}
+
+/// The lit scene's colour bar: 0 at the bottom, `top` (the brightest non-emitter) at the top.
+fn draw_colour_bar(bar: &Area<'_>, top: f64) -> DrawResult {
     let (_, h) = bar.dim_in_pixel();
     let (x0, y0, bar_h) = (20_i32, (h as i32) / 5, (h as i32) * 3 / 5);
     for k in 0..bar_h {
@@ -282,4 +284,49 @@ fn draw_legend<'a>(
         .label_font(("sans-serif", 15))
         .draw()?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::colormap::inferno;
+    use flatland_geom::Kernel;
+    use flatland_solve::{SolveParams, never};
+
+    /// The exact solve of fig3 drawn against itself: the picture's size, the colour bar from
+    /// the bottom colour to the top one, and both curves of B(s) drawn.
+    #[test]
+    fn the_lit_scene_has_a_colour_bar_and_both_curves() {
+        let kernel = Kernel::new(flatland_geom::bundled::scene("fig3").unwrap());
+        let params = SolveParams::default();
+        let reference = ExactReference::new(&kernel, 128, &params, &never).unwrap();
+        let mesh = Mesh::new(&kernel, 64).unwrap();
+        let b = reference.radiosity_on(&mesh, &never).unwrap();
+        let png = lit_scene_png(&Picture {
+            scene: kernel.scene(),
+            label: "fig3",
+            kernel: "exact",
+            mesh: &mesh,
+            b: &b,
+            reference: &reference,
+            rel_l2_reflected: 0.0,
+        })
+        .unwrap();
+        let image = image::load_from_memory(&png).unwrap().to_rgb8();
+        assert_eq!(image.dimensions(), (WIDTH, HEIGHT));
+        let at = |x: u32, y: u32| image.get_pixel(x, y).0;
+        // The bar: 24 pixels wide, 20 right of the scene's plot, from a fifth of the height
+        // over three fifths of it, row k in the colour of 1 − k / (rows − 1), in a frame.
+        let (x, y0, rows) = (SCENE_WIDTH - 110 + 32, HEIGHT / 5, HEIGHT * 3 / 5);
+        let colour_of_row = |k: u32| inferno(1.0 - f64::from(k) / f64::from(rows - 1));
+        for k in 1..rows {
+            assert_eq!(at(x, y0 + k), colour_of_row(k), "the bar's row {k}");
+        }
+        assert_eq!(at(x, y0 + 1), inferno(1.0 - 1.0 / f64::from(rows - 1)));
+        assert_eq!(at(x, y0 + rows - 1), inferno(0.0));
+        let right =
+            |colour: [u8; 3]| (SCENE_WIDTH..WIDTH).any(|x| (0..HEIGHT).any(|y| at(x, y) == colour));
+        assert!(right([220, 80, 30]), "the solution's steps");
+        assert!(right([0, 0, 0]), "the exact curve");
+    }
 }

@@ -1,13 +1,14 @@
 //! Log–log line charts as PNG: one line per series, a band from the min to the max over seeds.
+//! Heatmaps of `(s, t)` are drawn by [`heatmap_png`]; both use the one font of every picture.
 
-use std::path::Path;
 use std::sync::Once;
 
-use anyhow::{Context, Result, anyhow};
-use plotters::coord::combinators::BindKeyPoints;
+use plotters::coord::combinators::{BindKeyPoints, LogCoord, WithKeyPoints};
 use plotters::prelude::*;
 
-pub use heatmap::{Heatmap, Overlay, heatmap_png};
+use crate::PictureError;
+
+pub use heatmap::{Heatmap, Overlay, heatmap, heatmap_png};
 
 mod heatmap;
 
@@ -39,7 +40,7 @@ const PALETTE: [RGBColor; 12] = [
 ];
 
 /// Registers the one font every picture uses (once per process; later calls do nothing).
-pub fn register_font() {
+pub(crate) fn register_font() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
         // egui's bundled Ubuntu-Light: no system font lookup, the same text on every machine.
@@ -52,7 +53,7 @@ pub fn register_font() {
 }
 
 /// A number with at most three significant digits, trailing zeros trimmed: `0.5`, `20`, `1e-5`.
-pub fn short_number(v: f64) -> String {
+pub(crate) fn short_number(v: f64) -> String {
     let a = v.abs();
     if a == 0.0 {
         return "0".to_owned();
@@ -73,7 +74,7 @@ pub fn short_number(v: f64) -> String {
 /// Labelled (bold) and unlabelled (light) ticks of a log axis over `[lo, hi]`: 1, 2, 5 × 10ᵏ
 /// when that gives at least three labels in the range, every 1 … 9 × 10ᵏ when the range is
 /// narrower, whole decades (thinned to at most eight) when it is wide.
-pub fn log_ticks(lo: f64, hi: f64) -> (Vec<f64>, Vec<f64>) {
+pub(crate) fn log_ticks(lo: f64, hi: f64) -> (Vec<f64>, Vec<f64>) {
     if !(lo > 0.0 && hi > lo && hi.is_finite()) {
         return (Vec::new(), Vec::new());
     }
@@ -148,24 +149,21 @@ fn log_axes(title: &str, series: &[Series]) -> ((f64, f64), (f64, f64), String) 
     ((x0, x1), (y0, y1), title)
 }
 
-/// Draws a log–log chart of `series` to a PNG at `path` (atomically).
+/// A log–log chart of `series`, PNG-encoded.
 pub fn log_log(
-    path: &Path,
     title: &str,
     x_label: &str,
     y_label: &str,
     series: &[Series],
-) -> Result<()> {
+) -> Result<Vec<u8>, PictureError> {
     register_font();
     let ((x0, x1), (y0, y1), title) = log_axes(title, series);
-    let at_floor = |v: f64, floor: f64| if positive(v) { v } else { floor * 1.15 };
     let title = title.as_str();
-    let finite = |v: f64| v.is_finite();
 
     let mut buffer = vec![0u8; (WIDTH * HEIGHT * 3) as usize];
     {
         let root = BitMapBackend::with_buffer(&mut buffer, (WIDTH, HEIGHT)).into_drawing_area();
-        let err = |e| anyhow!("drawing the plot: {e}");
+        let err = PictureError::draw("the plot");
         root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
         let mut chart = ChartBuilder::on(&root)
             .caption(title, ("sans-serif", 22))
@@ -184,46 +182,7 @@ pub fn log_log(
             .draw()
             .map_err(|e| err(e.to_string()))?;
         for (i, s) in series.iter().enumerate() {
-            let color = PALETTE[i % PALETTE.len()];
-            let pts: Vec<_> = s
-                .points
-                .iter()
-                .filter(|p| finite(p.0) && finite(p.1))
-                .map(|p| {
-                    (
-                        at_floor(p.0, x0),
-                        at_floor(p.1, y0),
-                        at_floor(p.2, y0),
-                        at_floor(p.3, y0),
-                    )
-                })
-                .collect();
-            for p in &pts {
-                if finite(p.2) && finite(p.3) && p.3 > p.2 {
-                    chart
-                        .draw_series(LineSeries::new(
-                            [(p.0, p.2), (p.0, p.3)],
-                            color.stroke_width(2),
-                        ))
-                        .map_err(|e| err(e.to_string()))?;
-                }
-            }
-            chart
-                .draw_series(LineSeries::new(
-                    pts.iter().map(|p| (p.0, p.1)),
-                    color.stroke_width(2),
-                ))
-                .map_err(|e| err(e.to_string()))?
-                .label(s.label.clone())
-                .legend(move |(x, y)| {
-                    PathElement::new([(x, y), (x + 20, y)], color.stroke_width(3))
-                });
-            chart
-                .draw_series(
-                    pts.iter()
-                        .map(|p| Circle::new((p.0, p.1), 4, color.filled())),
-                )
-                .map_err(|e| err(e.to_string()))?;
+            draw_one(&mut chart, s, PALETTE[i % PALETTE.len()], (x0, y0))?;
         }
         chart
             .configure_series_labels()
@@ -235,7 +194,63 @@ pub fn log_log(
             .map_err(|e| err(e.to_string()))?;
         root.present().map_err(|e| err(e.to_string()))?;
     }
-    write_rgb_png(path, &buffer, WIDTH, HEIGHT)
+    encode_png(&buffer, WIDTH, HEIGHT)
+}
+
+/// A log axis with chosen ticks ([`log_axis`]).
+type LogAxis = WithKeyPoints<LogCoord<f64>>;
+/// A log–log chart being drawn.
+type LogLogChart<'a> = ChartContext<'a, BitMapBackend<'a>, Cartesian2d<LogAxis, LogAxis>>;
+
+/// One series of [`log_log`] in `color`: its min–max bands, its line (with a legend entry) and
+/// its points; zeros at the axes' lower ends `(x0, y0)`.
+fn draw_one(
+    chart: &mut LogLogChart<'_>,
+    s: &Series,
+    color: RGBColor,
+    (x0, y0): (f64, f64),
+) -> Result<(), PictureError> {
+    let err = PictureError::draw("the plot");
+    let at_floor = |v: f64, floor: f64| if positive(v) { v } else { floor * 1.15 };
+    let finite = |v: f64| v.is_finite();
+    let pts: Vec<_> = s
+        .points
+        .iter()
+        .filter(|p| finite(p.0) && finite(p.1))
+        .map(|p| {
+            (
+                at_floor(p.0, x0),
+                at_floor(p.1, y0),
+                at_floor(p.2, y0),
+                at_floor(p.3, y0),
+            )
+        })
+        .collect();
+    for p in &pts {
+        if finite(p.2) && finite(p.3) && p.3 > p.2 {
+            chart
+                .draw_series(LineSeries::new(
+                    [(p.0, p.2), (p.0, p.3)],
+                    color.stroke_width(2),
+                ))
+                .map_err(|e| err(e.to_string()))?;
+        }
+    }
+    chart
+        .draw_series(LineSeries::new(
+            pts.iter().map(|p| (p.0, p.1)),
+            color.stroke_width(2),
+        ))
+        .map_err(|e| err(e.to_string()))?
+        .label(s.label.clone())
+        .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], color.stroke_width(3)));
+    chart
+        .draw_series(
+            pts.iter()
+                .map(|p| Circle::new((p.0, p.1), 4, color.filled())),
+        )
+        .map_err(|e| err(e.to_string()))?;
+    Ok(())
 }
 
 /// The corner of a log–log chart with the fewest points of `series` near it (where the legend
@@ -272,10 +287,7 @@ fn emptiest_corner(series: &[Series], x: (f64, f64), y: (f64, f64)) -> SeriesLab
 }
 
 /// A log axis over `[lo, hi]` whose ticks are [`log_ticks`].
-fn log_axis(
-    lo: f64,
-    hi: f64,
-) -> plotters::coord::combinators::WithKeyPoints<plotters::coord::combinators::LogCoord<f64>> {
+fn log_axis(lo: f64, hi: f64) -> LogAxis {
     let (bold, light) = log_ticks(lo, hi);
     (lo..hi)
         .log_scale()
@@ -284,20 +296,16 @@ fn log_axis(
 }
 
 /// Encodes an RGB buffer as PNG.
-pub fn encode_png(rgb: &[u8], width: u32, height: u32) -> Result<Vec<u8>> {
+pub(crate) fn encode_png(rgb: &[u8], width: u32, height: u32) -> Result<Vec<u8>, PictureError> {
     use image::ImageEncoder as _;
     let mut png = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut png)
-        .write_image(rgb, width, height, image::ExtendedColorType::Rgb8)
-        .context("encoding the PNG")?;
+    image::codecs::png::PngEncoder::new(&mut png).write_image(
+        rgb,
+        width,
+        height,
+        image::ExtendedColorType::Rgb8,
+    )?;
     Ok(png)
-}
-
-/// Encodes an RGB buffer as PNG and writes it atomically (Ctrl-C waits for the write).
-pub fn write_rgb_png(path: &Path, rgb: &[u8], width: u32, height: u32) -> Result<()> {
-    let png = encode_png(rgb, width, height)?;
-    crate::interrupt::writing(|| flatland_geom::write_atomic(path, &png))?;
-    Ok(())
 }
 
 #[cfg(test)]

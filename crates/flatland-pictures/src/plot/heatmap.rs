@@ -2,12 +2,12 @@
 //! `s` (sender) upwards, as in the viewer; the surface edges' boundaries marked and their indices
 //! on both axes; a colour bar with values; a title.
 
-use anyhow::{Result, anyhow};
 use flatland_geom::{EdgeId, Scene};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::{register_font, short_number};
+use crate::PictureError;
 use crate::colormap::{LOG_DECADES, Scale, inferno};
 
 /// Smallest side of the plotted square in pixels: small grids are scaled up (nearest
@@ -47,6 +47,24 @@ pub struct Heatmap<'a> {
     pub overlay: Option<Overlay<'a>>,
 }
 
+/// A heatmap of `grid` over `scene`, scaled by the project's one rule ([`Scale::fit`]).
+pub fn heatmap<'a>(
+    title: String,
+    quantity: &'a str,
+    scene: &'a Scene,
+    grid: &[f64],
+    log: bool,
+) -> Heatmap<'a> {
+    Heatmap {
+        title,
+        quantity,
+        scene,
+        log,
+        top: Scale::fit(grid, log).top,
+        overlay: None,
+    }
+}
+
 impl Heatmap<'_> {
     fn scale(&self) -> Scale {
         Scale {
@@ -57,16 +75,20 @@ impl Heatmap<'_> {
 }
 
 /// The heatmap of an `res × res` grid (row `i` ↔ `s = (i + ½)/res`, column `j` ↔ `t`), PNG-encoded.
-pub fn heatmap_png(grid: &[f64], res: usize, map: &Heatmap<'_>) -> Result<Vec<u8>> {
-    anyhow::ensure!(
-        res > 0 && grid.len() == res * res,
-        "heatmap: {} values for a {res}×{res} grid",
-        grid.len()
-    );
+pub fn heatmap_png(grid: &[f64], res: usize, map: &Heatmap<'_>) -> Result<Vec<u8>, PictureError> {
+    if res == 0 || Some(grid.len()) != res.checked_mul(res) {
+        return Err(PictureError::GridSize {
+            values: grid.len(),
+            res,
+        });
+    }
     register_font();
     let zoom = MIN_SIDE.div_ceil(res).max(1);
     let side = res * zoom;
-    let side_px = u32::try_from(side).map_err(|_| anyhow!("heatmap too large"))?;
+    let side_px = u32::try_from(side).map_err(|_| PictureError::TooLarge {
+        what: "heatmap",
+        side,
+    })?;
     let (width, height) = (LEFT + side_px + RIGHT, TOP + side_px + BOTTOM);
     let mut rgb = vec![255u8; width as usize * height as usize * 3];
 
@@ -98,7 +120,7 @@ pub fn heatmap_png(grid: &[f64], res: usize, map: &Heatmap<'_>) -> Result<Vec<u8
 
     {
         let root = BitMapBackend::with_buffer(&mut rgb, (width, height)).into_drawing_area();
-        let err = |e: String| anyhow!("drawing the heatmap: {e}");
+        let err = PictureError::draw("the heatmap");
         draw_labels(&root, map, side_px).map_err(|e| err(e.to_string()))?;
         root.present().map_err(|e| err(e.to_string()))?;
     }
@@ -109,18 +131,27 @@ type Area<'a> = DrawingArea<BitMapBackend<'a>, plotters::coord::Shift>;
 type DrawResult =
     Result<(), DrawingAreaErrorKind<<BitMapBackend<'static> as DrawingBackend>::ErrorType>>;
 
-/// Everything drawn on top of the pixels: boundaries, overlay, frame, axes, colour bar, title.
-fn draw_labels(root: &Area<'_>, map: &Heatmap<'_>, side: u32) -> DrawResult {
+/// `(s, t)` → pixel of a plot `side` pixels wide: `t` to the right, `s` upwards.
+fn pixel(side: u32) -> impl Fn(f64, f64) -> (i32, i32) + Copy {
     let (left, top, side_i) = (LEFT as i32, TOP as i32, side as i32);
     let fside = f64::from(side);
-    // (s, t) → pixel: t to the right, s upwards.
-    let px = move |s: f64, t: f64| {
+    move |s: f64, t: f64| {
         (
             left + (t * fside).round() as i32,
             top + side_i - (s * fside).round() as i32,
         )
-    };
-    let text = |size: f64| TextStyle::from(("sans-serif", size).into_font()).color(&BLACK);
+    }
+}
+
+/// The labels' text: black, `size` pixels.
+fn text(size: f64) -> TextStyle<'static> {
+    TextStyle::from(("sans-serif", size).into_font()).color(&BLACK)
+}
+
+/// Everything drawn on top of the pixels: boundaries, overlay, frame, axes, colour bar, title.
+fn draw_labels(root: &Area<'_>, map: &Heatmap<'_>, side: u32) -> DrawResult {
+    let (left, top, side_i) = (LEFT as i32, TOP as i32, side as i32);
+    let px = pixel(side);
 
     // Surface edge boundaries (parameter starts) and where each edge's label goes.
     let surfaces = map.scene.surface_edges();
@@ -128,7 +159,7 @@ fn draw_labels(root: &Area<'_>, map: &Heatmap<'_>, side: u32) -> DrawResult {
         .iter()
         .filter_map(|&e| map.scene.edge_param_range(e).map(|(a, b)| (e, a, b)))
         .collect();
-    let show_boundaries = fside / ranges.len().max(1) as f64 >= MIN_BOUNDARY_GAP;
+    let show_boundaries = f64::from(side) / ranges.len().max(1) as f64 >= MIN_BOUNDARY_GAP;
     if show_boundaries {
         let line = WHITE.mix(0.35);
         for &(_, s0, _) in ranges.iter().filter(|r| r.1 > 0.0) {
@@ -153,14 +184,32 @@ fn draw_labels(root: &Area<'_>, map: &Heatmap<'_>, side: u32) -> DrawResult {
         [(left - 1, top - 1), (left + side_i, top + side_i)],
         BLACK.stroke_width(1),
     ))?;
+    let boundaries = if show_boundaries { &ranges[..] } else { &[] };
+    draw_axes(root, &ranges, boundaries, side)?;
+    draw_colour_bar(root, map, side)?;
 
-    // Axes: a tick at every boundary (and the ends), the edge index mid-interval when it fits.
+    // Title.
+    root.draw(&Text::new(
+        map.title.clone(),
+        (left + side_i / 2, 8),
+        text(17.0).pos(Pos::new(HPos::Center, VPos::Top)),
+    ))?;
+    Ok(())
+}
+
+/// The axes: a tick at both ends and at every boundary drawn (`boundaries`), each edge's index
+/// mid-interval where it fits (`ranges`: every surface edge's parameter range), the axes' names.
+fn draw_axes(
+    root: &Area<'_>,
+    ranges: &[(EdgeId, f64, f64)],
+    boundaries: &[(EdgeId, f64, f64)],
+    side: u32,
+) -> DrawResult {
+    let (left, top, side_i) = (LEFT as i32, TOP as i32, side as i32);
+    let px = pixel(side);
     let tick = 6;
-    let mut ticks = vec![0.0, 1.0];
-    if show_boundaries {
-        ticks.extend(ranges.iter().map(|r| r.1));
-    }
-    for &u in &ticks {
+    let ticks = [0.0, 1.0].into_iter().chain(boundaries.iter().map(|r| r.1));
+    for u in ticks {
         let (x, _) = px(0.0, u);
         let (_, y) = px(u, 0.0);
         let (bottom, l) = (top + side_i, left - 1);
@@ -170,8 +219,8 @@ fn draw_labels(root: &Area<'_>, map: &Heatmap<'_>, side: u32) -> DrawResult {
     let label = text(14.0);
     let centred = label.pos(Pos::new(HPos::Center, VPos::Top));
     let right = label.pos(Pos::new(HPos::Right, VPos::Center));
-    for &(edge, a, b) in &ranges {
-        if (b - a) * fside < 16.0 {
+    for &(edge, a, b) in ranges {
+        if (b - a) * f64::from(side) < 16.0 {
             continue;
         }
         let mid = 0.5 * (a + b);
@@ -197,15 +246,6 @@ fn draw_labels(root: &Area<'_>, map: &Heatmap<'_>, side: u32) -> DrawResult {
         axis.transform(FontTransform::Rotate270)
             .pos(Pos::new(HPos::Center, VPos::Center)),
     ))?;
-
-    draw_colour_bar(root, map, side)?;
-
-    // Title.
-    root.draw(&Text::new(
-        map.title.clone(),
-        (left + side_i / 2, 8),
-        text(17.0).pos(Pos::new(HPos::Center, VPos::Top)),
-    ))?;
     Ok(())
 }
 
@@ -213,7 +253,6 @@ fn draw_labels(root: &Area<'_>, map: &Heatmap<'_>, side: u32) -> DrawResult {
 fn draw_colour_bar(root: &Area<'_>, map: &Heatmap<'_>, side: u32) -> DrawResult {
     let (left, top, side_i) = (LEFT as i32, TOP as i32, side as i32);
     let fside = f64::from(side);
-    let text = |size: f64| TextStyle::from(("sans-serif", size).into_font()).color(&BLACK);
     let bar_left = left + side_i + BAR_GAP as i32;
     let bar_right = bar_left + BAR_WIDTH as i32;
     root.draw(&Rectangle::new(

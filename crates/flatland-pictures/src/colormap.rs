@@ -195,6 +195,33 @@ mod tests {
         assert_eq!(linear.value_at(0.5), 1.0);
     }
 
+    /// Emitters are left out of a lit scene's top (they would leave the rest dark); with nothing
+    /// lit but the emitters, the top is theirs; with nothing lit at all, it is still positive.
+    #[test]
+    fn the_radiosity_top_is_the_brightest_non_emitter() {
+        let kernel = flatland_geom::Kernel::new(flatland_geom::bundled::scene("fig3").unwrap());
+        let mesh = flatland_solve::Mesh::new(&kernel, 64).unwrap();
+        let emits = |i: usize| mesh.edge_of(i).emission > 0.0;
+        assert!((0..mesh.len()).any(emits) && !(0..mesh.len()).all(emits));
+        let mut b: Vec<f64> = (0..mesh.len())
+            .map(|i| if emits(i) { 1e6 } else { i as f64 })
+            .collect();
+        let brightest = (0..mesh.len()).filter(|&i| !emits(i)).max().unwrap() as f64;
+        assert_eq!(radiosity_top(&mesh, &b), brightest);
+        // A non-finite B (a diverged solve) is not the top.
+        let last = (0..mesh.len()).rfind(|&i| !emits(i)).unwrap();
+        b[last] = f64::INFINITY;
+        assert!(radiosity_top(&mesh, &b) < brightest);
+        let dark: Vec<f64> = (0..mesh.len())
+            .map(|i| if emits(i) { 3.0 } else { 0.0 })
+            .collect();
+        assert_eq!(radiosity_top(&mesh, &dark), 3.0);
+        assert_eq!(
+            radiosity_top(&mesh, &vec![0.0; mesh.len()]),
+            f64::MIN_POSITIVE
+        );
+    }
+
     #[test]
     fn values_spanning_decades_want_a_log_scale() {
         let narrow: Vec<f64> = (1..=100).map(f64::from).collect();
