@@ -31,13 +31,9 @@ fn scaling(c: &mut Criterion) {
         let mesh = found.coarse.mesh().clone();
         group.bench_function("default_fit_and_solve", |b| {
             b.iter(|| {
-                let mut fit = LightFit::new(
-                    Arc::clone(&kernel),
-                    mesh.clone(),
-                    LightParams::default(),
-                    &never,
-                )
-                .expect("fit");
+                let mut fit =
+                    LightFit::new(Arc::clone(&kernel), mesh.clone(), LightParams::default())
+                        .expect("fit");
                 fit.run(&never, |_| {}).expect("rounds");
                 black_box(solve(&fit, &mesh, &params, &never).expect("solve"))
             })

@@ -177,15 +177,6 @@ impl Kernel {
         (s.a, s.b)
     }
 
-    /// `E'` of the parent surface edge of rank `rank` (see [`Kernel::source_weight`]).
-    ///
-    /// # Panics
-    /// If `rank >= surface_parents()`.
-    #[must_use]
-    pub fn source_weight_of_rank(&self, rank: SurfaceRank) -> f64 {
-        self.parents[self.surface_parents[rank.index()]].weight
-    }
-
     /// The parent (group) of `edge`, `None` for an edge not in the scene.
     fn group(&self, edge: EdgeId) -> Option<usize> {
         (edge.index() < self.scene.edges().len()).then(|| self.scene.group_of(edge.index()))

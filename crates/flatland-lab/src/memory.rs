@@ -2,9 +2,8 @@
 //! `time -v` would say of a whole command), and the heap's peak over one piece of work (what one
 //! experiment among several in a process added).
 //!
-//! On Linux the resident peak is `VmHWM` in `/proc/self/status`, and writing `5` to
-//! `/proc/self/clear_refs` resets it. Elsewhere both say `None` / do nothing, and the figures
-//! read "unknown". The heap's peak needs the counting allocator installed by the binary
+//! On Linux the resident peak is `VmHWM` in `/proc/self/status`; elsewhere it is `None` and the
+//! figures read "unknown". The heap's peak needs the counting allocator installed by the binary
 //! (`#[global_allocator] static A: &PeakMemAlloc<System> = &INSTRUMENTED_SYSTEM;`); without it
 //! [`heap_peak_of`] says `None`.
 
@@ -23,8 +22,8 @@ pub fn heap_peak_of<T>(work: impl FnOnce() -> T) -> (T, Option<u64>) {
     (out, (peak > 0).then_some(peak))
 }
 
-/// The peak resident memory of this process so far (since the last [`reset_peak`]), in bytes;
-/// `None` where the system does not say.
+/// The peak resident memory of this process so far, in bytes; `None` where the system does not
+/// say.
 #[must_use]
 pub fn peak_bytes() -> Option<u64> {
     status_kib("VmHWM:").map(|kib| kib * 1024)
@@ -37,17 +36,12 @@ fn status_kib(key: &str) -> Option<u64> {
     line.split_whitespace().nth(1)?.parse().ok()
 }
 
-/// Starts a new peak at the memory held now; whether the system could.
-pub fn reset_peak() -> bool {
-    fs::write("/proc/self/clear_refs", "5").is_ok()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     /// While 64 MiB are held and touched, the peak is at least that (other tests in this
-    /// process may hold more, never less); a reset leaves a figure to read.
+    /// process may hold more, never less).
     #[test]
     fn a_peak_counts_what_is_held() {
         if peak_bytes().is_none() {
@@ -57,9 +51,5 @@ mod tests {
         let during = peak_bytes().unwrap();
         assert!(during >= 64 << 20, "{during}");
         assert_eq!(held.iter().map(|&b| u64::from(b)).sum::<u64>(), 64 << 20);
-        drop(held);
-        if reset_peak() {
-            assert!(peak_bytes().unwrap() > 0);
-        }
     }
 }

@@ -31,7 +31,7 @@ const ESTIMATE_TOLERANCE: f64 = 1e-3;
 ///
 /// let kernel = Arc::new(Kernel::new(generate::floor_plan(80, 1).unwrap()));
 /// let mesh = Mesh::new(&kernel, Mesh::default_elements(kernel.scene())).unwrap();
-/// let mut fit = LightFit::new(kernel, mesh, LightParams::default(), &never).unwrap();
+/// let mut fit = LightFit::new(kernel, mesh, LightParams::default()).unwrap();
 /// let stopped = fit.run(&never, |_| {}).unwrap();
 /// let last = fit.history().last().unwrap();
 /// assert!(last.estimated_error <= 0.01 || stopped != flatland_light::LightStop::Tolerance);
@@ -61,7 +61,6 @@ impl LightFit {
         kernel: Arc<Kernel>,
         mesh: Mesh,
         params: LightParams,
-        _stop: &Stop,
     ) -> Result<LightFit, LightError> {
         params.check()?;
         let sweep = Sweep::new(&kernel, &mesh)?;

@@ -34,7 +34,7 @@
 //! // A generated floor plan of about 80 edges, meshed as `flatland solve` meshes it.
 //! let kernel = Arc::new(Kernel::new(generate::floor_plan(80, 1)?));
 //! let mesh = Mesh::new(&kernel, Mesh::default_elements(kernel.scene()))?;
-//! let mut fit = LightFit::new(kernel, mesh, LightParams::default(), &never)?;
+//! let mut fit = LightFit::new(kernel, mesh, LightParams::default())?;
 //! let stopped = fit.run(&never, |_| {})?;
 //! // It stops at the default tolerance (1 % of B − E, as it estimates it) or has no doubt left.
 //! assert!(matches!(stopped, LightStop::Tolerance | LightStop::Exact));

@@ -14,7 +14,7 @@ use flatland_testkit::assert_close;
 fn fit(scene: Scene, params: LightParams) -> LightFit {
     let kernel = Arc::new(Kernel::new(scene));
     let mesh = Mesh::new(&kernel, Mesh::default_elements(kernel.scene())).unwrap();
-    let mut fit = LightFit::new(kernel, mesh, params, &never).unwrap();
+    let mut fit = LightFit::new(kernel, mesh, params).unwrap();
     fit.run(&never, |_| {}).unwrap();
     fit
 }
@@ -86,7 +86,7 @@ fn the_estimate_tracks_the_measured_error_at_the_tolerance() {
 fn rows_never_gather_more_than_rho_and_b_stays_physical() {
     let kernel = Arc::new(Kernel::new(generate::hall(200, 5).unwrap()));
     let mesh = Mesh::new(&kernel, Mesh::default_elements(kernel.scene())).unwrap();
-    let mut fit = LightFit::new(kernel, mesh.clone(), LightParams::default(), &never).unwrap();
+    let mut fit = LightFit::new(kernel, mesh.clone(), LightParams::default()).unwrap();
     for _ in 0..5 {
         let stopped = fit.round(&never).unwrap();
         let ones = vec![1.0; mesh.len()];
@@ -196,22 +196,17 @@ fn a_stopped_fit_goes_on_when_asked_for_more_and_is_deterministic() {
 fn the_cell_budget_stops_it() {
     let kernel = Arc::new(Kernel::new(generate::floor_plan(300, 2).unwrap()));
     let mesh = Mesh::new(&kernel, Mesh::default_elements(kernel.scene())).unwrap();
-    let first = LightFit::new(
-        Arc::clone(&kernel),
-        mesh.clone(),
-        LightParams::default(),
-        &never,
-    )
-    .unwrap()
-    .probes
-    .first()
-    .len();
+    let first = LightFit::new(Arc::clone(&kernel), mesh.clone(), LightParams::default())
+        .unwrap()
+        .probes
+        .first()
+        .len();
     let params = LightParams {
         tolerance: 1e-9,
         max_cells: first + 10,
         ..LightParams::default()
     };
-    let mut fit = LightFit::new(kernel, mesh, params, &never).unwrap();
+    let mut fit = LightFit::new(kernel, mesh, params).unwrap();
     assert_eq!(fit.run(&never, |_| {}).unwrap(), LightStop::Cells);
     assert!(fit.cells().len() <= first + 10);
 }

@@ -90,20 +90,6 @@ impl Discretization {
     }
 }
 
-impl ExactReference {
-    /// The discretization error of this solve, estimated from a solve of `kernel` (the same
-    /// scene) on twice its elements.
-    pub fn error_estimate(
-        &self,
-        kernel: &Kernel,
-        params: &SolveParams,
-        stop: &Stop,
-    ) -> Result<ErrorEstimate, SolveError> {
-        let finer = ExactReference::new(kernel, 2 * self.mesh().len(), params, stop)?;
-        Ok(compare(self, &finer, stop)?.1)
-    }
-}
-
 /// `finer`'s B at `coarse`'s collocation points, and the estimate it gives.
 fn compare(
     coarse: &ExactReference,
@@ -179,7 +165,9 @@ mod tests {
         for (scene, n) in cases {
             let kernel = Kernel::new(scene);
             let coarse = ExactReference::new(&kernel, n, &params, &never).unwrap();
-            let estimate = coarse.error_estimate(&kernel, &params, &never).unwrap();
+            let Discretization {
+                coarse, estimate, ..
+            } = Discretization::of(coarse, &kernel, &params, &never).unwrap();
             assert_eq!((estimate.elements, estimate.finer_elements), (n, 2 * n));
             assert_eq!(estimate.estimate, SAFETY_FACTOR * estimate.difference);
             let finer = ExactReference::new(&kernel, 4 * n, &params, &never).unwrap();

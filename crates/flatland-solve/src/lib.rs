@@ -49,8 +49,8 @@
 //! fine B, the Nyström interpolation). [`solve_errors`] then measures a solution's relative L2
 //! error (element lengths as weights), of B and of the reflected part `B − E`.
 //! [`solve_against`] does both for one representation: what a view or a benchmark row needs.
-//! How good the exact solve itself is: [`ExactReference::error_estimate`] compares it with a
-//! solve on twice the elements, and [`elements_for_error`] doubles the elements until that
+//! How good the exact solve itself is: [`Discretization::of`] compares it with a solve on twice
+//! the elements, and [`elements_for_error`] doubles the elements until that
 //! estimate is within a bound ([`DEFAULT_ERROR_BOUND`], 1 % of `B − E`).
 //!
 //! **Errors of ζ.** A [`Reference`] holds the exact ζ on a midpoint grid and at held-out random

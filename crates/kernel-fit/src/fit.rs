@@ -152,14 +152,6 @@ impl Fit {
     pub fn rays(&self) -> u64 {
         self.state.rays
     }
-    /// Training samples so far.
-    pub fn sample_count(&self) -> usize {
-        self.state.samples.len()
-    }
-    /// Sample sets so far.
-    pub fn set_count(&self) -> usize {
-        self.state.set_starts.len()
-    }
     /// Training steps so far.
     pub fn steps(&self) -> u64 {
         self.state.model.network.steps()

@@ -67,7 +67,7 @@ impl Context<'_> {
         };
         let started = Instant::now();
         let mesh = self.scorer.mesh().clone();
-        let mut fit = LightFit::new(Arc::clone(self.kernel), mesh, params, self.stop)?;
+        let mut fit = LightFit::new(Arc::clone(self.kernel), mesh, params)?;
         let stopped = fit.run(self.stop, |_| {})?;
         let build_s = started.elapsed().as_secs_f64();
         let mut row = self.scored(Built {

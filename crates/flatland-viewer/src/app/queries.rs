@@ -86,13 +86,6 @@ impl ViewerApp {
             _ => None,
         }
     }
-    /// Why there is no lit scene, when it failed.
-    pub fn lit_failure(&self) -> Option<&str> {
-        match &self.lit {
-            Some(LitState::Failed(why)) => Some(why),
-            _ => None,
-        }
-    }
     /// Whether the newest status was made after the learner handled every command sent so far
     /// (what a test waits for before it asserts on the learner's state).
     pub fn caught_up(&self) -> bool {

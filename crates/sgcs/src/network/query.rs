@@ -100,11 +100,6 @@ impl Network {
         all[0]
     }
 
-    /// The network activation `D_A(ξ) = Σ_c M_c(ξ)`.
-    pub fn activation_sum(&self, xi: &[f64]) -> f64 {
-        self.active(xi).iter().map(|e| e.1).sum()
-    }
-
     /// `(D_A(ξ), D_ACC(ξ))`: the activation of all cells and of the cells flagged in `critical`
     /// (length `len()`, e.g. from [`Network::critical_cells`]), in one pass.
     ///
@@ -202,7 +197,6 @@ mod tests {
             let crit: f64 = acts.iter().filter(|e| critical[e.0]).map(|e| e.1).sum();
             assert_eq!(da, all);
             assert_eq!(dacc, crit);
-            assert_eq!(net.activation_sum(&p), da);
             let kappa: f64 = acts.iter().map(|&(c, a)| net.output(c)[0] * a).sum();
             assert_eq!(net.predict1(&p), kappa);
         }

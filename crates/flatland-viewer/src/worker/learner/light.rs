@@ -196,7 +196,6 @@ impl Learner {
             Arc::clone(&world.kernel),
             setup.mesh().clone(),
             LightParams::default(),
-            &|| false,
         );
         match made {
             Ok(fit) => {
