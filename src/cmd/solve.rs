@@ -153,5 +153,5 @@ fn picture(path: &Path, lit: &LitScene, label: &str, kernel: &str, lighting: &Li
         rel_l2_reflected: c.errors.rel_l2_reflected,
     };
     let png = flatland_pictures::lit::lit_scene_png(&picture)?;
-    interrupt::writing(|| write_atomic(path, &png))
+    Ok(interrupt::writing(|| write_atomic(path, &png))?)
 }

@@ -229,7 +229,7 @@ impl Recipes {
         };
         params.check()?;
         let started = Instant::now();
-        let mut fit = LightFit::new(Arc::clone(kernel), mesh.clone(), params, stop)?;
+        let mut fit = LightFit::new(Arc::clone(kernel), mesh.clone(), params)?;
         let stopped = fit.run(stop, |f| {
             progress(Progress::Probes {
                 cells: f.cells().len(),
