@@ -7,7 +7,8 @@ mod cmd;
 
 use flatland_lab::interrupt;
 
-/// Learn the Flatland radiosity kernel with supervised growing cell structures (Bohn 1996).
+/// Light 2D scenes with all their bounces, and learn the light transport with supervised growing
+/// cell structures (after Bohn 1996).
 #[derive(Parser)]
 #[command(name = "flatland", version, about)]
 struct Cli {
@@ -23,7 +24,7 @@ enum Command {
     Params,
     /// Evaluate the exact kernel k(s,t) (or zeta with --weighted) on an RxR grid, to CSV or PNG.
     Kernel(cmd::kernel::Args),
-    /// Learn a scene's kernel with SGCS; print the figures, optionally save the model.
+    /// Learn a scene's kernel with an SGCS network; print the figures, optionally save the model.
     Fit(cmd::fit::Args),
     /// Evaluate a saved model on a grid (CSV or PNG) and report its errors.
     Eval(cmd::eval::Args),
@@ -33,7 +34,8 @@ enum Command {
     Results(cmd::results::Args),
     /// The paper's Fig. 3 panels as PNGs: geometry, kernel, cells, approximation, error.
     Figure(cmd::figure::Args),
-    /// Run time against error: SGCS, hierarchical radiosity and a uniform grid at several budgets.
+    /// Every method at equal time on one scene (error against time, bytes, basis functions), or
+/// cost against scene size (--scaling).
     Bench(cmd::bench::Args),
     /// Light the scene: solve the radiosity equation with a kernel (exact, learned, HR, uniform)
     /// and compare the solved B with the exact kernel's.

@@ -1450,3 +1450,49 @@ fn a_plan_lit_by_lamps_keeps_its_point_lights() {
     let json = solve_json(&["--scene", as_str(&plan), "--elements", "2048"]);
     assert!(json["rel_l2_b"].as_f64().unwrap() < 0.2, "{json}");
 }
+
+/// The README's command list, read back: every command it names exists and takes every flag it
+/// shows, and every command the binary has is listed. So the front page cannot drift from
+/// `--help`.
+#[test]
+fn the_readme_lists_every_command_with_flags_its_help_knows() {
+    let readme = std::fs::read_to_string(root().join("README.md")).expect("read README.md");
+    let section = readme
+        .split("\n## Commands\n")
+        .nth(1)
+        .and_then(|rest| rest.split("\n## ").next())
+        .expect("README.md has a ## Commands section");
+    let mut listed = Vec::new();
+    for line in section.lines().filter_map(|l| l.trim().strip_prefix("flatland ")) {
+        let command = line.split_whitespace().next().expect("a command after `flatland`");
+        let help = stdout(&flatland(&[command, "--help"]));
+        assert!(help.contains("Usage:"), "README lists `flatland {command}`, which has no --help");
+        let shown = line.split('#').next().unwrap_or(line);
+        for flag in shown
+            .split(|c: char| !(c.is_ascii_alphanumeric() || c == '-'))
+            .filter(|word| word.starts_with("--") && word.len() > 2)
+        {
+            assert!(
+                help.contains(flag),
+                "README shows `flatland {command} {flag}`, which its --help does not know"
+            );
+        }
+        listed.push(command.to_owned());
+    }
+    let top = stdout(&flatland(&["--help"]));
+    let commands = top
+        .split("Commands:")
+        .nth(1)
+        .expect("flatland --help lists its commands");
+    for command in commands
+        .lines()
+        .take_while(|l| !l.trim().is_empty())
+        .filter_map(|l| l.split_whitespace().next())
+        .filter(|c| *c != "help")
+    {
+        assert!(
+            listed.iter().any(|l| l == command),
+            "`flatland {command}` is missing from README.md's command list"
+        );
+    }
+}
