@@ -35,7 +35,7 @@ enum Command {
     /// The paper's Fig. 3 panels as PNGs: geometry, kernel, cells, approximation, error.
     Figure(cmd::figure::Args),
     /// Every method at equal time on one scene (error against time, bytes, basis functions), or
-/// cost against scene size (--scaling).
+    /// cost against scene size (--scaling).
     Bench(cmd::bench::Args),
     /// Light the scene: solve the radiosity equation with a kernel (exact, learned, HR, uniform)
     /// and compare the solved B with the exact kernel's.

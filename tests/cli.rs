@@ -1424,6 +1424,38 @@ fn an_svg_drawing_converts_checks_and_lights() {
     // A scene file is not a drawing: --unit is refused naming the file.
     let out = flatland(&["check", "--scene", as_str(&json), "--unit", "2"]);
     assert_one_line_error(&out, &["--unit", "plan.json"]);
+    // The lit plan comes back as a drawing: one segment per element carrying its B, which
+    // reads back as the solve's CSV.
+    let (svg, csv) = (dir.join("lit.svg"), dir.join("lit.csv"));
+    for out_file in [&svg, &csv] {
+        let out = flatland(&[
+            "solve",
+            "--scene",
+            as_str(&drawing),
+            "--out",
+            as_str(out_file),
+        ]);
+        assert!(out.status.success(), "{}", stderr(&out));
+    }
+    let svg = std::fs::read_to_string(&svg).unwrap();
+    let mut drawn: Vec<f64> = svg
+        .split("data-b=\"")
+        .skip(1)
+        .map(|rest| rest.split('"').next().unwrap().parse().unwrap())
+        .collect();
+    let mut rows: Vec<f64> = std::fs::read_to_string(&csv)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|row| row.rsplit(',').next().unwrap().parse().unwrap())
+        .collect();
+    drawn.sort_by(f64::total_cmp);
+    rows.sort_by(f64::total_cmp);
+    assert!(!rows.is_empty());
+    assert_eq!(
+        drawn, rows,
+        "the drawing's data-b are the solve's B, bit for bit"
+    );
 }
 
 /// `scene --lamps` lights a generated plan by point lights, no edge emitting, and the file
@@ -1463,10 +1495,19 @@ fn the_readme_lists_every_command_with_flags_its_help_knows() {
         .and_then(|rest| rest.split("\n## ").next())
         .expect("README.md has a ## Commands section");
     let mut listed = Vec::new();
-    for line in section.lines().filter_map(|l| l.trim().strip_prefix("flatland ")) {
-        let command = line.split_whitespace().next().expect("a command after `flatland`");
+    for line in section
+        .lines()
+        .filter_map(|l| l.trim().strip_prefix("flatland "))
+    {
+        let command = line
+            .split_whitespace()
+            .next()
+            .expect("a command after `flatland`");
         let help = stdout(&flatland(&[command, "--help"]));
-        assert!(help.contains("Usage:"), "README lists `flatland {command}`, which has no --help");
+        assert!(
+            help.contains("Usage:"),
+            "README lists `flatland {command}`, which has no --help"
+        );
         let shown = line.split('#').next().unwrap_or(line);
         for flag in shown
             .split(|c: char| !(c.is_ascii_alphanumeric() || c == '-'))

@@ -50,7 +50,9 @@ pub struct Args {
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Write the solution: `.csv` (header `edge,s,x,y,b`, one row per element midpoint in
-    /// order of s) or `.png` (the lit scene beside B(s) against the exact solution).
+    /// order of s), `.png` (the lit scene beside B(s) against the exact solution) or `.svg`
+    /// (the lit plan: each element a segment in its B colour, `data-b` its value, lights
+    /// marked, a colour bar; it opens in any browser).
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,
     /// Print one JSON object with the figures instead of the table.
@@ -61,7 +63,7 @@ pub struct Args {
 /// Runs `flatland solve`.
 pub fn run(args: &Args) -> Result<()> {
     let format = (args.out.as_deref())
-        .map(|out| flatland_lab::output::format(out, &["csv", "png"]))
+        .map(|out| flatland_lab::output::format(out, &["csv", "png", "svg"]))
         .transpose()?;
     if let Some(out) = &args.out {
         let mut inputs: Vec<&Path> = args.scene.path().into_iter().collect();
@@ -101,6 +103,13 @@ pub fn run(args: &Args) -> Result<()> {
         (Some(path), Some("csv")) => {
             let csv = radiosity_csv(lit.mesh(), &lighting.comparison.solution.radiosity);
             interrupt::writing(|| write_atomic(path, csv.as_bytes()))?;
+        }
+        (Some(path), Some("svg")) => {
+            let title = format!("{label} lit by the {kernel_label} kernel");
+            let b = &lighting.comparison.solution.radiosity;
+            let plan =
+                flatland_pictures::plan::lit_plan(lit.kernel().scene(), lit.mesh(), b, &title);
+            interrupt::writing(|| write_atomic(path, plan.svg().as_bytes()))?;
         }
         (Some(path), Some(_)) => picture(path, &lit, &label, &kernel_label, &lighting)?,
         _ => {}

@@ -9,6 +9,7 @@
 //! - [`plot`]: log–log line charts ([`plot::log_log`]) and heatmaps of a function of `(s, t)`
 //!   with axes, edge boundaries and a colour bar ([`plot::heatmap_png`]).
 //! - [`lit`]: the scene lit by a solved radiosity beside `B(s)` against the exact solution.
+//! - [`plan`]: the lit plan as an SVG drawing (and its PNG), for `solve --out lit.svg`.
 //! - [`figure`]: the paper's Fig. 3 panels of a finished fit.
 //!
 //! Errors are a [`PictureError`]. Text is drawn in a font egui ships, registered once per process,
@@ -42,6 +43,7 @@ pub mod colormap;
 mod error;
 pub mod figure;
 pub mod lit;
+pub mod plan;
 pub mod plot;
 
 pub use error::PictureError;
