@@ -99,6 +99,17 @@ pub enum GeomError {
         /// The edge it lies on.
         edge: usize,
     },
+    /// A walk found no point to start from: none at least `margin` from every edge, inside a
+    /// room.
+    #[error(
+        "the walk found no free point at least {margin} from every edge inside the scene (tried {tries} points across its bounds); a light needs a room wider than twice that margin"
+    )]
+    NoFreeSpace {
+        /// The margin asked for.
+        margin: f64,
+        /// Points tried.
+        tries: usize,
+    },
     /// The scene has no edge with role `surface`, so there is nothing to parameterize.
     #[error(
         "scene has no surface edge ({edges} edges given): at least one edge must have role `surface`"

@@ -3,6 +3,7 @@
 mod batch;
 mod cache;
 mod eval;
+mod free;
 mod pairs;
 mod params;
 mod rays;
@@ -18,6 +19,8 @@ use crate::scene::{Role, Scene};
 use crate::visibility::{Bvh, Segment};
 use crate::{EdgeId, GeomError, SurfaceRank};
 use cache::PairCache;
+#[cfg(test)]
+pub(crate) use free::point_segment_distance;
 
 pub use pairs::PairEventsRef;
 pub use params::KernelParams;

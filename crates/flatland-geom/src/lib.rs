@@ -50,6 +50,7 @@ mod kernel;
 mod overlap;
 mod scene;
 mod visibility;
+mod walk;
 
 #[cfg(test)]
 mod test_support;
@@ -66,3 +67,4 @@ pub use kernel::{
 };
 pub use scene::{Edge, PointLight, Role, Scene, SurfacePoint};
 pub use visibility::{OnRay, PairEvents, RayFace, SenderFace};
+pub use walk::{MAX_POSITIONS, MAX_TURN, PROBES, START_SAMPLES, Walk, WalkParams, walk};

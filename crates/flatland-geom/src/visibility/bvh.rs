@@ -339,7 +339,6 @@ impl Bvh {
     }
 
     /// Indices of the segments whose boxes overlap the closed box `[lo, hi]`, sorted.
-    #[cfg(test)]
     pub(crate) fn overlapping(&self, lo: DVec2, hi: DVec2) -> Vec<u32> {
         self.overlapping_beyond(lo, hi, &[])
     }
