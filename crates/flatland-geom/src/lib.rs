@@ -65,6 +65,6 @@ pub use io::write_atomic;
 pub use kernel::{
     Hit, Kernel, KernelParams, KernelSample, PairClass, PairEventsRef, Unoccluded, VaryingPairs,
 };
-pub use scene::{Edge, PointLight, Role, Scene, SurfacePoint};
+pub use scene::{Edge, LightCheck, PointLight, Role, Scene, SurfacePoint};
 pub use visibility::{OnRay, PairEvents, RayFace, SenderFace};
 pub use walk::{MAX_POSITIONS, MAX_TURN, PROBES, START_SAMPLES, Walk, WalkParams, walk};

@@ -14,7 +14,7 @@ use glam::DVec2;
 
 use crate::{EdgeId, GeomError, SurfaceRank};
 pub use edge::{Edge, Role};
-pub use light::PointLight;
+pub use light::{LightCheck, PointLight};
 pub use param::SurfacePoint;
 pub(crate) use raw::RawScene;
 

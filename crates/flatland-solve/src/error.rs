@@ -58,6 +58,9 @@ pub enum SolveError {
         /// The mesh's scene fingerprint.
         mesh: String,
     },
+    /// A scene or its lights refused (a light on an edge, named by its index).
+    #[error(transparent)]
+    Geom(#[from] flatland_geom::GeomError),
     /// The caller's stop flag ended the work.
     #[error("interrupted")]
     Interrupted,

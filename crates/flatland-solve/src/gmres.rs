@@ -39,6 +39,31 @@ fn apply_system(op: &dyn TransferOperator, x: &[f64], out: &mut [f64]) {
     }
 }
 
+/// How a solve decides it has converged.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Finish {
+    /// Once the Arnoldi estimate meets the tolerance, one more product with K computes the
+    /// true residual, and the solve goes on if it does not meet it: what every one-off solve
+    /// reports.
+    TrueResidual,
+    /// The Arnoldi estimate is the residual (exact in exact arithmetic): one product with K
+    /// less per solve, for the many small solves of a relighting.
+    Estimate,
+}
+
+/// What a solve keeps between calls: the Krylov basis, the Hessenberg columns, the rotations
+/// and two work vectors, allocated on the first solve of a size and reused after it.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Gmres {
+    basis: Vec<Vec<f64>>,
+    h: Vec<Vec<f64>>,
+    rotations: Vec<(f64, f64)>,
+    g: Vec<f64>,
+    y: Vec<f64>,
+    r: Vec<f64>,
+    w: Vec<f64>,
+}
+
 /// Solves `x − K x = e` to relative residual `tolerance`, starting from `x`. Polls `stop`
 /// before every product with K.
 pub(crate) fn solve(
@@ -49,73 +74,169 @@ pub(crate) fn solve(
     max_iterations: usize,
     stop: &Stop,
 ) -> Result<Converged, SolveError> {
-    let n = e.len();
-    let norm_e = norm(e);
-    if norm_e == 0.0 {
-        x.fill(0.0);
-        return Ok(Converged {
-            iterations: 0,
-            residual: 0.0,
-        });
+    Gmres::default().solve(
+        op,
+        e,
+        x,
+        Limits {
+            tolerance,
+            max_iterations,
+            finish: Finish::TrueResidual,
+        },
+        stop,
+    )
+}
+
+/// When a solve stops.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Limits {
+    /// The relative residual to reach.
+    pub tolerance: f64,
+    /// Most products with K in the Krylov steps.
+    pub max_iterations: usize,
+    /// How convergence is decided.
+    pub finish: Finish,
+}
+
+impl Gmres {
+    /// Bytes its vectors hold (as allocated).
+    pub(crate) fn memory_bytes(&self) -> usize {
+        let vectors = self.basis.iter().chain(&self.h).map(Vec::capacity);
+        8 * (vectors.sum::<usize>()
+            + self.g.capacity()
+            + self.y.capacity()
+            + self.r.capacity()
+            + self.w.capacity())
+            + 16 * self.rotations.capacity()
     }
-    let m = RESTART.min(n).max(1);
-    let mut iterations = 0;
-    let mut r = vec![0.0; n];
-    let mut w = vec![0.0; n];
-    let mut basis: Vec<Vec<f64>> = Vec::with_capacity(m + 1);
-    loop {
-        if stop() {
-            return Err(SolveError::Interrupted);
+
+    /// Sizes the work space for `n` elements and restarts of `m` steps (allocating only the
+    /// first time, or when `n` grows). Nothing is cleared: every vector is written before it
+    /// is read.
+    fn prepare(&mut self, n: usize, m: usize) {
+        let sized = |v: &mut Vec<f64>, len: usize| v.resize(len, 0.0);
+        sized(&mut self.r, n);
+        sized(&mut self.w, n);
+        self.basis.resize_with(m + 1, Vec::new);
+        for v in &mut self.basis {
+            sized(v, n);
         }
-        apply_system(op, x, &mut r);
-        for (ri, ei) in r.iter_mut().zip(e) {
-            *ri = ei - *ri;
+        self.h.resize_with(m, Vec::new);
+        for column in &mut self.h {
+            sized(column, m + 1);
         }
-        let beta = norm(&r);
-        let residual = beta / norm_e;
-        if !residual.is_finite() || (residual > tolerance && iterations >= max_iterations) {
-            return Err(SolveError::NotConverged {
-                iterations,
-                residual,
-                tolerance,
-            });
-        }
-        if residual <= tolerance {
+        sized(&mut self.g, m + 1);
+        sized(&mut self.y, m);
+    }
+
+    /// Solves `x − K x = e` within `limits`, starting from `x`. Polls `stop` before every
+    /// product with K.
+    pub(crate) fn solve(
+        &mut self,
+        op: &dyn TransferOperator,
+        e: &[f64],
+        x: &mut [f64],
+        limits: Limits,
+        stop: &Stop,
+    ) -> Result<Converged, SolveError> {
+        let n = e.len();
+        let norm_e = norm(e);
+        if norm_e == 0.0 {
+            x.fill(0.0);
             return Ok(Converged {
-                iterations,
-                residual,
+                iterations: 0,
+                residual: 0.0,
             });
         }
-        basis.clear();
-        basis.push(r.iter().map(|v| v / beta).collect());
-        // Hessenberg columns, Givens rotations, and the rotated right-hand side.
-        let mut h = vec![vec![0.0; m + 1]; m];
-        let mut rotations: Vec<(f64, f64)> = Vec::with_capacity(m);
-        let mut g = vec![0.0; m + 1];
-        g[0] = beta;
+        let Limits {
+            tolerance,
+            max_iterations,
+            finish,
+        } = limits;
+        let m = RESTART.min(n).max(1);
+        self.prepare(n, m);
+        let mut iterations = 0;
+        loop {
+            if stop() {
+                return Err(SolveError::Interrupted);
+            }
+            apply_system(op, x, &mut self.r);
+            for (ri, ei) in self.r.iter_mut().zip(e) {
+                *ri = ei - *ri;
+            }
+            let beta = norm(&self.r);
+            let residual = beta / norm_e;
+            if !residual.is_finite() || (residual > tolerance && iterations >= max_iterations) {
+                return Err(SolveError::NotConverged {
+                    iterations,
+                    residual,
+                    tolerance,
+                });
+            }
+            if residual <= tolerance {
+                return Ok(Converged {
+                    iterations,
+                    residual,
+                });
+            }
+            let (steps, estimate) = self.cycle(op, beta, norm_e, limits, iterations, stop)?;
+            iterations += steps;
+            let y = &mut self.y[..steps];
+            back_substitute(&self.h, &self.g, y);
+            for (yi, v) in y.iter().zip(&self.basis) {
+                x.iter_mut().zip(v).for_each(|(xi, vi)| *xi += yi * vi);
+            }
+            if finish == Finish::Estimate && estimate <= tolerance {
+                return Ok(Converged {
+                    iterations,
+                    residual: estimate,
+                });
+            }
+        }
+    }
+
+    /// One cycle of Krylov steps from the residual in `self.r` (norm `beta`): the steps made
+    /// and the estimated relative residual after them.
+    fn cycle(
+        &mut self,
+        op: &dyn TransferOperator,
+        beta: f64,
+        norm_e: f64,
+        limits: Limits,
+        done: usize,
+        stop: &Stop,
+    ) -> Result<(usize, f64), SolveError> {
+        let m = self.h.len();
+        for (b, r) in self.basis[0].iter_mut().zip(&self.r) {
+            *b = r / beta;
+        }
+        self.rotations.clear();
+        self.g.fill(0.0);
+        self.g[0] = beta;
         let mut steps = 0;
+        let mut estimate = beta / norm_e;
         for k in 0..m {
             if stop() {
                 return Err(SolveError::Interrupted);
             }
-            apply_system(op, &basis[k], &mut w);
-            iterations += 1;
-            let next = orthogonalize(&mut w, &basis, &mut h[k]);
-            h[k][k + 1] = next;
-            let (c, s) = rotate(&mut h[k], k, &mut rotations);
-            g[k + 1] = -s * g[k];
-            g[k] *= c;
+            apply_system(op, &self.basis[k], &mut self.w);
+            let column = &mut self.h[k];
+            column.fill(0.0);
+            let next = orthogonalize(&mut self.w, &self.basis[..=k], column);
+            column[k + 1] = next;
+            let (c, s) = rotate(column, k, &mut self.rotations);
+            self.g[k + 1] = -s * self.g[k];
+            self.g[k] *= c;
             steps = k + 1;
-            let estimate = g[k + 1].abs() / norm_e;
-            if estimate <= tolerance || iterations >= max_iterations || next == 0.0 {
+            estimate = self.g[k + 1].abs() / norm_e;
+            if estimate <= limits.tolerance || done + steps >= limits.max_iterations || next == 0.0
+            {
                 break;
             }
-            basis.push(w.iter().map(|v| v / next).collect());
+            let (w, basis) = (&self.w, &mut self.basis[k + 1]);
+            basis.iter_mut().zip(w).for_each(|(b, wi)| *b = wi / next);
         }
-        let y = back_substitute(&h, &g, steps);
-        for (yi, v) in y.iter().zip(&basis) {
-            x.iter_mut().zip(v).for_each(|(xi, vi)| *xi += yi * vi);
-        }
+        Ok((steps, estimate))
     }
 }
 
@@ -161,8 +282,8 @@ fn rotate(h: &mut [f64], k: usize, rotations: &mut Vec<(f64, f64)>) -> (f64, f64
 
 /// The Krylov coefficients of the first `steps` columns: back substitution in the rotated
 /// (upper-triangular) Hessenberg matrix, column-major in `h`.
-fn back_substitute(h: &[Vec<f64>], g: &[f64], steps: usize) -> Vec<f64> {
-    let mut y = vec![0.0; steps];
+fn back_substitute(h: &[Vec<f64>], g: &[f64], y: &mut [f64]) {
+    let steps = y.len();
     for i in (0..steps).rev() {
         let sum: f64 = (i + 1..steps).map(|j| h[j][i] * y[j]).sum();
         y[i] = if h[i][i] == 0.0 {
@@ -171,7 +292,6 @@ fn back_substitute(h: &[Vec<f64>], g: &[f64], steps: usize) -> Vec<f64> {
             (g[i] - sum) / h[i][i]
         };
     }
-    y
 }
 
 #[cfg(test)]

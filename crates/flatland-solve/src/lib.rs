@@ -44,6 +44,12 @@
 //! **Linear solve.** Restarted GMRES on `(I − K) B = E` to a relative residual
 //! [`SolveParams::tolerance`] (default 1e-10); it needs only `I − K` invertible, not `‖K‖ < 1`.
 //!
+//! **Relighting.** One scene lit by point lights that move: a [`Relighter`] builds the exact
+//! operator once, by rows and by columns, and per move computes the direct light by one view
+//! per light, the first bounce `K B₀` from the columns of the lit elements only, and the later
+//! bounces by GMRES warm-started from the last move's ([`Relighter::relight`]); [`cold_solve`]
+//! is the one-off solve a move is checked against.
+//!
 //! **Errors of B.** [`ExactReference`] solves the exact kernel on a fine mesh once and gives the
 //! exact B at any mesh's collocation points (by the equation itself: `E + ρ ∫ G V B` with the
 //! fine B, the Nyström interpolation). [`solve_errors`] then measures a solution's relative L2
@@ -86,6 +92,7 @@ mod operator;
 mod physical;
 mod quadrature;
 mod reference;
+mod relight;
 mod represent;
 mod settings;
 mod solve;
@@ -121,6 +128,7 @@ pub use reference::{
     BOOTSTRAP_RESAMPLES, Errors, Reference, bootstrap_l2, density_ratio, discontinuity_mask,
     grid_point, relative_l1, relative_l2,
 };
+pub use relight::{ColdSolve, MoveCost, RelightParams, Relighter, Relit, WarmStart, cold_solve};
 pub use represent::{
     Representation, check_fingerprint, inverse_source_weights, quadrature_operator,
 };

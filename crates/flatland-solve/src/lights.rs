@@ -41,6 +41,11 @@ impl DirectLight {
         })
     }
 
+    /// The hierarchy already built for the sweep's operator on the same mesh.
+    pub(crate) fn of_sweep(scene: SweepScene) -> DirectLight {
+        DirectLight { scene }
+    }
+
     /// One view from scene point `at`: `(element, Δφ)` for every element whose front faces
     /// `at` and which `at` sees, `Δφ` the angle its visible part subtends (radians), elements
     /// ascending. The slice lives in `buffers` until the next view. A light of power `Φ` there

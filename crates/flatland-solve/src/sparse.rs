@@ -103,6 +103,71 @@ impl SparseOperator {
         self.blocks.iter().map(|b| b.values.len()).sum()
     }
 
+    /// The transpose: row `j` of it is column `j` of this operator, `(i, K_ij)` with `i`
+    /// ascending — what sends light from element `j`, for products with a vector that is
+    /// non-zero on few elements ([`SparseOperator::gather_columns`]). Linear in the numbers
+    /// held; the same numbers, so the same bytes.
+    #[must_use]
+    pub fn transposed(&self) -> SparseOperator {
+        let n = self.n;
+        let mut counts = vec![0u32; n];
+        for block in &self.blocks {
+            for &j in &block.columns {
+                counts[j as usize] += 1;
+            }
+        }
+        let mut blocks: Vec<RowBlock> = counts
+            .chunks(ROWS_PER_BLOCK)
+            .map(|counts| {
+                let mut starts = Vec::with_capacity(counts.len() + 1);
+                starts.push(0);
+                let mut held = 0;
+                for &c in counts {
+                    held += c;
+                    starts.push(held);
+                }
+                RowBlock {
+                    starts,
+                    columns: vec![0; held as usize],
+                    values: vec![0.0; held as usize],
+                }
+            })
+            .collect();
+        // Where the next entry of each row of the transpose goes; rows of K in ascending
+        // order fill each of its rows in ascending order.
+        let mut next: Vec<u32> = blocks
+            .iter()
+            .flat_map(|b| b.starts[..b.starts.len() - 1].iter().copied())
+            .collect();
+        for i in 0..n {
+            let (columns, values) = self.row(i);
+            for (&j, &v) in columns.iter().zip(values) {
+                let j = j as usize;
+                let block = &mut blocks[j / ROWS_PER_BLOCK];
+                let at = next[j] as usize;
+                block.columns[at] = i as u32;
+                block.values[at] = v;
+                next[j] += 1;
+            }
+        }
+        SparseOperator { n, blocks }
+    }
+
+    /// `out += Σ_j weight_j · (row j)` over `(j, weight_j)` in `weights`: on a transposed
+    /// operator, `K x` for an `x` that is `weight_j` on the listed elements and 0 elsewhere,
+    /// in the work of the columns listed only. Returns the numbers read.
+    pub fn gather_columns(&self, weights: &[(u32, f64)], out: &mut [f64]) -> usize {
+        let mut read = 0;
+        for &(j, w) in weights {
+            let (rows, values) = self.row(j as usize);
+            read += rows.len();
+            for (&i, v) in rows.iter().zip(values) {
+                out[i as usize] += w * v;
+            }
+        }
+        read
+    }
+
     /// Bytes the operator holds in memory (indices and values, as allocated).
     #[must_use]
     pub fn memory_bytes(&self) -> usize {
@@ -241,6 +306,47 @@ mod tests {
                 for j in 0..n {
                     assert_eq!(op.get(i, j), dense[i * n + j]);
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn the_transpose_holds_the_columns_and_gathers_them() {
+        let mut rng = flatland_testkit::rng(5);
+        for (n, fill) in [(1, 1.0), (70, 0.2), (300, 0.03)] {
+            let dense = random(n, fill, 10 + n as u64);
+            let op = sparse_of(&dense, n);
+            let columns = op.transposed();
+            assert_eq!(columns.nonzeros(), op.nonzeros());
+            for i in 0..n {
+                for j in 0..n {
+                    assert_eq!(columns.get(j, i), dense[i * n + j], "K[{i}][{j}]");
+                }
+                let (rows, _) = columns.row(i);
+                assert!(rows.windows(2).all(|w| w[0] < w[1]), "column {i} ascends");
+            }
+            // K x for an x non-zero on a few elements, by its columns, is the product.
+            let picked: Vec<(u32, f64)> = (0..n)
+                .filter_map(|j| {
+                    let w = rng.random_range(-1.0..1.0);
+                    (rng.random_range(0.0..1.0) < 0.1).then_some((j as u32, w))
+                })
+                .collect();
+            let mut x = vec![0.0; n];
+            for &(j, w) in &picked {
+                x[j as usize] = w;
+            }
+            let mut expected = vec![0.0; n];
+            op.apply(&x, &mut expected);
+            let mut gathered = vec![0.0; n];
+            let read = columns.gather_columns(&picked, &mut gathered);
+            let held: usize = picked
+                .iter()
+                .map(|&(j, _)| columns.row(j as usize).0.len())
+                .sum();
+            assert_eq!(read, held);
+            for i in 0..n {
+                assert_close!(gathered[i], expected[i], 1e-12, "n = {n}, row {i}");
             }
         }
     }

@@ -59,24 +59,57 @@ pub(super) fn check_lights(edges: &[Edge], lights: &[PointLight]) -> Result<(), 
     if lights.is_empty() {
         return Ok(());
     }
-    let grid = EdgeGrid::new(edges);
-    for (i, light) in lights.iter().enumerate() {
-        if let Some(edge) = grid
-            .near(light.at)
-            .find(|&e| on_closed_segment(light.at, edges[e].a, edges[e].b))
-        {
-            return Err(GeomError::LightOnEdge {
-                light: i,
-                x: light.at.x,
-                y: light.at.y,
-                edge,
-            });
+    LightCheck::of_edges(edges.to_vec()).check(lights)
+}
+
+/// A scene's edges filed to check lights against: built once (linear in the edges), each
+/// check a look-up per light — what a light moved many times is checked with
+/// ([`Scene::with_lights`](crate::Scene::with_lights) files the edges anew each call).
+#[derive(Clone, Debug)]
+pub struct LightCheck {
+    edges: Vec<Edge>,
+    grid: EdgeGrid,
+}
+
+impl LightCheck {
+    /// The edges of `scene`, filed.
+    #[must_use]
+    pub fn new(scene: &crate::Scene) -> LightCheck {
+        LightCheck::of_edges(scene.edges().to_vec())
+    }
+
+    fn of_edges(edges: Vec<Edge>) -> LightCheck {
+        LightCheck {
+            grid: EdgeGrid::new(&edges),
+            edges,
         }
     }
-    Ok(())
+
+    /// The rule of [`Scene::with_lights`](crate::Scene::with_lights): every light finite, of
+    /// power ≥ 0 and off every edge; the error names the first light that is not (by its
+    /// index in `lights`) and the edge it lies on.
+    pub fn check(&self, lights: &[PointLight]) -> Result<(), GeomError> {
+        for (i, light) in lights.iter().enumerate() {
+            light.validate(i)?;
+            if let Some(edge) = self
+                .grid
+                .near(light.at)
+                .find(|&e| on_closed_segment(light.at, self.edges[e].a, self.edges[e].b))
+            {
+                return Err(GeomError::LightOnEdge {
+                    light: i,
+                    x: light.at.x,
+                    y: light.at.y,
+                    edge,
+                });
+            }
+        }
+        Ok(())
+    }
 }
 
 /// The edges filed by the square cells their bounding boxes touch: about one edge per cell.
+#[derive(Clone, Debug)]
 struct EdgeGrid {
     lo: DVec2,
     cell: f64,
@@ -241,6 +274,30 @@ mod tests {
                     assert!(found.contains(&j), "edge {j} at {p}");
                 }
             }
+        }
+    }
+
+    #[test]
+    fn a_check_built_once_gives_what_with_lights_gives() {
+        let scene = lit(Vec::new()).unwrap();
+        let check = LightCheck::new(&scene);
+        for lights in [
+            vec![PointLight::new(v(0.7, 0.4), 2.0)],
+            vec![
+                PointLight::new(v(0.7, 0.4), 2.0),
+                PointLight::new(v(2.0, 0.5), 1.0),
+            ],
+            vec![PointLight::new(v(1.0, 0.0), 1.0)],
+            vec![PointLight::new(v(1.0, 0.5), -1.0)],
+            vec![PointLight::new(v(f64::NAN, 0.5), 1.0)],
+        ] {
+            let once = check.check(&lights).map_err(|e| e.to_string());
+            let anew = scene
+                .clone()
+                .with_lights(lights.clone())
+                .map(|_| ())
+                .map_err(|e| e.to_string());
+            assert_eq!(once, anew, "{lights:?}");
         }
     }
 }
