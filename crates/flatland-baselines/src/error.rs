@@ -48,6 +48,9 @@ pub enum BaselineError {
         /// The limit.
         max_links: usize,
     },
+    /// A scene or its lights refused (a lighting's light on an edge, named by its index).
+    #[error(transparent)]
+    Geom(#[from] flatland_geom::GeomError),
     /// A solve a baseline makes on its way failed (clustered HR's weighting solves).
     #[error(transparent)]
     Solve(#[from] flatland_solve::SolveError),

@@ -28,8 +28,8 @@
 //!
 //! # Use
 //! [`trace`] lights a scene as it is, its point lights included; a [`LightTracer`] traces any
-//! [`Lighting`] (emission overrides per edge, with the scene's lights) of one scene and mesh,
-//! one trace per lighting. A budget is a photon
+//! [`Lighting`] (emission overrides per edge, with the scene's lights or others instead) of one
+//! scene and mesh, one trace per lighting. A budget is a photon
 //! count or a wall time ([`TraceBudget`]); `stop` is polled between batches and ends the trace
 //! with what is done ([`Traced::stopped`]). The result has what a bench row needs: `B`
 //! (compare it with [`solve_errors`](flatland_solve::solve_errors) against the exact
@@ -67,7 +67,7 @@ mod tally;
 
 use std::time::{Duration, Instant};
 
-use flatland_geom::{EdgeId, Kernel};
+use flatland_geom::{EdgeId, Kernel, LightCheck, PointLight};
 use flatland_solve::{Mesh, Stop};
 use rayon::prelude::*;
 
@@ -139,10 +139,12 @@ impl TraceParams {
     }
 }
 
-/// A lighting of a scene: the scene's own emissions, with some edges' overridden.
+/// A lighting of a scene: the scene's own emissions, with some edges' overridden, and its own
+/// point lights or others instead.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Lighting {
     overrides: Vec<(EdgeId, f64)>,
+    lights: Option<Vec<PointLight>>,
 }
 
 impl Lighting {
@@ -155,10 +157,26 @@ impl Lighting {
         self
     }
 
+    /// The same lighting with `lights` instead of the scene's point lights (none: every light
+    /// off). Checked when traced by the rule of
+    /// [`Scene::with_lights`](flatland_geom::Scene::with_lights): finite, power ≥ 0, off every
+    /// edge.
+    #[must_use]
+    pub fn with_lights(mut self, lights: Vec<PointLight>) -> Lighting {
+        self.lights = Some(lights);
+        self
+    }
+
     /// The overrides, in the order given.
     #[must_use]
     pub fn overrides(&self) -> &[(EdgeId, f64)] {
         &self.overrides
+    }
+
+    /// The point lights instead of the scene's, if the lighting replaces them.
+    #[must_use]
+    pub fn lights(&self) -> Option<&[PointLight]> {
+        self.lights.as_deref()
     }
 }
 
@@ -224,6 +242,8 @@ pub struct LightTracer<'a> {
     mesh: &'a Mesh,
     /// The mesh edge of each scene edge (`None` for a blocker).
     surface_of: Vec<Option<u32>>,
+    /// The edges filed to check a lighting's own lights.
+    light_check: LightCheck,
 }
 
 impl<'a> LightTracer<'a> {
@@ -246,6 +266,7 @@ impl<'a> LightTracer<'a> {
             kernel,
             mesh,
             surface_of,
+            light_check: LightCheck::new(kernel.scene()),
         })
     }
 
@@ -259,7 +280,13 @@ impl<'a> LightTracer<'a> {
     ) -> Result<Traced, BaselineError> {
         params.check()?;
         let started = Instant::now();
-        let lights = self.kernel.scene().lights();
+        let lights = match lighting.lights() {
+            Some(lights) => {
+                self.light_check.check(lights)?;
+                lights
+            }
+            None => self.kernel.scene().lights(),
+        };
         let emitters = Emitters::new(self.mesh, &self.surface_of, lighting, lights)?;
         let (batches, size) = plan(params.budget, emitters.power());
         let round = 4 * rayon::current_num_threads().max(1) as u64;
@@ -585,6 +612,42 @@ mod tests {
             (&direct.radiosity, direct.rays)
         );
         assert!(relit.radiosity[0] >= 0.5);
+    }
+
+    #[test]
+    fn a_lighting_with_its_own_lights_traces_as_the_scene_lit_by_them() {
+        let scene = flatland_geom::generate::floor_plan_lit(120, 3).unwrap();
+        let lamp = PointLight::new(scene.lights()[1].at, 5.0);
+        let kernel = Kernel::new(scene.clone());
+        let mesh = Mesh::new(&kernel, 300).unwrap();
+        let tracer = LightTracer::new(&kernel, &mesh).unwrap();
+        let lighting = Lighting::default().with_lights(vec![lamp]);
+        let relit = tracer
+            .trace(&lighting, &photons(20_000, 4), &never)
+            .unwrap();
+        let moved = Kernel::new(scene.with_lights(vec![lamp]).unwrap());
+        let moved_mesh = Mesh::new(&moved, 300).unwrap();
+        let direct = trace(&moved, &moved_mesh, &photons(20_000, 4), &never).unwrap();
+        assert_eq!(
+            (&relit.radiosity, relit.rays),
+            (&direct.radiosity, direct.rays)
+        );
+        assert_close!(relit.power.emitted, 5.0, 1e-12);
+        // No lights: nothing emits, nothing is traced.
+        let dark = Lighting::default().with_lights(Vec::new());
+        let none = tracer.trace(&dark, &photons(1_000, 4), &never).unwrap();
+        assert_eq!((none.photons, none.rays), (0, 0));
+        // A light on a wall is refused by its index and the edge.
+        let wall = kernel.scene().edges()[0];
+        let on_wall = Lighting::default().with_lights(vec![lamp, PointLight::new(wall.a, 1.0)]);
+        let err = tracer
+            .trace(&on_wall, &photons(1_000, 4), &never)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.starts_with("light 1: at (") && err.contains("lies on edge"),
+            "{err}"
+        );
     }
 
     #[test]

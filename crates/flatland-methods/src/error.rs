@@ -35,6 +35,9 @@ pub enum MethodError {
     /// The tracer lights a scene without any kernel: it has no representation to build.
     #[error("`{0}` lights a scene without a kernel: it has no representation to build")]
     NotAKernel(&'static str),
+    /// A method that is named but not built yet (the learned transport).
+    #[error("`{0}` ({1}) is not built yet")]
+    NotBuilt(&'static str, &'static str),
     /// A build parameter out of its range.
     #[error("{name} must be {valid}, but is {value}")]
     InvalidParameter {
@@ -63,6 +66,12 @@ pub enum MethodError {
 }
 
 impl MethodError {
+    /// The error of a method that is named but not built yet.
+    #[must_use]
+    pub fn not_built(method: crate::Method) -> MethodError {
+        MethodError::NotBuilt(method.name(), method.title())
+    }
+
     /// Whether a stop ended the build, here or in the crate below that was running.
     #[must_use]
     pub fn is_interrupted(&self) -> bool {

@@ -38,6 +38,11 @@ pub enum Method {
     UniformExact,
     /// The Monte Carlo light tracer: photons from the emitters, no kernel at all.
     Tracer,
+    /// The learned transport of the later bounces, for one scene lit again and again
+    /// (`flatland relight`): the exact direct light and first bounce, a learned operator for
+    /// the light that bounces twice or more. Not built yet: named so that commands refuse it
+    /// with that reason.
+    Transport,
 }
 
 /// What a method is, for the tables that sort and sweep them.
@@ -66,7 +71,7 @@ pub enum Knob {
 
 impl Method {
     /// Every method, in the order tables list them.
-    pub const ALL: [Method; 10] = [
+    pub const ALL: [Method; 11] = [
         Method::Light,
         Method::Visibility,
         Method::Paper,
@@ -77,6 +82,7 @@ impl Method {
         Method::UniformExact,
         Method::Exact,
         Method::Tracer,
+        Method::Transport,
     ];
 
     /// Its one name.
@@ -93,6 +99,7 @@ impl Method {
             Method::Uniform => "uniform",
             Method::UniformExact => "uniform-exact",
             Method::Tracer => "tracer",
+            Method::Transport => "transport",
         }
     }
 
@@ -110,6 +117,7 @@ impl Method {
             Method::Uniform => "uniform grid",
             Method::UniformExact => "uniform grid of exact means",
             Method::Tracer => "Monte Carlo tracer",
+            Method::Transport => "learned transport of the later bounces",
         }
     }
 
@@ -133,9 +141,11 @@ impl Method {
     pub fn family(self) -> Family {
         match self {
             Method::Exact => Family::Exact,
-            Method::Light | Method::Visibility | Method::Paper | Method::PaperNorefit => {
-                Family::Learner
-            }
+            Method::Light
+            | Method::Visibility
+            | Method::Paper
+            | Method::PaperNorefit
+            | Method::Transport => Family::Learner,
             Method::Hr
             | Method::Clustered
             | Method::Uniform
@@ -153,6 +163,13 @@ impl Method {
             Method::Tracer => Knob::Photons,
             _ => Knob::Budget,
         }
+    }
+
+    /// Whether it exists yet: every method but the learned transport, which the next issue
+    /// builds.
+    #[must_use]
+    pub fn is_built(self) -> bool {
+        self != Method::Transport
     }
 
     /// Whether it is swept over budgets of basis functions.
@@ -313,6 +330,21 @@ mod tests {
         );
         let msg = Method::parse_network("default").unwrap_err().to_string();
         assert!(msg.contains("`visibility`"), "{msg}");
+    }
+
+    #[test]
+    fn the_transport_is_named_and_refused_as_not_built() {
+        assert_eq!(Method::parse("transport").unwrap(), Method::Transport);
+        assert!(
+            Method::ALL
+                .iter()
+                .all(|m| m.is_built() != (*m == Method::Transport))
+        );
+        let msg = crate::MethodError::not_built(Method::Transport).to_string();
+        assert_eq!(
+            msg,
+            "`transport` (learned transport of the later bounces) is not built yet"
+        );
     }
 
     #[test]
