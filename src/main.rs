@@ -40,6 +40,9 @@ enum Command {
     /// Light the scene: solve the radiosity equation with a kernel (exact, learned, HR, uniform)
     /// and compare the solved B with the exact kernel's.
     Solve(cmd::solve::Args),
+    /// Relight one scene again and again: a light at many positions (given, from a file, or a
+    /// walk through the rooms), the exact operator built once and re-solved per move.
+    Relight(cmd::relight::Args),
     /// Generate a realistic scene of any size: a floor plan or a hall.
     Scene(cmd::scene::Args),
     /// Run the adversarial stability suite (scaling, extreme scenes and parameters, soak).
@@ -66,6 +69,7 @@ fn main() {
         Some(Command::Eval(args)) => cmd::eval::run(&args),
         Some(Command::Stress(args)) => cmd::stress::run(&args),
         Some(Command::Solve(args)) => cmd::solve::run(&args),
+        Some(Command::Relight(args)) => cmd::relight::run(&args),
         Some(Command::Scene(args)) => cmd::scene::run(&args),
         Some(Command::Bench(args)) => cmd::bench::run(&args),
         Some(Command::Figure(args)) => cmd::figure::run(&args),

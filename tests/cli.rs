@@ -1537,3 +1537,217 @@ fn the_readme_lists_every_command_with_flags_its_help_knows() {
         );
     }
 }
+
+// ===== relight: one scene, many light positions =====
+
+/// A generated floor plan lit by lamps (no edge emitting), written in `dir`.
+fn lamp_plan(dir: &Path, size: usize) -> PathBuf {
+    let path = dir.join("plan.json");
+    let size = size.to_string();
+    let out = flatland_in(
+        dir,
+        &[
+            "scene",
+            "floorplan",
+            "--size",
+            &size,
+            "--seed",
+            "5",
+            "--lamps",
+            "--out",
+            "plan.json",
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    path
+}
+
+fn json_keys(json: &serde_json::Value) -> Vec<String> {
+    let mut keys: Vec<String> = json.as_object().unwrap().keys().cloned().collect();
+    keys.sort();
+    keys
+}
+
+#[test]
+fn relight_reports_exactly_its_keys_and_each_position_is_the_cold_solve() {
+    // fig3: its emitting edge stays on, the light moves over three positions.
+    let lights = [
+        "--light",
+        "0.3,0.5",
+        "--light",
+        "0.5,0.6,2",
+        "--light",
+        "0.7,0.4",
+    ];
+    let mut args = vec!["relight", "--json"];
+    args.extend(lights);
+    let out = flatland(&args);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+    let plain = [
+        "bytes",
+        "ms_per_move_median",
+        "ms_per_move_p95",
+        "positions",
+        "setup_s",
+    ];
+    assert_eq!(json_keys(&json), plain);
+    assert_eq!(json["positions"], 3);
+    assert!(json["bytes"].as_u64().unwrap() > 0);
+    args.push("--check");
+    let out = flatland(&args);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+    let mut checked: Vec<&str> = plain.to_vec();
+    checked.extend(["rel_l2_b_max", "rel_l2_b_mean", "rel_l2_indirect_mean"]);
+    checked.sort_unstable();
+    assert_eq!(json_keys(&json), checked);
+    // To its tolerance, 1e-6: the re-solve is the cold exact solve at every position.
+    for key in ["rel_l2_b_max", "rel_l2_b_mean", "rel_l2_indirect_mean"] {
+        let e = json[key].as_f64().unwrap();
+        assert!((0.0..1e-5).contains(&e), "{key} = {e}");
+    }
+}
+
+#[test]
+fn relight_writes_a_block_of_rows_per_position_and_a_picture_each() {
+    let dir = temp_dir("relight-out");
+    let plan = lamp_plan(&dir, 120);
+    let walk = [
+        "relight",
+        "--scene",
+        as_str(&plan),
+        "--walk",
+        "4",
+        "--seed",
+        "3",
+    ];
+    let csv = |name: &str| {
+        let mut args = walk.to_vec();
+        args.extend(["--out", name]);
+        let out = flatland_in(&dir, &args);
+        assert!(out.status.success(), "{}", stderr(&out));
+        std::fs::read_to_string(dir.join(name)).unwrap()
+    };
+    let text = csv("b.csv");
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("position,edge,s,x,y,b"));
+    let rows = parse_csv(&lines.collect::<Vec<_>>().join("\n"));
+    let per_position = rows.len() / 4;
+    assert_eq!(rows.len(), 4 * per_position);
+    for (k, block) in rows.chunks(per_position).enumerate() {
+        assert!(block.iter().all(|r| r[0] == k as f64 && r.len() == 6));
+        // In order of s, every B finite and ≥ 0, and the lamp lights something.
+        assert!(block.windows(2).all(|w| w[0][2] < w[1][2]));
+        assert!(block.iter().all(|r| r[5].is_finite() && r[5] >= 0.0));
+        assert!(block.iter().any(|r| r[5] > 0.0));
+    }
+    assert_eq!(csv("again.csv"), text, "the same walk gives the same B");
+    let mut args = walk.to_vec();
+    args.extend(["--out", "frames"]);
+    let out = flatland_in(&dir, &args);
+    assert!(out.status.success(), "{}", stderr(&out));
+    for k in 0..4 {
+        let png = image::open(dir.join(format!("frames/position-{k}.png"))).unwrap();
+        assert_eq!((png.width(), png.height()), (760, 760));
+    }
+}
+
+#[test]
+fn relight_refuses_bad_input_with_one_line_naming_the_flag() {
+    let dir = temp_dir("relight-bad");
+    std::fs::write(dir.join("path.txt"), "# x,y\n0.3,0.5\n\n0.5,oops\n").unwrap();
+    std::fs::write(dir.join("wall.txt"), "0.3,0.5\n0.0,0.5\n").unwrap();
+    let bad: [(&[&str], &[&str]); 9] = [
+        (
+            &["relight", "--light", "0.0,0.5"],
+            &["--light 1 (0.0,0.5)", "lies on edge"],
+        ),
+        (
+            &["relight", "--light", "0.3,0.5", "--light", "1,2,3,4"],
+            &["--light 2", "X,Y or X,Y,POWER"],
+        ),
+        (
+            &["relight", "--path", "path.txt"],
+            &["path.txt:4", "`0.5,oops`"],
+        ),
+        (
+            &["relight", "--path", "wall.txt"],
+            &["wall.txt:2", "lies on edge"],
+        ),
+        (
+            &["relight", "--walk", "0"],
+            &["--walk", "positions must be in [1, 1000000]"],
+        ),
+        (
+            &["relight", "--walk", "3", "--kernel", "transport"],
+            &["not built yet", "--kernel exact"],
+        ),
+        (
+            &["relight", "--walk", "3", "--kernel", "m.json"],
+            &["model", "not built yet"],
+        ),
+        (
+            &["relight", "--walk", "3", "--kernel", "hr"],
+            &["--kernel hr", "exact or transport"],
+        ),
+        (
+            &["relight", "--walk", "3", "--save-model", "t.json"],
+            &["--save-model", "not built yet"],
+        ),
+    ];
+    for (args, needles) in bad {
+        let out = flatland_in(&dir, args);
+        assert_one_line_error(&out, needles);
+    }
+    let out = flatland_in(&dir, &["relight", "--walk", "3", "--tolerance", "0"]);
+    assert_one_line_error(&out, &["--tolerance", "(0, 0.1]"]);
+    // None of --light, --path, --walk: clap says one is needed.
+    let out = flatland_in(&dir, &["relight"]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("--light"), "{}", stderr(&out));
+    let names: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names.len(), 2, "nothing written: {names:?}");
+}
+
+#[test]
+fn relight_warns_about_a_light_outside_every_room() {
+    // fig3's room is closed: a light outside it lights only the outer faces.
+    let out = flatland(&["relight", "--light", "0.3,0.5", "--light", "5,5"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert!(
+        err.contains("warning: 1 of 2 positions are outside every room"),
+        "{err}"
+    );
+    assert!(err.contains("--light 2 (5,5)"), "{err}");
+}
+
+#[test]
+fn regression_ctrl_c_keeps_the_positions_relit() {
+    let dir = temp_dir("relight-ctrl-c");
+    let plan = lamp_plan(&dir, 300);
+    let stopped = interrupt_when(
+        &dir,
+        &[
+            "relight",
+            "--scene",
+            as_str(&plan),
+            "--walk",
+            "100000",
+            "--out",
+            "b.csv",
+        ],
+        "relighting",
+    );
+    assert_interrupted(&stopped, "positions relit, kept in b.csv");
+    let text = std::fs::read_to_string(dir.join("b.csv")).unwrap();
+    assert!(
+        text.starts_with("position,edge,s,x,y,b\n"),
+        "{}",
+        &text[..40]
+    );
+}

@@ -15,6 +15,7 @@ pub mod eval;
 pub mod figure;
 pub mod fit;
 pub mod kernel;
+pub mod relight;
 pub mod results;
 pub mod scene;
 pub mod solve;

@@ -157,31 +157,97 @@ impl Scene {
 /// file is removed. A temporary file left by a process that was killed while writing (they are
 /// named `.NAME.tmpPID`) is removed by the next successful write of the same file.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), GeomError> {
-    let io = |error| GeomError::Io {
+    use std::io::Write as _;
+    let mut file = AtomicFile::create(path)?;
+    file.write_all(bytes).map_err(|error| GeomError::Io {
         path: path.to_path_buf(),
         error,
-    };
-    let name = path.file_name().ok_or_else(|| {
-        io(std::io::Error::new(
-            std::io::ErrorKind::InvalidInput,
-            "not a file name",
-        ))
     })?;
-    let prefix = tmp_prefix(name);
-    let mut tmp_name = prefix.clone();
-    tmp_name.push(std::process::id().to_string());
-    let tmp: PathBuf = path.with_file_name(tmp_name);
-    let result = write_synced(&tmp, bytes).and_then(|()| {
-        std::fs::rename(&tmp, path)?;
-        sync_folder(path);
-        Ok(())
-    });
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    } else {
-        remove_orphans(path, &prefix);
+    file.commit()
+}
+
+/// A file written a piece at a time and put in place whole, as [`write_atomic`] puts its
+/// bytes: a buffered temporary file next to `path` that [`AtomicFile::commit`] syncs and
+/// renames; dropped without a commit, it is removed and `path` is untouched. For outputs too
+/// large to hold in memory (a relighting's B at every position).
+#[derive(Debug)]
+pub struct AtomicFile {
+    path: PathBuf,
+    tmp: PathBuf,
+    prefix: std::ffi::OsString,
+    file: Option<std::io::BufWriter<std::fs::File>>,
+}
+
+impl AtomicFile {
+    /// Starts the temporary file of `path`.
+    pub fn create(path: &Path) -> Result<AtomicFile, GeomError> {
+        let io = |error| GeomError::Io {
+            path: path.to_path_buf(),
+            error,
+        };
+        let name = path.file_name().ok_or_else(|| {
+            io(std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                "not a file name",
+            ))
+        })?;
+        let prefix = tmp_prefix(name);
+        let mut tmp_name = prefix.clone();
+        tmp_name.push(std::process::id().to_string());
+        let tmp: PathBuf = path.with_file_name(tmp_name);
+        let file = std::fs::File::create(&tmp).map_err(io)?;
+        Ok(AtomicFile {
+            path: path.to_path_buf(),
+            tmp,
+            prefix,
+            file: Some(std::io::BufWriter::new(file)),
+        })
     }
-    result.map_err(io)
+
+    /// Syncs what was written and puts it in place under its name.
+    pub fn commit(mut self) -> Result<(), GeomError> {
+        let file = self.file.take().expect("a file until committed");
+        let result = file
+            .into_inner()
+            .map_err(std::io::IntoInnerError::into_error)
+            .and_then(|f| f.sync_all())
+            .and_then(|()| std::fs::rename(&self.tmp, &self.path));
+        match result {
+            Ok(()) => {
+                sync_folder(&self.path);
+                remove_orphans(&self.path, &self.prefix);
+                Ok(())
+            }
+            Err(error) => {
+                let _ = std::fs::remove_file(&self.tmp);
+                Err(GeomError::Io {
+                    path: self.path.clone(),
+                    error,
+                })
+            }
+        }
+    }
+}
+
+impl std::io::Write for AtomicFile {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.file
+            .as_mut()
+            .expect("a file until committed")
+            .write(buf)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.file.as_mut().expect("a file until committed").flush()
+    }
+}
+
+impl Drop for AtomicFile {
+    fn drop(&mut self) {
+        if self.file.take().is_some() {
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
 }
 
 /// `.NAME.tmp`: the start of every temporary file name of `NAME`.
@@ -190,13 +256,6 @@ fn tmp_prefix(name: &std::ffi::OsStr) -> std::ffi::OsString {
     prefix.push(name);
     prefix.push(".tmp");
     prefix
-}
-
-fn write_synced(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    use std::io::Write as _;
-    let mut file = std::fs::File::create(path)?;
-    file.write_all(bytes)?;
-    file.sync_all()
 }
 
 /// Makes the rename durable (best effort: some file systems cannot sync a folder).
@@ -263,6 +322,32 @@ mod tests {
             .collect();
         names.sort();
         names
+    }
+
+    #[test]
+    fn a_file_written_in_pieces_appears_whole_on_commit_and_not_at_all_when_dropped() {
+        use std::io::Write as _;
+        let dir = temp("pieces");
+        let path = dir.join("b.csv");
+        std::fs::write(&path, "old").unwrap();
+        let mut file = AtomicFile::create(&path).unwrap();
+        for k in 0..3 {
+            writeln!(file, "row {k}").unwrap();
+        }
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "old");
+        file.commit().unwrap();
+        assert_eq!(
+            std::fs::read_to_string(&path).unwrap(),
+            "row 0\nrow 1\nrow 2\n"
+        );
+        let mut dropped = AtomicFile::create(&path).unwrap();
+        writeln!(dropped, "half").unwrap();
+        drop(dropped);
+        assert_eq!(names(&dir), ["b.csv"]);
+        assert_eq!(
+            std::fs::read_to_string(&path).unwrap(),
+            "row 0\nrow 1\nrow 2\n"
+        );
     }
 
     #[test]

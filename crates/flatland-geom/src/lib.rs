@@ -61,10 +61,10 @@ use flatland_testkit::assert_close;
 pub use error::GeomError;
 pub use glam::DVec2;
 pub use ids::{EdgeId, SurfaceRank};
-pub use io::write_atomic;
+pub use io::{AtomicFile, write_atomic};
 pub use kernel::{
     Hit, Kernel, KernelParams, KernelSample, PairClass, PairEventsRef, Unoccluded, VaryingPairs,
 };
 pub use scene::{Edge, LightCheck, PointLight, Role, Scene, SurfacePoint};
 pub use visibility::{OnRay, PairEvents, RayFace, SenderFace};
-pub use walk::{MAX_POSITIONS, MAX_TURN, PROBES, START_SAMPLES, Walk, WalkParams, walk};
+pub use walk::{MAX_POSITIONS, MAX_TURN, PROBES, START_SAMPLES, Walk, WalkParams, in_a_room, walk};

@@ -130,6 +130,20 @@ pub fn walk(kernel: &Kernel, params: &WalkParams) -> Result<Walk, GeomError> {
     Ok(Walk { positions, margin })
 }
 
+/// Whether `p` is in a room: no ray of [`PROBES`] evenly spread from it meets the back of a
+/// surface (one that leaves the scene is fine: an open scene is one room). A point behind a
+/// wall, inside a solid object or outside a closed building sees a back.
+#[must_use]
+pub fn in_a_room(kernel: &Kernel, p: DVec2) -> bool {
+    (0..PROBES).all(|k| {
+        let direction = DVec2::from_angle(TAU * k as f64 / PROBES as f64);
+        kernel.first_hit(p, direction, None).is_none_or(|hit| {
+            let edge = kernel.scene().edge(hit.edge);
+            edge.role != Role::Surface || (edge.b - edge.a).perp_dot(p - edge.a) > 0.0
+        })
+    })
+}
+
 /// What every step asks of the scene.
 struct Walker<'k> {
     kernel: &'k Kernel,
@@ -191,16 +205,8 @@ impl<'k> Walker<'k> {
             && self.kernel.nearest_edge_within(p, self.margin).is_none()
     }
 
-    /// Whether no probe ray from `p` meets the back of a surface: `p` is in a room (or in an
-    /// open scene), not behind a wall or inside a solid object.
     fn in_a_room(&self, p: DVec2) -> bool {
-        (0..PROBES).all(|k| {
-            let direction = DVec2::from_angle(TAU * k as f64 / PROBES as f64);
-            self.kernel.first_hit(p, direction, None).is_none_or(|hit| {
-                let edge = self.kernel.scene().edge(hit.edge);
-                edge.role != Role::Surface || (edge.b - edge.a).perp_dot(p - edge.a) > 0.0
-            })
-        })
+        in_a_room(self.kernel, p)
     }
 
     /// How far `p` is from the nearest edge (up to the bounds' diagonal).

@@ -1,7 +1,9 @@
 //! The picture of `flatland solve`: the scene lit by a solved radiosity (each element in the
-//! colour of its B, emitters marked, a colour bar) beside B(s) against the exact solution.
+//! colour of its B, emitters and point lights marked, a colour bar) beside B(s) against the
+//! exact solution; and the lit scene alone ([`panel_png`]), one picture per position of
+//! `flatland relight`.
 
-use flatland_geom::{Role, Scene};
+use flatland_geom::{PointLight, Role, Scene};
 use flatland_solve::{ExactReference, Mesh};
 use plotters::prelude::*;
 
@@ -35,19 +37,57 @@ fn inferno(x: f64) -> RGBColor {
     RGBColor(r, g, b)
 }
 
+/// The lit scene alone: what one position of a relighting shows.
+pub struct Panel<'a> {
+    /// The scene lit.
+    pub scene: &'a Scene,
+    /// The caption above it.
+    pub caption: String,
+    /// The mesh `b` is on.
+    pub mesh: &'a Mesh,
+    /// B per element of `mesh`.
+    pub b: &'a [f64],
+    /// The point lights, each marked where it stands.
+    pub lights: &'a [PointLight],
+    /// The top of the colour scale ([`crate::colormap::radiosity_top`] of this B, or one kept
+    /// for a series of pictures so that they compare).
+    pub top: f64,
+}
+
 /// The picture `p`, PNG-encoded.
 pub fn lit_scene_png(p: &Picture<'_>) -> Result<Vec<u8>, PictureError> {
     register_font();
+    let panel = Panel {
+        scene: p.scene,
+        caption: format!("{}: lit by the {} kernel", p.label, p.kernel),
+        mesh: p.mesh,
+        b: p.b,
+        lights: p.mesh.lights(),
+        top: crate::colormap::radiosity_top(p.mesh, p.b),
+    };
     let mut rgb = vec![255u8; (WIDTH * HEIGHT * 3) as usize];
     {
         let root = BitMapBackend::with_buffer(&mut rgb, (WIDTH, HEIGHT)).into_drawing_area();
         let (left, right) = root.split_horizontally(SCENE_WIDTH);
-        draw_scene(&left, p).map_err(PictureError::draw("the lit scene"))?;
+        draw_scene(&left, &panel).map_err(PictureError::draw("the lit scene"))?;
         draw_curves(&right, p).map_err(PictureError::draw("B(s)"))?;
         root.present()
             .map_err(PictureError::draw("the lit scene's picture"))?;
     }
     encode_png(&rgb, WIDTH, HEIGHT)
+}
+
+/// The lit scene alone ([`Panel`]), PNG-encoded.
+pub fn panel_png(panel: &Panel<'_>) -> Result<Vec<u8>, PictureError> {
+    register_font();
+    let mut rgb = vec![255u8; (SCENE_WIDTH * HEIGHT * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut rgb, (SCENE_WIDTH, HEIGHT)).into_drawing_area();
+        draw_scene(&root, panel).map_err(PictureError::draw("the lit scene"))?;
+        root.present()
+            .map_err(PictureError::draw("the lit scene's picture"))?;
+    }
+    encode_png(&rgb, SCENE_WIDTH, HEIGHT)
 }
 
 type Area<'a> = DrawingArea<BitMapBackend<'a>, plotters::coord::Shift>;
@@ -56,23 +96,21 @@ type DrawResult = std::result::Result<(), Box<dyn std::error::Error>>;
 type Axes =
     Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>;
 
-/// Each element in the colour of its B, blockers grey, emitters marked, a colour bar.
-fn draw_scene(area: &Area<'_>, p: &Picture<'_>) -> DrawResult {
+/// Each element in the colour of its B, blockers grey, emitters and point lights marked, a
+/// colour bar.
+fn draw_scene(area: &Area<'_>, p: &Panel<'_>) -> DrawResult {
     let (plot, bar) = area.split_horizontally(SCENE_WIDTH - 110);
     let (lo, hi) = p.scene.bounds();
     let span = (hi - lo).max_element() * 1.1;
     let centre = (lo + hi) * 0.5;
     let mut chart = ChartBuilder::on(&plot)
-        .caption(
-            format!("{}: lit by the {} kernel", p.label, p.kernel),
-            ("sans-serif", 20),
-        )
+        .caption(&p.caption, ("sans-serif", 20))
         .margin(12)
         .build_cartesian_2d(
             (centre.x - span / 2.0)..(centre.x + span / 2.0),
             (centre.y - span / 2.0)..(centre.y + span / 2.0),
         )?;
-    let top = crate::colormap::radiosity_top(p.mesh, p.b);
+    let top = p.top;
     for edge in p.scene.edges().iter().filter(|e| e.role == Role::Blocker) {
         chart.draw_series(LineSeries::new(
             [(edge.a.x, edge.a.y), (edge.b.x, edge.b.y)],
@@ -98,6 +136,13 @@ fn draw_scene(area: &Area<'_>, p: &Picture<'_>) -> DrawResult {
             (at.0 + 0.025 * span, at.1 + 0.01 * span),
             ("sans-serif", 16).into_font(),
         )])?;
+    }
+    // Point lights: a yellow disc with a cross where each stands.
+    for light in p.lights.iter().filter(|l| l.power > 0.0) {
+        let at = (light.at.x, light.at.y);
+        chart.draw_series([Circle::new(at, 7, RGBColor(255, 230, 60).filled())])?;
+        chart.draw_series([Circle::new(at, 7, BLACK.stroke_width(2))])?;
+        chart.draw_series([Cross::new(at, 11, BLACK.stroke_width(1))])?;
     }
     draw_colour_bar(&bar, top)
 }
@@ -328,5 +373,30 @@ mod tests {
             |colour: [u8; 3]| (SCENE_WIDTH..WIDTH).any(|x| (0..HEIGHT).any(|y| at(x, y) == colour));
         assert!(right([220, 80, 30]), "the solution's steps");
         assert!(right([0, 0, 0]), "the exact curve");
+    }
+
+    /// A relighting's panel: the scene alone, each point light marked in its colour.
+    #[test]
+    fn a_panel_marks_its_lights() {
+        let kernel = Kernel::new(flatland_geom::bundled::scene("fig3").unwrap());
+        let mesh = Mesh::new(&kernel, 64).unwrap();
+        let b = vec![0.5; mesh.len()];
+        let (lo, hi) = kernel.scene().bounds();
+        let lights = [PointLight::new((lo + hi) * 0.5, 1.0)];
+        let panel = |lights| Panel {
+            scene: kernel.scene(),
+            caption: "fig3".into(),
+            mesh: &mesh,
+            b: &b,
+            lights,
+            top: 1.0,
+        };
+        let marked = |png: &[u8]| {
+            let image = image::load_from_memory(png).unwrap().to_rgb8();
+            assert_eq!(image.dimensions(), (SCENE_WIDTH, HEIGHT));
+            image.pixels().any(|p| p.0 == [255, 230, 60])
+        };
+        assert!(marked(&panel_png(&panel(&lights)).unwrap()));
+        assert!(!marked(&panel_png(&panel(&[])).unwrap()));
     }
 }

@@ -139,5 +139,5 @@ pub use solve::{
 };
 pub use sparse::{MAX_NONZEROS, SparseOperator};
 pub use sweep::{ProbeBuffers, SeenSpan, Sweep, sweep_operator};
-pub use table::radiosity_csv;
+pub use table::{RADIOSITY_HEADER, radiosity_csv, radiosity_rows};
 pub use transfer::{Receiver, Sender, point_to_segment, point_to_segment_visible};

@@ -2,16 +2,32 @@
 
 use crate::Mesh;
 
+/// The header of [`radiosity_csv`].
+pub const RADIOSITY_HEADER: &str = "edge,s,x,y,b";
+
 /// `edge,s,x,y,b`: one row per element midpoint of `mesh` in order of `s`, `b` its value
 /// (shortest round-trip decimals, so the file reads back bit for bit).
 #[must_use]
 pub fn radiosity_csv(mesh: &Mesh, b: &[f64]) -> String {
-    let mut out = String::from("edge,s,x,y,b\n");
+    let mut out = format!("{RADIOSITY_HEADER}\n").into_bytes();
+    radiosity_rows(&mut out, "", mesh, b).expect("writing to memory does not fail");
+    String::from_utf8(out).expect("the rows are ASCII")
+}
+
+/// The rows of [`radiosity_csv`] without its header, each after `prefix` (`"3,"` for a
+/// relighting's position column), written to `out` as they are made: a long relighting streams
+/// them instead of holding every position's table.
+pub fn radiosity_rows(
+    out: &mut dyn std::io::Write,
+    prefix: &str,
+    mesh: &Mesh,
+    b: &[f64],
+) -> std::io::Result<()> {
     for (e, value) in mesh.elements().iter().zip(b) {
         let (x, y) = (e.midpoint.x, e.midpoint.y);
-        out.push_str(&format!("{},{},{x},{y},{value}\n", e.edge, e.s_mid));
+        writeln!(out, "{prefix}{},{},{x},{y},{value}", e.edge, e.s_mid)?;
     }
-    out
+    Ok(())
 }
 
 #[cfg(test)]
@@ -35,5 +51,12 @@ mod tests {
             assert_eq!(cells[1].parse::<f64>().unwrap(), e.s_mid);
             assert_eq!(cells[4].parse::<f64>().unwrap(), value);
         }
+        let mut prefixed = Vec::new();
+        radiosity_rows(&mut prefixed, "7,", &mesh, &b).unwrap();
+        let prefixed = String::from_utf8(prefixed).unwrap();
+        for (row, plain) in prefixed.lines().zip(&rows[1..]) {
+            assert_eq!(row, format!("7,{plain}"));
+        }
+        assert_eq!(prefixed.lines().count(), 64);
     }
 }

@@ -6,3 +6,4 @@ pub mod figure;
 pub mod grid;
 pub mod scaling;
 pub mod timed;
+pub mod walk;

@@ -1,13 +1,15 @@
 //! Methods judged at equal time: each swept over its own knob (tolerance, basis functions,
 //! elements, photons) until a row takes longer than the time budget; every row timed to its lit
 //! scene and scored against one independent exact reference. Relighting ([`relight`]) times
-//! ten lightings of the same geometry.
+//! ten lightings of the same geometry; [`walk`] a lamp carried through generated plans and
+//! halls, every method per move.
 //!
 //! A method that cannot meet a setting gives the nearest row it can with a note; one that
 //! fails there gives a failed row with the reason, and the sweep goes on.
 
 pub(crate) mod compute;
 pub mod relight;
+pub mod walk;
 
 mod row;
 mod run;

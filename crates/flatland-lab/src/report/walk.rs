@@ -1,0 +1,210 @@
+//! The outputs of `flatland bench --relight`: its CSV, its Markdown table, and the log–log
+//! plots of each method's error against its milliseconds per move.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use anyhow::Result;
+use flatland_geom::write_atomic;
+
+use flatland_pictures::plot::{Series, log_log};
+use crate::timed::walk::{COLD, WalkRow};
+
+/// The rows so far, rewritten after each scene (removed once the results are written).
+pub const PARTIAL: &str = "relight-walk.partial.csv";
+/// Every row.
+pub const CSV: &str = "relight-walk.csv";
+/// The table.
+pub const MARKDOWN: &str = "relight-walk.md";
+/// The plots: the error of B, and of the indirect part, against ms per move.
+pub const PLOTS: [&str; 2] = ["relight-walk-b.png", "relight-walk-indirect.png"];
+/// Every file a relighting bench writes.
+pub const OUTPUTS: [&str; 5] = [PARTIAL, CSV, MARKDOWN, PLOTS[0], PLOTS[1]];
+
+/// The CSV's columns.
+pub const HEADER: [&str; 15] = [
+    "scene",
+    "edges",
+    "elements",
+    "method",
+    "setting",
+    "setup_s",
+    "bytes",
+    "positions",
+    "ms_per_move_median",
+    "ms_per_move_p95",
+    "work_per_move",
+    "rel_l2_b_mean",
+    "rel_l2_b_max",
+    "rel_l2_indirect_mean",
+    "note",
+];
+
+/// Writes `name` in `dir` with `rows`, atomically.
+pub fn write_csv(dir: &Path, name: &str, rows: &[WalkRow]) -> Result<()> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record(HEADER)?;
+    let opt = |v: Option<f64>| v.map_or(String::new(), |v| v.to_string());
+    for r in rows {
+        let f = &r.figures;
+        w.write_record([
+            r.scene.clone(),
+            r.edges.to_string(),
+            r.elements.to_string(),
+            r.method.name().to_owned(),
+            r.setting.clone(),
+            r.setup_s.to_string(),
+            r.bytes.to_string(),
+            f.positions.to_string(),
+            f.ms_median.to_string(),
+            f.ms_p95.to_string(),
+            f.work_mean.to_string(),
+            opt(f.rel_l2_b_mean),
+            opt(f.rel_l2_b_max),
+            opt(f.rel_l2_indirect_mean),
+            r.note.clone(),
+        ])?;
+    }
+    let bytes = w.into_inner()?;
+    crate::interrupt::writing(|| write_atomic(&dir.join(name), &bytes))?;
+    Ok(())
+}
+
+/// The Markdown table: a row per method and setting, scenes one after another.
+#[must_use]
+pub fn table(rows: &[WalkRow]) -> String {
+    let mut out = String::from(
+        "| scene | edges | elements | method | setting | set-up s | MB | ms/move median | p95 | \
+         work/move | rel. L2 B mean | max | indirect mean | note |\n|---|---:|---:|---|---|---:|\
+         ---:|---:|---:|---:|---:|---:|---:|---|\n",
+    );
+    let e = |v: Option<f64>| v.map_or("–".to_owned(), |v| format!("{v:.2e}"));
+    for r in rows {
+        let f = &r.figures;
+        let measured = f.positions > 0;
+        let ms = |v: f64| {
+            if measured {
+                format!("{v:.2}")
+            } else {
+                "–".to_owned()
+            }
+        };
+        let _ = writeln!(
+            out,
+            "| {} | {} | {} | {} | {} | {:.2} | {:.1} | {} | {} | {} | {} | {} | {} | {} |",
+            r.scene,
+            r.edges,
+            r.elements,
+            r.method.name(),
+            r.setting,
+            r.setup_s,
+            r.bytes as f64 / 1e6,
+            ms(f.ms_median),
+            ms(f.ms_p95),
+            if measured {
+                format!("{:.1}", f.work_mean)
+            } else {
+                "–".to_owned()
+            },
+            e(f.rel_l2_b_mean),
+            e(f.rel_l2_b_max),
+            e(f.rel_l2_indirect_mean),
+            r.note
+        );
+    }
+    out
+}
+
+/// Writes the two plots in `dir`: per scene and method a line through its settings, error
+/// (mean over the positions) against the median ms per move.
+pub fn write_plots(dir: &Path, rows: &[WalkRow]) -> Result<()> {
+    let error_b = |r: &WalkRow| r.figures.rel_l2_b_mean;
+    let indirect = |r: &WalkRow| r.figures.rel_l2_indirect_mean;
+    for (name, error, what) in [
+        (PLOTS[0], &error_b as &dyn Fn(&WalkRow) -> Option<f64>, "B"),
+        (PLOTS[1], &indirect, "the indirect part B − B₀"),
+    ] {
+        let series = series(rows, error);
+        let png = log_log(
+            &format!("relighting a moving lamp: error of {what} against time per move"),
+            "ms per move (median)",
+            &format!("relative L2 error of {what} (mean over the walk)"),
+            &series,
+        )?;
+        crate::interrupt::writing(|| write_atomic(&dir.join(name), &png))?;
+    }
+    Ok(())
+}
+
+/// One series per scene and method, its points in order of time.
+fn series(rows: &[WalkRow], error: &dyn Fn(&WalkRow) -> Option<f64>) -> Vec<Series> {
+    let mut out: Vec<Series> = Vec::new();
+    for r in rows.iter().filter(|r| r.setting != COLD) {
+        let Some(e) = error(r) else { continue };
+        let label = format!("{} {}", r.scene, r.method.name());
+        let point = (r.figures.ms_median, e, e, e);
+        match out.iter_mut().find(|s| s.label == label) {
+            Some(s) => s.points.push(point),
+            None => out.push(Series {
+                label,
+                points: vec![point],
+            }),
+        }
+    }
+    for s in &mut out {
+        s.points.sort_by(|a, b| a.0.total_cmp(&b.0));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::timed::Method;
+    use crate::timed::walk::WalkFigures;
+
+    fn row(method: Method, setting: &str, ms: f64, error: Option<f64>) -> WalkRow {
+        WalkRow {
+            scene: "floorplan-100".into(),
+            edges: 97,
+            elements: 512,
+            method,
+            setting: setting.into(),
+            setup_s: 0.5,
+            bytes: 2_000_000,
+            figures: WalkFigures {
+                positions: 3,
+                ms_median: ms,
+                ms_p95: 2.0 * ms,
+                work_mean: 8.0,
+                rel_l2_b_mean: error,
+                rel_l2_b_max: error,
+                rel_l2_indirect_mean: error,
+            },
+            note: String::new(),
+        }
+    }
+
+    #[test]
+    fn a_series_per_method_through_its_settings_and_a_table_row_per_row() {
+        let rows = vec![
+            row(Method::Exact, COLD, 9.0, None),
+            row(Method::Exact, "tolerance 1e-6", 3.0, Some(1e-6)),
+            row(Method::Exact, "tolerance 1e-2", 1.0, Some(1e-2)),
+            row(Method::Tracer, "time", 3.0, Some(0.1)),
+        ];
+        let s = series(&rows, &|r: &WalkRow| r.figures.rel_l2_b_mean);
+        assert_eq!(s.len(), 2);
+        assert_eq!(s[0].label, "floorplan-100 exact");
+        assert_eq!(
+            s[0].points,
+            vec![(1.0, 1e-2, 1e-2, 1e-2), (3.0, 1e-6, 1e-6, 1e-6)]
+        );
+        let t = table(&rows);
+        assert_eq!(t.lines().count(), 2 + rows.len());
+        assert!(
+            t.contains("| exact | tolerance 1e-6 | 0.50 | 2.0 | 3.00 | 6.00 | 8.0 | 1.00e-6 |"),
+            "{t}"
+        );
+    }
+}

@@ -1,0 +1,224 @@
+//! The methods that relight a scene per move of its lights, behind one trait ([`Mover`]): the
+//! exact re-solve, clustered HR re-solved with each move's source, the tracer at a time per
+//! move. The learned transport is the next to implement it.
+
+use std::time::Instant;
+
+use anyhow::{Context as _, Result};
+use flatland_baselines::{
+    ClusteredParams, LightTracer, Lighting, TraceBudget, TraceParams, run_clustered,
+};
+use flatland_geom::{Kernel, PointLight};
+use flatland_solve::{
+    DirectLight, Mesh, RelightParams, Relighter, Representation, SolveParams, Stop,
+    TransferOperator, solve_linear,
+};
+
+use super::Method;
+
+/// What a method did at one move.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Moved<'a> {
+    /// B per element of the mesh (held by the method until its next move).
+    pub radiosity: &'a [f64],
+    /// Its work: products with K (the re-solves), photons (the tracer).
+    pub work: u64,
+}
+
+/// A method that relights one scene and mesh per move of its point lights: built once, then
+/// [`Mover::relight`] per move. What `bench --relight` times; the learned transport is the
+/// next method to implement it.
+pub trait Mover {
+    /// The method.
+    fn method(&self) -> Method;
+    /// What it runs at, in words (`tolerance 1e-6`, `1 000 000 links`).
+    fn setting(&self) -> String;
+    /// Seconds its set-up took.
+    fn setup_s(&self) -> f64;
+    /// Bytes it holds.
+    fn bytes(&self) -> usize;
+    /// B under `lights` (the scene's emitting edges on). `budget_s`: the time the move may
+    /// take, for a method that runs to a time (the tracer); the others ignore it.
+    fn relight(&mut self, lights: &[PointLight], budget_s: f64, stop: &Stop) -> Result<Moved<'_>>;
+}
+
+/// The exact re-solve ([`Relighter`]) at one tolerance.
+pub struct ExactMover {
+    relighter: Relighter,
+}
+
+impl ExactMover {
+    /// The relighter of `kernel`'s scene on `mesh` at `params`.
+    pub fn new(kernel: &Kernel, mesh: &Mesh, params: RelightParams, stop: &Stop) -> Result<Self> {
+        let relighter = Relighter::new(kernel, mesh, params, stop)?;
+        Ok(ExactMover { relighter })
+    }
+
+    /// The relighter (its operator, for a cold solve).
+    pub fn relighter(&self) -> &Relighter {
+        &self.relighter
+    }
+}
+
+impl Mover for ExactMover {
+    fn method(&self) -> Method {
+        Method::Exact
+    }
+
+    fn setting(&self) -> String {
+        format!("tolerance {:e}", self.relighter.params().tolerance)
+    }
+
+    fn setup_s(&self) -> f64 {
+        self.relighter.setup_s()
+    }
+
+    fn bytes(&self) -> usize {
+        self.relighter.memory_bytes()
+    }
+
+    fn relight(&mut self, lights: &[PointLight], _: f64, stop: &Stop) -> Result<Moved<'_>> {
+        let relit = self.relighter.relight(lights, stop)?;
+        Ok(Moved {
+            radiosity: relit.radiosity,
+            work: relit.cost.products as u64,
+        })
+    }
+}
+
+/// Clustered HR: its links built once; per move the exact direct light as the source (what
+/// the links do not hold) and a re-solve with its operator from the last move's B.
+pub struct ClusteredMover {
+    mesh: Mesh,
+    direct: DirectLight,
+    op: Box<dyn TransferOperator>,
+    links: usize,
+    bytes: usize,
+    setup_s: f64,
+    last: Vec<f64>,
+}
+
+impl ClusteredMover {
+    /// Clustered HR of `kernel`'s scene with `links` links, its operator on `mesh`.
+    pub fn new(
+        kernel: &Kernel,
+        mesh: &Mesh,
+        links: usize,
+        params: &ClusteredParams,
+        stop: &Stop,
+    ) -> Result<Self> {
+        let started = Instant::now();
+        let run = run_clustered(kernel, links, 1, params)
+            .with_context(|| format!("clustered HR at {links} links"))?;
+        let op = run.approx.operator(mesh, &SolveParams::default(), stop)?;
+        let direct = DirectLight::new(kernel, mesh)?;
+        Ok(ClusteredMover {
+            mesh: mesh.clone(),
+            direct,
+            op,
+            links: run.basis_functions,
+            bytes: run.memory_bytes,
+            setup_s: started.elapsed().as_secs_f64(),
+            last: Vec::new(),
+        })
+    }
+}
+
+impl Mover for ClusteredMover {
+    fn method(&self) -> Method {
+        Method::Clustered
+    }
+
+    fn setting(&self) -> String {
+        format!("{} links", self.links)
+    }
+
+    fn setup_s(&self) -> f64 {
+        self.setup_s
+    }
+
+    fn bytes(&self) -> usize {
+        self.bytes
+    }
+
+    fn relight(&mut self, lights: &[PointLight], _: f64, stop: &Stop) -> Result<Moved<'_>> {
+        let mesh = &self.mesh;
+        let direct = self.direct.mean_irradiance(mesh, lights);
+        let source: Vec<f64> = (0..mesh.len())
+            .map(|i| mesh.edge_of(i).emission + mesh.edge_of(i).reflectance * direct[i])
+            .collect();
+        let start = if self.last.is_empty() {
+            source.clone()
+        } else {
+            std::mem::take(&mut self.last)
+        };
+        let params = SolveParams {
+            tolerance: RelightParams::default().tolerance,
+            ..SolveParams::default()
+        };
+        let solved = solve_linear(self.op.as_ref(), &source, start, &params, stop)?;
+        self.last = solved.radiosity;
+        Ok(Moved {
+            radiosity: &self.last,
+            work: solved.iterations as u64,
+        })
+    }
+}
+
+/// The Monte Carlo tracer: each move traced from scratch for the time it is given.
+pub struct TracerMover<'a> {
+    tracer: LightTracer<'a>,
+    seed: u64,
+    setup_s: f64,
+    bytes: usize,
+    last: Vec<f64>,
+}
+
+impl<'a> TracerMover<'a> {
+    /// The tracer of `kernel`'s scene on `mesh`; move `k` is traced with seed `seed + k`.
+    pub fn new(kernel: &'a Kernel, mesh: &'a Mesh, seed: u64) -> Result<Self> {
+        let started = Instant::now();
+        let tracer = LightTracer::new(kernel, mesh)?;
+        Ok(TracerMover {
+            tracer,
+            seed,
+            setup_s: started.elapsed().as_secs_f64(),
+            bytes: 0,
+            last: Vec::new(),
+        })
+    }
+}
+
+impl Mover for TracerMover<'_> {
+    fn method(&self) -> Method {
+        Method::Tracer
+    }
+
+    fn setting(&self) -> String {
+        "the exact re-solve's time per move".to_owned()
+    }
+
+    fn setup_s(&self) -> f64 {
+        self.setup_s
+    }
+
+    fn bytes(&self) -> usize {
+        self.bytes
+    }
+
+    fn relight(&mut self, lights: &[PointLight], budget_s: f64, stop: &Stop) -> Result<Moved<'_>> {
+        let params = TraceParams {
+            budget: TraceBudget::Seconds(budget_s.clamp(1e-6, 1e6)),
+            seed: self.seed,
+        };
+        self.seed += 1;
+        let lighting = Lighting::default().with_lights(lights.to_vec());
+        let traced = self.tracer.trace(&lighting, &params, stop)?;
+        self.bytes = self.bytes.max(traced.memory_bytes);
+        self.last = traced.radiosity;
+        Ok(Moved {
+            radiosity: &self.last,
+            work: traced.photons,
+        })
+    }
+}
