@@ -5,6 +5,7 @@
 //! scene size) is its own module, `scaling`.
 
 mod scaling;
+mod walk;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -69,14 +70,28 @@ pub struct Args {
     /// log–log slopes, relighting up to 10⁴ edges); --scene is not used.
     #[arg(long)]
     pub scaling: bool,
-    /// With --scaling: the sizes in edges, ascending, comma-separated, each in [24, 1000000].
-    #[arg(long, value_delimiter = ',', default_value = "100,1000,10000")]
-    pub sizes: Vec<usize>,
-    /// With --scaling: the kinds of scene, comma-separated: floorplan, hall.
+    /// Instead of one scene: a lamp carried along a walk of --positions through generated
+    /// floor plans and halls of --sizes edges (their own lamps off, no edge emitting), each
+    /// position relit by the exact re-solve (at tolerances 1e-6, 1e-2, 1e-4, 1e-8), clustered
+    /// HR and the tracer (given the exact re-solve's time per move), each against a cold exact
+    /// solve there: set-up, bytes, ms per move, errors of B and of the indirect part.
+    /// --methods: of exact, clustered, tracer, transport.
+    #[arg(long)]
+    pub relight: bool,
+    /// With --relight: positions of the lamp's walk, in [1, 1000000].
+    #[arg(long, value_name = "N", default_value_t = flatland_lab::timed::walk::POSITIONS)]
+    pub positions: usize,
+    /// With --scaling or --relight: the sizes in edges, ascending, comma-separated, each in
+    /// [24, 1000000]. Default: 100,1000,10000 (--scaling), 1000,10000 (--relight; add 100000
+    /// for the largest).
+    #[arg(long, value_delimiter = ',')]
+    pub sizes: Option<Vec<usize>>,
+    /// With --scaling or --relight: the kinds of scene, comma-separated: floorplan, hall.
     #[arg(long, value_delimiter = ',', default_value = "floorplan,hall")]
     pub kinds: Vec<String>,
     /// Output folder for results.csv, relight.csv and the plots (with --scaling:
-    /// scaling.csv, scaling.md and its plots).
+    /// scaling.csv, scaling.md and its plots; with --relight: relight-walk.csv,
+    /// relight-walk.md and its plots).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
 }
@@ -131,6 +146,9 @@ impl Args {
 
 /// Runs `flatland bench`.
 pub fn run(args: &Args) -> Result<()> {
+    if args.relight {
+        return walk::run(args);
+    }
     if args.scaling {
         return scaling::run(args);
     }

@@ -18,6 +18,7 @@
 //! allocates nothing once the first has sized them. Memory is the operator twice (rows and
 //! columns, [`Relighter::memory_bytes`]) plus a few vectors and the GMRES basis.
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use flatland_geom::{Kernel, LightCheck, PointLight};
@@ -120,19 +121,26 @@ pub struct Relit<'a> {
 /// built once ([`Relighter::new`]), then [`Relighter::relight`] per move.
 #[derive(Debug)]
 pub struct Relighter {
+    built: Arc<Built>,
+    params: RelightParams,
+    state: State,
+}
+
+/// What a relighter builds once, shared by the relighters made from it
+/// ([`Relighter::with_params`]).
+#[derive(Debug)]
+struct Built {
     mesh: Mesh,
     rows: SparseOperator,
     columns: SparseOperator,
     direct: DirectLight,
     lights: LightCheck,
-    params: RelightParams,
     /// E per element (the emitting edges) and `K E`.
     emission: Vec<f64>,
     emission_bounce: Vec<f64>,
     /// `ρ_i / (2π l_i)`: a light's power times the angle it lights element `i` under, times
     /// this, is its share of `ρ H̄_i`.
     direct_per_radian: Vec<f64>,
-    state: State,
     setup_s: f64,
 }
 
@@ -176,18 +184,32 @@ impl Relighter {
             .iter()
             .map(|e| mesh.edges()[e.mesh_edge].reflectance / (std::f64::consts::TAU * e.length))
             .collect();
-        Ok(Relighter {
+        let built = Built {
             mesh: mesh.clone(),
             rows,
             columns,
             direct: DirectLight::of_sweep(scene),
             lights: LightCheck::new(kernel.scene()),
-            params,
             emission,
             emission_bounce,
             direct_per_radian,
-            state: State::default(),
             setup_s: started.elapsed().as_secs_f64(),
+        };
+        Ok(Relighter {
+            built: Arc::new(built),
+            params,
+            state: State::default(),
+        })
+    }
+
+    /// Another relighter on the same operator (shared, not built again nor copied), with its
+    /// own settings and its own last move.
+    pub fn with_params(&self, params: RelightParams) -> Result<Relighter, SolveError> {
+        params.check()?;
+        Ok(Relighter {
+            built: Arc::clone(&self.built),
+            params,
+            state: State::default(),
         })
     }
 
@@ -196,7 +218,7 @@ impl Relighter {
     /// negative power or on an edge (named by its index), a solve that does not converge, or
     /// `stop`.
     pub fn relight(&mut self, lights: &[PointLight], stop: &Stop) -> Result<Relit<'_>, SolveError> {
-        self.lights.check(lights)?;
+        self.built.lights.check(lights)?;
         let started = Instant::now();
         self.direct_light(lights);
         let direct_s = started.elapsed().as_secs_f64();
@@ -225,11 +247,11 @@ impl Relighter {
 
     /// `B₀ = E + ρ H̄` into the state, and the lit elements' `ρ H̄`.
     fn direct_light(&mut self, lights: &[PointLight]) {
-        let s = &mut self.state;
+        let (s, b) = (&mut self.state, &*self.built);
         s.lit.clear();
         for light in lights.iter().filter(|l| l.power > 0.0) {
-            for &(j, angle) in self.direct.view(&self.mesh, light.at, &mut s.views) {
-                let value = light.power * angle * self.direct_per_radian[j as usize];
+            for &(j, angle) in b.direct.view(&b.mesh, light.at, &mut s.views) {
+                let value = light.power * angle * b.direct_per_radian[j as usize];
                 s.lit.push((j, value));
             }
         }
@@ -243,7 +265,7 @@ impl Relighter {
             same
         });
         s.lit.retain(|&(_, v)| v != 0.0);
-        s.source.clone_from(&self.emission);
+        s.source.clone_from(&b.emission);
         for &(j, v) in &s.lit {
             s.source[j as usize] += v;
         }
@@ -251,15 +273,15 @@ impl Relighter {
 
     /// `K B₀ = K E + Σ_{j lit} K_{·j} ρ_j H̄_j` into the state: the numbers read.
     fn first_bounce(&mut self) -> usize {
-        let s = &mut self.state;
-        s.first_bounce.clone_from(&self.emission_bounce);
-        self.columns.gather_columns(&s.lit, &mut s.first_bounce)
+        let (s, b) = (&mut self.state, &*self.built);
+        s.first_bounce.clone_from(&b.emission_bounce);
+        b.columns.gather_columns(&s.lit, &mut s.first_bounce)
     }
 
     /// The solve from the warm start: products with K and the residual reached.
     fn later_bounces(&mut self, stop: &Stop) -> Result<(usize, f64), SolveError> {
-        let s = &mut self.state;
-        let n = self.mesh.len();
+        let (s, b) = (&mut self.state, &*self.built);
+        let n = b.mesh.len();
         let first = s.later.is_empty();
         match self.params.warm_start {
             WarmStart::Cold => s.radiosity.clone_from(&s.source),
@@ -281,7 +303,7 @@ impl Relighter {
         };
         let done = s
             .gmres
-            .solve(&self.rows, &s.source, &mut s.radiosity, limits, stop)?;
+            .solve(&b.rows, &s.source, &mut s.radiosity, limits, stop)?;
         s.later.resize(n, 0.0);
         let parts = s.source.iter().zip(&s.first_bounce);
         for ((l, b), (b0, b1)) in s.later.iter_mut().zip(&s.radiosity).zip(parts) {
@@ -299,32 +321,32 @@ impl Relighter {
     /// The mesh every move is solved on.
     #[must_use]
     pub fn mesh(&self) -> &Mesh {
-        &self.mesh
+        &self.built.mesh
     }
 
     /// The exact operator by rows: `(K b)_i = Σ_j K_ij b_j`.
     #[must_use]
     pub fn rows(&self) -> &SparseOperator {
-        &self.rows
+        &self.built.rows
     }
 
     /// The same operator by columns: row `j` of this is column `j` of K
     /// ([`SparseOperator::transposed`]).
     #[must_use]
     pub fn columns(&self) -> &SparseOperator {
-        &self.columns
+        &self.built.columns
     }
 
     /// The exact direct light of point lights on the mesh (the sweep's hierarchy).
     #[must_use]
     pub fn direct(&self) -> &DirectLight {
-        &self.direct
+        &self.built.direct
     }
 
     /// The static source E per element: the emitting edges.
     #[must_use]
     pub fn emission(&self) -> &[f64] {
-        &self.emission
+        &self.built.emission
     }
 
     /// Its settings.
@@ -336,25 +358,26 @@ impl Relighter {
     /// Seconds [`Relighter::new`] took.
     #[must_use]
     pub fn setup_s(&self) -> f64 {
-        self.setup_s
+        self.built.setup_s
     }
 
     /// Bytes held: the operator's rows and columns, the vectors and the GMRES work space
-    /// (as allocated; the sweep's hierarchy is a few numbers per edge and not counted).
+    /// (as allocated; the sweep's hierarchy is a few numbers per edge and not counted). A
+    /// relighter made by [`Relighter::with_params`] counts the operator it shares.
     #[must_use]
     pub fn memory_bytes(&self) -> usize {
-        let s = &self.state;
+        let (s, b) = (&self.state, &*self.built);
         let vectors = [
-            &self.emission,
-            &self.emission_bounce,
-            &self.direct_per_radian,
+            &b.emission,
+            &b.emission_bounce,
+            &b.direct_per_radian,
             &s.radiosity,
             &s.source,
             &s.first_bounce,
             &s.later,
         ];
-        self.rows.memory_bytes()
-            + self.columns.memory_bytes()
+        b.rows.memory_bytes()
+            + b.columns.memory_bytes()
             + 8 * vectors.iter().map(|v| v.capacity()).sum::<usize>()
             + 12 * s.lit.capacity()
             + s.gmres.memory_bytes()

@@ -5,7 +5,7 @@ use flatland_geom::generate::SceneKind;
 use flatland_lab::report::scaling::{
     CSV, MARKDOWN, OUTPUTS, PARTIAL, markdown, write_csv, write_plots,
 };
-use flatland_lab::scaling::{ScalingPlan, run_scaling};
+use flatland_lab::scaling::{DEFAULT_SIZES, ScalingPlan, run_scaling};
 use flatland_lab::{interrupt, output};
 use flatland_solve::Stop;
 
@@ -17,16 +17,8 @@ fn plan(args: &Args) -> Result<ScalingPlan> {
         bail!("--scaling generates its scenes: drop --scene and --subdivide (or drop --scaling)");
     }
     let mut plan = ScalingPlan::new();
-    plan.sizes = args.sizes.clone();
-    plan.kinds = args
-        .kinds
-        .iter()
-        .map(|k| match k.trim() {
-            "floorplan" => Ok(SceneKind::FloorPlan),
-            "hall" => Ok(SceneKind::Hall),
-            other => bail!("--kinds: `{other}` is not a kind of scene; valid: floorplan, hall"),
-        })
-        .collect::<Result<_>>()?;
+    plan.sizes = args.sizes.clone().unwrap_or_else(|| DEFAULT_SIZES.to_vec());
+    plan.kinds = kinds(&args.kinds)?;
     if let Some(methods) = &args.methods {
         plan.methods = methods.clone();
     }
@@ -36,6 +28,18 @@ fn plan(args: &Args) -> Result<ScalingPlan> {
     plan.lightings = args.lightings;
     plan.validate()?;
     Ok(plan)
+}
+
+/// The kinds of scene `--kinds` names.
+pub(super) fn kinds(names: &[String]) -> Result<Vec<SceneKind>> {
+    names
+        .iter()
+        .map(|k| match k.trim() {
+            "floorplan" => Ok(SceneKind::FloorPlan),
+            "hall" => Ok(SceneKind::Hall),
+            other => bail!("--kinds: `{other}` is not a kind of scene; valid: floorplan, hall"),
+        })
+        .collect()
 }
 
 /// Runs `flatland bench --scaling`.

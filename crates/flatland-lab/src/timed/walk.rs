@@ -355,15 +355,17 @@ fn scene_rows(
         mesh.len(),
         moves.len()
     ));
-    let mut exact = Vec::new();
-    for tolerance in EXACT_TOLERANCES {
-        let params = RelightParams {
-            tolerance,
-            warm_start: WarmStart::LaterBounces,
-            ..RelightParams::default()
-        };
-        exact.push(ExactMover::new(&kernel, &mesh, params, stop)?);
+    let params = |tolerance| RelightParams {
+        tolerance,
+        warm_start: WarmStart::LaterBounces,
+        ..RelightParams::default()
+    };
+    let first = ExactMover::new(&kernel, &mesh, params(EXACT_TOLERANCES[0]), stop)?;
+    let mut exact = vec![];
+    for &tolerance in &EXACT_TOLERANCES[1..] {
+        exact.push(first.with_params(params(tolerance))?);
     }
+    exact.insert(0, first);
     let (mut others, mut rows) = baselines(plan, &cx, stop);
     let records = walk_all(&moves, &mut exact, &mut others, &cx, stop, progress)?;
     let mut movers: Vec<&dyn Mover> = exact.iter().map(|m| m as &dyn Mover).collect();

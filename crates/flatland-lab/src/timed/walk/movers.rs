@@ -54,6 +54,12 @@ impl ExactMover {
         Ok(ExactMover { relighter })
     }
 
+    /// The same method on the same operator (shared) at `params`.
+    pub fn with_params(&self, params: RelightParams) -> Result<Self> {
+        let relighter = self.relighter.with_params(params)?;
+        Ok(ExactMover { relighter })
+    }
+
     /// The relighter (its operator, for a cold solve).
     pub fn relighter(&self) -> &Relighter {
         &self.relighter
