@@ -16,7 +16,7 @@ use flatland_lab::timed::walk::{
     MoveRecord, WalkFigures, lamp_moves, relight_elements, relight_moves,
 };
 use flatland_lab::{interrupt, output};
-use flatland_methods::{Method, MethodError};
+use flatland_methods::Method;
 use flatland_pictures::lit::{Panel, panel_png};
 use flatland_solve::{
     RADIOSITY_HEADER, RelightParams, Relighter, SolveError, Stop, check_elements, radiosity_rows,
@@ -128,7 +128,7 @@ pub fn run(args: &Args) -> Result<()> {
 
 /// Refuses every `--kernel` but exact, each with why.
 fn check_kernel(text: &str) -> Result<()> {
-    let not_built = MethodError::not_built(Method::Transport);
+    let not_built = Method::Transport.not_built();
     let model = Path::new(text).extension().is_some() || text.contains(['/', '\\']);
     if model {
         bail!(
@@ -319,7 +319,8 @@ fn relight(
             radiosity_rows(file, &format!("{k},"), &mesh, b)?;
         }
         if let Some(Output::Pictures(dir)) = output {
-            let top = *top.get_or_insert_with(|| flatland_pictures::colormap::radiosity_top(&mesh, b));
+            let top =
+                *top.get_or_insert_with(|| flatland_pictures::colormap::radiosity_top(&mesh, b));
             let panel = Panel {
                 scene: kernel.scene(),
                 caption: format!("{label}: position {k} of {}", moves.len()),

@@ -66,12 +66,6 @@ pub enum MethodError {
 }
 
 impl MethodError {
-    /// The error of a method that is named but not built yet.
-    #[must_use]
-    pub fn not_built(method: crate::Method) -> MethodError {
-        MethodError::NotBuilt(method.name(), method.title())
-    }
-
     /// Whether a stop ended the build, here or in the crate below that was running.
     #[must_use]
     pub fn is_interrupted(&self) -> bool {

@@ -121,6 +121,12 @@ impl Method {
         }
     }
 
+    /// The error refusing this method as named but not built yet.
+    #[must_use]
+    pub fn not_built(self) -> crate::MethodError {
+        crate::MethodError::NotBuilt(self.name(), self.title())
+    }
+
     /// Parses [`Method::name`] (clap's `ValueEnum` parser); a name the project used before
     /// gets an error naming the new one, any other an error listing the valid names.
     pub fn parse(text: &str) -> Result<Method, crate::MethodError> {
@@ -340,7 +346,7 @@ mod tests {
                 .iter()
                 .all(|m| m.is_built() != (*m == Method::Transport))
         );
-        let msg = crate::MethodError::not_built(Method::Transport).to_string();
+        let msg = Method::Transport.not_built().to_string();
         assert_eq!(
             msg,
             "`transport` (learned transport of the later bounces) is not built yet"

@@ -7,8 +7,8 @@ use std::path::Path;
 use anyhow::Result;
 use flatland_geom::write_atomic;
 
-use flatland_pictures::plot::{Series, log_log};
 use crate::timed::walk::{COLD, WalkRow};
+use flatland_pictures::plot::{Series, log_log};
 
 /// The rows so far, rewritten after each scene (removed once the results are written).
 pub const PARTIAL: &str = "relight-walk.partial.csv";

@@ -116,6 +116,14 @@ impl ClusteredMover {
         let started = Instant::now();
         let run = run_clustered(kernel, links, 1, params)
             .with_context(|| format!("clustered HR at {links} links"))?;
+        // Its oracle weighs a sender by E' (docs/ALGORITHM.md §2), 0 on every edge of a scene
+        // no edge of which emits: such a scene gets no link, and a row of it would pass off
+        // the direct light alone as clustered HR's answer.
+        anyhow::ensure!(
+            run.basis_functions > 0,
+            "clustered HR built no link: its refinement weighs senders by their emission, and \
+             no edge of this scene emits (its light is point lights)"
+        );
         let op = run.approx.operator(mesh, &SolveParams::default(), stop)?;
         let direct = DirectLight::new(kernel, mesh)?;
         Ok(ClusteredMover {
