@@ -7,18 +7,20 @@ use anyhow::Result;
 /// Arguments of `flatland view` (the default: none given).
 #[derive(clap::Args, Debug, Default)]
 pub struct Args {
-    /// Scene file (.ron or .json); in the window also a scene the viewer offers by name (fig3,
-    /// maze, floorplan, hall, or floorplan-N, hall-N: a generated scene of N edges). Default:
-    /// the scene of the last session, else a generated floor plan of 300 edges.
+    /// Scene file (.ron, .json, or an .svg drawing imported with default settings: docs/SVG.md);
+    /// in the window also a scene the viewer offers by name (fig3, maze, floorplan, hall, or
+    /// floorplan-N, hall-N: a generated scene of N edges). Default: the scene of the last
+    /// session, else a generated floor plan of 300 edges.
     #[arg(long, value_name = "FILE")]
     pub scene: Option<PathBuf>,
     /// Open paused instead of learning at once.
     #[arg(long)]
     pub paused: bool,
-    /// The learner: `light` (light-driven rounds, the default), `theta` (the θ-driven network) or
-    /// `paper` (the paper's network). Default: the learner of the last session.
+    /// The learner: `light` (the light-driven learner's rounds, the default), `visibility` (the
+    /// visibility network) or `paper` (the paper's network). Default: the learner of the last
+    /// session.
     #[arg(long, value_name = "NAME", value_parser = parse_learner)]
-    pub learner: Option<flatland_viewer::LearnerName>,
+    pub learner: Option<flatland_viewer::Learner>,
     /// Target cell count of the fit.
     #[arg(long, value_name = "N")]
     pub cells: Option<usize>,
@@ -49,9 +51,11 @@ fn parse_growth(text: &str) -> Result<f64, String> {
     }
 }
 
-/// `light`, `theta` or `paper`.
-fn parse_learner(text: &str) -> Result<flatland_viewer::LearnerName, String> {
-    text.parse()
+/// `light`, `visibility` or `paper`, as every command names a method ([`Method::parse`]).
+///
+/// [`Method::parse`]: flatland_methods::Method::parse
+fn parse_learner(text: &str) -> Result<flatland_viewer::Learner, String> {
+    flatland_viewer::Learner::parse(text).map_err(|e| e.to_string())
 }
 
 /// Runs `flatland view`: the viewer when a display is available; otherwise one line saying so,
@@ -88,12 +92,16 @@ mod tests {
     }
 
     #[test]
-    fn a_learner_is_named_as_in_the_controls() {
-        use flatland_viewer::LearnerName;
-        assert_eq!(parse_learner("theta"), Ok(LearnerName::Theta));
-        assert_eq!(parse_learner("paper"), Ok(LearnerName::Paper));
-        assert_eq!(parse_learner("light"), Ok(LearnerName::Light));
+    fn a_learner_is_named_as_every_command_names_its_method() {
+        use flatland_viewer::Learner;
+        assert_eq!(parse_learner("visibility"), Ok(Learner::Visibility));
+        assert_eq!(parse_learner("paper"), Ok(Learner::Paper));
+        assert_eq!(parse_learner("light"), Ok(Learner::Light));
+        let err = parse_learner("theta").unwrap_err();
+        assert!(err.contains("`visibility`"), "a retired name: {err}");
+        let err = parse_learner("clustered").unwrap_err();
+        assert!(err.contains("light, visibility or paper"), "{err}");
         let err = parse_learner("θ").unwrap_err();
-        assert!(err.contains("light, theta or paper"), "{err}");
+        assert!(err.contains("light, visibility, paper"), "{err}");
     }
 }

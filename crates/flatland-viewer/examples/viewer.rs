@@ -1,10 +1,13 @@
 //! Opens the viewer with every option on the command line (used by `scripts/screenshot.sh`):
 //!
-//! `cargo run --release -p flatland-viewer --example viewer -- [--scene FILE] [--paused]
-//! [--learner light|theta|paper] [--cells N] [--growth CELLS_PER_S|max] [--fresh] [--fps-log] [--export-dir DIR]` (it learns
-//! at once unless `--paused`)
+//! `cargo run --release -p flatland-viewer --example viewer -- [--scene FILE|NAME] [--paused]
+//! [--learner light|visibility|paper] [--cells N] [--growth CELLS_PER_S|max] [--fresh]
+//! [--fps-log] [--export-dir DIR]` (it learns at once unless `--paused`; FILE may be an SVG
+//! drawing)
 
 use std::path::PathBuf;
+
+use flatland_viewer::Learner;
 
 fn main() {
     let mut options = flatland_viewer::Options::default();
@@ -15,14 +18,14 @@ fn main() {
             "--paused" => options.paused = true,
             // Learning at once is the default; kept so older command lines still work.
             "--play" => options.paused = false,
-            "--learner" => match args.next().map(|name| name.parse()) {
-                Some(Ok(name)) => options.learner = Some(name),
+            "--learner" => match args.next().map(|name| Learner::parse(&name)) {
+                Some(Ok(learner)) => options.learner = Some(learner),
                 Some(Err(e)) => {
                     eprintln!("--learner: {e}");
                     std::process::exit(2);
                 }
                 None => {
-                    eprintln!("--learner needs a value: light, theta or paper");
+                    eprintln!("--learner needs a value: light, visibility or paper");
                     std::process::exit(2);
                 }
             },

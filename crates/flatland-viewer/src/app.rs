@@ -29,9 +29,10 @@ use flatland_geom::Scene;
 use kernel_fit::FitParams;
 
 use crate::background::Priority;
+use crate::learner::Learner;
 use crate::scenes;
 use crate::scenes::SceneChoice;
-use crate::settings::{LearnerName, SETTINGS_KEY, Settings};
+use crate::settings::{SETTINGS_KEY, Settings};
 use crate::timeline::{Moment, Timeline};
 use crate::views::{EdgesTexture, Hover, SceneDrag};
 use crate::worker::{Approx, Command, KernelGrid, LitState, Status, WorkerHandle, World};
@@ -60,7 +61,7 @@ pub struct Options {
     /// Start paused instead of learning at once.
     pub paused: bool,
     /// Run this learner instead of the remembered one.
-    pub learner: Option<LearnerName>,
+    pub learner: Option<Learner>,
     /// Override the target cell count.
     pub target_cells: Option<usize>,
     /// Override the pace of growth, cells per second (infinite: as fast as the machine goes).
@@ -91,6 +92,8 @@ struct Cursor {
 /// [`ViewerApp::headless`] in tests; [`ViewerApp::show`] draws one frame into a [`egui::Ui`].
 pub struct ViewerApp {
     settings: Settings,
+    /// The learner the last Reset started.
+    fit_learner: Learner,
     /// Parameters of the fit the last Reset started.
     fit_params: FitParams,
     /// Parameters the learner last got: the fit's, with the live part last sent.
@@ -101,6 +104,8 @@ pub struct ViewerApp {
     /// The scene as the user sees and edits it (not subdivided).
     scene: Scene,
     scene_label: String,
+    /// What importing the scene's drawing said, one line each (shown under its name).
+    scene_warnings: Vec<String>,
     world: Option<Arc<World>>,
     /// The newest of each publication.
     status: Option<Status>,
@@ -157,8 +162,8 @@ impl ViewerApp {
         options: &Options,
         priority: Priority,
     ) -> ViewerApp {
-        if let Some(name) = options.learner {
-            settings.choose_learner(name);
+        if let Some(learner) = options.learner {
+            settings.choose_learner(learner);
         }
         if let Some(cells) = options.target_cells {
             settings.params.target_cells = cells;
@@ -191,13 +196,16 @@ impl ViewerApp {
 
     /// [`ViewerApp::headless`] with the learner's threads at `priority`.
     fn start(ctx: egui::Context, mut settings: Settings, priority: Priority) -> ViewerApp {
-        let mut message = None;
-        let (scene, label) = match scenes::load(&settings.scene) {
-            Ok(found) => found,
+        let (opened, mut message) = match scenes::load(&settings.scene) {
+            Ok(opened) => {
+                let note = scenes::warnings_note(&opened).map(|note| (note, false));
+                (opened, note)
+            }
             Err(e) => {
-                message = Some((format!("{e}; opened {} instead", scenes::DEFAULT), true));
+                let note = Some((format!("{e}; opened {} instead", scenes::DEFAULT), true));
                 settings.scene = SceneChoice::Bundled(scenes::DEFAULT.into());
-                scenes::named(scenes::DEFAULT).expect("the default scene loads")
+                let default = scenes::load(&settings.scene).expect("the default scene loads");
+                (default, note)
             }
         };
         if settings.params.validate().is_err() {
@@ -205,17 +213,19 @@ impl ViewerApp {
                 "remembered parameters were invalid; the preset's restored".into(),
                 true,
             ));
-            settings.choose_preset(settings.preset);
+            settings.restore_preset();
         }
         let repaint_ctx = ctx.clone();
         let worker = WorkerHandle::spawn(priority, move || repaint_ctx.request_repaint());
         let mut app = ViewerApp {
+            fit_learner: settings.learner,
             fit_params: settings.params,
             sent_params: settings.params,
             worker,
             fit_since: 0,
-            scene,
-            scene_label: label,
+            scene: opened.scene,
+            scene_label: opened.label,
+            scene_warnings: opened.warnings,
             world: None,
             status: None,
             approx: None,

@@ -2,7 +2,7 @@
 //! the lowest priority, so the window and its (possibly software) renderer get a core whenever
 //! they want one and the learner everything they leave.
 //!
-//! On 2 cores under Mesa's software rasterizer, `floorplan-1000` with the θ-driven network
+//! On 2 cores under Mesa's software rasterizer, `floorplan-1000` with the visibility network
 //! growing flat out drew 26–44 frames/s (33 on average over 40 s) at equal priority, the
 //! learner resting a third of its time to leave room; at the lowest priority without the rest,
 //! 50–61 (55): the rasterizer's threads no longer wait for the learner's time slice. Only

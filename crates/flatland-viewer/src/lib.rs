@@ -1,8 +1,9 @@
 //! The flatland viewer: watch a learner of a Flatland radiosity kernel at work over the
-//! `(s, t)` plot of that kernel, live — by default the light-driven learner
-//! ([`flatland_light::LightFit`]: rounds of solving the scene and learning the faces the most
-//! light flows through), or the cells of a supervised growing cell structures network — and
-//! scrub back through the run afterwards.
+//! `(s, t)` plot of that kernel, live, and scrub back through the run afterwards. Three learners
+//! ([`Learner`]), named as everywhere in the project ([`flatland_methods::Method`]): the
+//! light-driven learner (`light`, the default: [`flatland_light::LightFit`], rounds of solving
+//! the scene and probing where the most light flows), the visibility network (`visibility`) and
+//! the paper's network (`paper`), both supervised growing cell structures trained step by step.
 //!
 //! An eframe (glow) desktop app on top of [`kernel_fit`]; the library crates never depend on it.
 //! Its colours are the project's one colour map and scale rule ([`flatland_pictures::colormap`]),
@@ -10,59 +11,80 @@
 //!
 //! - **Kernel plot**: the exact `ζ(s, t)` as a heatmap (`t`, the receiver, to the right; `s`,
 //!   the sender, upwards; linear or log colour scale), the surface edges' boundaries on both
-//!   axes, labelled where the labels have room; over it the cells re-projected to the mean
-//!   `(s, t)` of the samples they won (paper Fig. 3c), sized by `δ_c`, cyan when critical,
+//!   axes, labelled where the labels have room; over it a network's cells re-projected to the
+//!   mean `(s, t)` of the samples they won (paper Fig. 3c), sized by `δ_c`, cyan when critical,
 //!   ringed when new, the network's edges between cells of one face (the others join cells that
 //!   never answer the same ray), and optionally every training sample coloured by its set. The
 //!   light-driven learner's cells are its probes: a light blue disc at the probed point's `t`
 //!   with the column of `s` it sees (`V = 1`) drawn faintly, ringed when the newest round
 //!   placed them. A legend under the plot says what each mark means.
 //! - **ζ̃ and |ζ̃ − ζ|** beside it, on the same colour scale (paper Fig. 3d). Hovering any of the
-//!   three shows `G`, `V`, `k`, `ζ` and the learned value at the pointer; for the default
-//!   learner also its `Ṽ` and whether the geometry or the cells of that face decide it.
+//!   three shows `G`, `V`, `k`, `ζ` and the learned value at the pointer; for the visibility
+//!   network also its `Ṽ` and whether the geometry or the cells of that face decide it.
 //! - **Lit scene**: the radiosity `B` solved with the kernel learned so far colours the scene's
 //!   edges, beside the scene lit by the exact kernel, with `B(s)` of both and the error of the
-//!   solved `B − E` as the cells grow ([`lit`]: solved on the learner's thread at most every
-//!   half second and for at most a tenth of its time).
+//!   solved `B − E` as the learner goes ([`lit`]: for a network solved on the learner's thread
+//!   at most every half second and for at most a tenth of its time; the light-driven learner
+//!   solves it every round).
 //! - **Scene view**: emitters, surfaces, blockers, front sides; the ray `x(s) → y(t)` under the
 //!   pointer; the `s` of a hovered surface point marked in the plots. Dragging an end point
-//!   changes the scene: the references are recomputed and the network keeps learning from
+//!   changes the scene: the references are recomputed and a network keeps learning from
 //!   where it is (`Fit::set_kernel`).
 //! - **Curves**: held-out relative L2 of ζ and of the solved `B − E` against steps and rays,
 //!   cells and samples; for the light-driven learner, per round, the `B − E` error measured
-//!   against the exact solve and the learner's own estimate of it.
+//!   against the exact solve and the learner's own estimate of it, and its probes.
 //! - **Timeline**: every moment the learner published is kept (thinned to every 2^k-th past a
 //!   cap, the first and latest always), and a slider shows any of them — kernel plot, cells, lit
 //!   scene and curves as they were then; Replay plays the run back at a chosen speed, Live
 //!   returns to the running learner ([`timeline`]).
 //! - **Controls**: play, pause, step (a round of the light-driven learner), reset, the pace of
-//!   growth; the learner (light-driven, the default; θ-driven, the default network; or the
-//!   paper's network) and every parameter of the networks (docs/ALGORITHM.md §8) with its
-//!   valid range; a live parameter ([`kernel_fit::LiveParams`]) reaches the
-//!   running fit, any other (target, gating, importance, the network's rules, …) starts a new
-//!   fit with it. Settings persist, with the preset chosen; settings saved by an older viewer
-//!   load with the current learner. Export saves the window as a PNG and the run as the model
-//!   file `flatland eval` reads.
+//!   growth; the scene (offered by name, a `.ron`/`.json` file or an SVG drawing, typed in or
+//!   dropped on the window: [`scenes`]); the learner and every parameter of the networks
+//!   (docs/ALGORITHM.md §8) with its valid range; a live parameter ([`kernel_fit::LiveParams`])
+//!   reaches the running fit, any other (target, gating, importance, the network's rules, …)
+//!   starts a new fit with it. Settings persist; settings saved by an older viewer load with
+//!   the learner they ran under its current name. Export saves the window as a PNG and a
+//!   network's run as the model file `flatland eval` reads, named after scene, learner and
+//!   step.
 //!
 //! The first launch opens a generated floor plan ([`scenes`]) and learns at a pace tied to wall
 //! time rather than as fast as the machine goes. The light-driven learner meets its tolerance
-//! on that floor plan in 7 rounds and under 0.2 s, so each round's new cells appear in the
+//! on that floor plan in 7 rounds and under 0.2 s, so each round's new probes appear in the
 //! order learned over at most 2 s (at least the pace of cells per second asked for) before the
 //! next round runs: about 12 s of rounds to watch, the lit scene changing with each. A network
-//! grows at the pace of cells per second: on `fig3` the θ-driven learner is exact after 17 000
-//! steps, which a fast machine runs before the window has drawn a useful frame.
+//! grows at the pace of cells per second: on `fig3` the visibility network is exact after
+//! 17 000 steps, which a fast machine runs before the window has drawn a useful frame.
 //!
-//! Training runs on its own thread, which owns the [`flatland_light::LightFit`] or the
-//! [`kernel_fit::Fit`]; the UI sends commands
+//! Training runs on its own thread, which owns the running learner; the UI sends commands
 //! and takes published snapshots without ever waiting for the learner. Textures are rebuilt
 //! only when the data behind them changes, and what is drawn over the plots is rastered at the
 //! plot's size in screen pixels, so a frame costs the same for 24 edges and 3 cells as for
 //! 1000 edges and 6400 cells.
 //!
+//! A learner by its name, as `flatland view --learner` reads it:
+//!
+//! ```
+//! use flatland_viewer::Learner;
+//!
+//! let learner = Learner::parse("visibility")?;
+//! assert_eq!(learner.title(), "visibility network");
+//! // A retired name is refused with the one to write now, a method that is not a learner with
+//! // the three.
+//! assert!(Learner::parse("theta").unwrap_err().to_string().contains("`visibility`"));
+//! assert!(Learner::parse("hr").unwrap_err().to_string().contains("light, visibility or paper"));
+//! # Ok::<(), flatland_methods::MethodError>(())
+//! ```
+//!
+//! What `flatland view --learner paper` does: a window if there is a display.
+//!
 //! ```no_run
-//! // What `flatland view` does: a window if there is a display, else a one-line note.
+//! use flatland_viewer::{Learner, Options};
+//!
 //! if flatland_viewer::display_available() {
-//!     flatland_viewer::run(None)?;
+//!     flatland_viewer::run_with(Options {
+//!         learner: Some(Learner::Paper),
+//!         ..Options::default()
+//!     })?;
 //! }
 //! # Ok::<(), flatland_viewer::ViewerError>(())
 //! ```
@@ -73,6 +95,7 @@
 mod app;
 mod background;
 mod colormap;
+mod learner;
 pub mod lit;
 mod prefix;
 pub mod scenes;
@@ -87,23 +110,32 @@ use std::path::PathBuf;
 
 pub use app::{Options, ViewerApp, stop_text};
 pub use colormap::{colour, grid_image, samples_image, set_color};
+pub use learner::Learner;
 pub use prefix::Prefix;
 pub use scenes::SceneChoice;
-pub use settings::{LearnerChoice, LearnerName, Settings, with_preset};
+pub use settings::{Settings, with_preset};
 pub use timeline::{Moment, Timeline};
-pub use worker::{CellMark, Growth, LearnedGrid, LightRounds, Lit, LitState, Status, World};
+pub use worker::{CellMark, Growth, LearnedGrid, Lit, LitState, Progress, Status, World};
 
 /// Why the viewer could not run.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum ViewerError {
-    /// The scene given on the command line does not load.
+    /// A scene file does not load.
     #[error("could not open {path}: {source}")]
     Scene {
         /// The file.
         path: PathBuf,
         /// Why.
         source: flatland_geom::GeomError,
+    },
+    /// An SVG drawing does not import.
+    #[error("could not open {path}: {source}")]
+    Drawing {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: flatland_svg::SvgError,
     },
     /// The window could not be opened (no display, no OpenGL, …).
     #[error("could not open the viewer window: {0}")]
@@ -138,9 +170,9 @@ fn background_learner_pool() {
         .build_global();
 }
 
-/// Opens the viewer on `scene` (a `.ron`/`.json` file, or a scene it offers by name:
-/// [`scenes::named`]), or on the scene remembered from the last run, else the generated floor
-/// plan, learning at once. Returns when the window is closed.
+/// Opens the viewer on `scene` (a `.ron`/`.json` file, an `.svg` drawing, or a scene it offers
+/// by name: [`scenes::named`]), or on the scene remembered from the last run, else the
+/// generated floor plan, learning at once. Returns when the window is closed.
 pub fn run(scene: Option<PathBuf>) -> Result<(), ViewerError> {
     run_with(Options {
         scene,
@@ -148,17 +180,14 @@ pub fn run(scene: Option<PathBuf>) -> Result<(), ViewerError> {
     })
 }
 
-/// [`run`] with all options (start paused, target cells, pace, fresh settings, frame-rate log,
-/// export folder).
+/// [`run`] with all options (start paused, the learner, target cells, pace, fresh settings,
+/// frame-rate log, export folder).
 pub fn run_with(options: Options) -> Result<(), ViewerError> {
     if let Some(path) = &options.scene
         && let SceneChoice::File(file) = scenes::choice_for(path)
     {
         // Refuse a bad file before a window opens.
-        flatland_geom::Scene::load(&file).map_err(|source| ViewerError::Scene {
-            path: file.clone(),
-            source,
-        })?;
+        scenes::open_file(&file)?;
     }
     background_learner_pool();
     let native = eframe::NativeOptions {
@@ -201,5 +230,8 @@ mod tests {
         let err = run(Some(PathBuf::from("/nonexistent/scene.ron"))).unwrap_err();
         assert!(matches!(err, ViewerError::Scene { .. }), "{err}");
         assert!(err.to_string().contains("/nonexistent/scene.ron"), "{err}");
+        let err = run(Some(PathBuf::from("/nonexistent/plan.svg"))).unwrap_err();
+        assert!(matches!(err, ViewerError::Drawing { .. }), "{err}");
+        assert!(err.to_string().contains("/nonexistent/plan.svg"), "{err}");
     }
 }

@@ -3,12 +3,14 @@
 //!
 //! Per scene, once: a [`LitScene`] — a [`Mesh`] and an [`ExactReference`] (the exact kernel
 //! solved on a mesh four times finer), whose `B` at the mesh's collocation points is what every
-//! learned solve is measured against ([`LitSetup`]). While the network learns, the learned kernel is solved on
-//! that mesh again at most every [`LIT_EVERY`], and for no more than [`LIT_SHARE`] of the
-//! time (of its core) — or, when the learner spends its time waiting for the pace of growth, for
-//! at most [`LIT_SHARE_IDLE`] of it ([`solve_interval`]): a visibility model integrates its own
-//! kernel exactly in 5–40 ms at 512 elements on `fig3`, but in 0.3–1 s on a floor plan of 220
-//! edges with a few hundred cells; the paper's network needs quadrature of ζ̃ (two network
+//! learned solve is measured against ([`LitSetup`]). While a network learns, the learned kernel
+//! is solved on that mesh again at most every [`LIT_EVERY`], and for no more than
+//! [`LIT_SHARE`] of the time (of its core) — or, when the learner spends its time waiting for
+//! the pace of growth, for at most [`LIT_SHARE_IDLE`] of it ([`solve_interval`]); the
+//! light-driven learner solves the mesh itself, once a round. How the learned operator is
+//! integrated ([`Integration`]) sets the mesh: a visibility model integrates its own kernel
+//! exactly in 5–40 ms at 512 elements on `fig3`, but in 0.3–1 s on a floor plan of 220 edges
+//! with a few hundred cells; the paper's network needs quadrature of ζ̃ (two network
 //! evaluations per element pair), so it is solved on [`NETWORK_ELEMENTS`] elements.
 
 use std::time::Duration;
@@ -33,15 +35,37 @@ pub const LIT_SHARE_IDLE: f64 = 0.5;
 /// measured at 400 cells ≈ 150 ms for 128 elements, ≈ 600 ms for 256.
 pub const NETWORK_ELEMENTS: usize = 128;
 
-/// Elements the lit view solves `kernel`'s scene on for a learner of `target`: the solver's
-/// default for a visibility model, [`NETWORK_ELEMENTS`] for a network of ζ or k; never fewer
-/// than the scene's sections.
+/// How a learner's operator on the lit view's mesh is integrated, which sets how many elements
+/// a solve can afford.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Integration {
+    /// Exactly, row by row: the light-driven learner's rows (exact views and blends of them),
+    /// a network of V times the exact unoccluded kernel.
+    Exact,
+    /// By quadrature of ζ̃: a network of ζ or k (two network evaluations per element pair).
+    Quadrature,
+}
+
+impl Integration {
+    /// How a network learning `target` is integrated.
+    #[must_use]
+    pub fn of_target(target: Target) -> Integration {
+        match target {
+            Target::Visibility => Integration::Exact,
+            Target::Zeta | Target::FactoredEmission => Integration::Quadrature,
+        }
+    }
+}
+
+/// Elements the lit view solves `kernel`'s scene on for a learner integrated as
+/// `integration`: the solver's default when exact, [`NETWORK_ELEMENTS`] by quadrature; never
+/// fewer than the scene's sections.
 #[must_use]
-pub fn lit_elements(kernel: &Kernel, target: Target) -> usize {
+pub fn lit_elements(kernel: &Kernel, integration: Integration) -> usize {
     let scene = kernel.scene();
-    match target {
-        Target::Visibility => Mesh::default_elements(scene),
-        Target::Zeta | Target::FactoredEmission => NETWORK_ELEMENTS
+    match integration {
+        Integration::Exact => Mesh::default_elements(scene),
+        Integration::Quadrature => NETWORK_ELEMENTS
             .max(Mesh::min_elements(scene))
             .min(MAX_ELEMENTS),
     }
@@ -71,16 +95,16 @@ pub struct LitSetup {
 }
 
 impl LitSetup {
-    /// The mesh for a learner of `target` on `kernel`'s scene and the exact `B` on it.
-    /// `stop` is polled in the long loops ([`SolveError::Interrupted`]).
+    /// The mesh for a learner integrated as `integration` on `kernel`'s scene and the exact
+    /// `B` on it. `stop` is polled in the long loops ([`SolveError::Interrupted`]).
     pub fn build(
         world: u64,
         kernel: Arc<Kernel>,
-        target: Target,
+        integration: Integration,
         stop: &Stop,
     ) -> Result<LitSetup, SolveError> {
         let started = std::time::Instant::now();
-        let elements = lit_elements(&kernel, target);
+        let elements = lit_elements(&kernel, integration);
         let fine = ExactReference::default_elements(elements);
         let params = SolveParams::default();
         let lit = LitScene::scoring(kernel, elements, fine, &params, stop)?;
@@ -192,12 +216,16 @@ mod tests {
     #[test]
     fn the_paper_network_is_solved_on_fewer_elements() {
         let k = kernel("fig3");
+        let exact = Integration::of_target(Target::Visibility);
+        let quadrature = Integration::of_target(Target::Zeta);
+        assert_eq!(exact, Integration::Exact);
         assert_eq!(
-            lit_elements(&k, Target::Visibility),
-            Mesh::default_elements(k.scene())
+            Integration::of_target(Target::FactoredEmission),
+            Integration::Quadrature
         );
-        assert_eq!(lit_elements(&k, Target::Zeta), NETWORK_ELEMENTS);
-        assert!(lit_elements(&k, Target::Zeta) < lit_elements(&k, Target::Visibility));
+        assert_eq!(lit_elements(&k, exact), Mesh::default_elements(k.scene()));
+        assert_eq!(lit_elements(&k, quadrature), NETWORK_ELEMENTS);
+        assert!(lit_elements(&k, quadrature) < lit_elements(&k, exact));
     }
 
     #[test]
@@ -226,7 +254,7 @@ mod tests {
         // The visibility network on fig3 converges to the exact kernel; its solve then matches the
         // exact B up to the mesh's discretisation (512 elements against 2048: ≈ 1e-4).
         let k = Arc::new(kernel("fig3"));
-        let setup = LitSetup::build(1, Arc::clone(&k), Target::Visibility, &never).unwrap();
+        let setup = LitSetup::build(1, Arc::clone(&k), Integration::Exact, &never).unwrap();
         assert_eq!(setup.mesh().len(), setup.exact().len());
         assert!(setup.top > 0.0 && setup.top.is_finite());
         let reference = Arc::new(Reference::new(&k, 32, 64, 1));

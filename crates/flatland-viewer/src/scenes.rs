@@ -1,6 +1,7 @@
 //! The scenes the viewer offers by name: the bundled ones, and floor plans and halls of any
 //! size made by `flatland_geom::generate` (`floorplan-1000`, `hall-5000`), and the one it opens
-//! first.
+//! first; and scene files: `.ron`/`.json`, or SVG drawings imported by [`flatland_svg`] with
+//! default parameters (docs/SVG.md), whose warnings come with the scene.
 //!
 //! The first launch opens [`DEFAULT`], the bundled floor plan: on a small scene such as `fig3`
 //! the visibility network is exact after a few dozen cells, before the window has shown anything
@@ -13,13 +14,26 @@ use flatland_geom::{Scene, bundled, generate};
 
 use serde::{Deserialize, Serialize};
 
+use crate::ViewerError;
+
 /// Which scene to open: a bundled one by name or a file.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum SceneChoice {
     /// One of `flatland_geom::bundled::SCENES`.
     Bundled(String),
-    /// A scene file (`.ron` or `.json`).
+    /// A scene file (`.ron` or `.json`) or an SVG drawing (`.svg`).
     File(PathBuf),
+}
+
+/// A scene as opened: the scene, its label, and what importing it said.
+#[derive(Clone, Debug)]
+pub struct Opened {
+    /// The scene.
+    pub scene: Scene,
+    /// Its name in the viewer (a file's: its file name).
+    pub label: String,
+    /// An SVG drawing's import warnings, one line each (none for other scenes).
+    pub warnings: Vec<String>,
 }
 
 /// The scene of the first launch (and of a remembered scene that no longer loads).
@@ -56,10 +70,12 @@ fn sized(name: &str) -> Option<Result<Scene, flatland_geom::GeomError>> {
     }
 }
 
-/// What a command line's scene means: a scene file when it names one (or ends in `.ron` or
-/// `.json`), else a scene the viewer offers by that name, else a file (that will not open).
+/// What a command line's scene means: a scene file when it names one (or ends in `.ron`,
+/// `.json` or `.svg`), else a scene the viewer offers by that name, else a file (that will not
+/// open).
 pub fn choice_for(arg: &Path) -> SceneChoice {
-    let is_file = arg.exists() || arg.extension().is_some_and(|x| x == "ron" || x == "json");
+    let is_file =
+        arg.exists() || is_svg(arg) || arg.extension().is_some_and(|x| x == "ron" || x == "json");
     match arg.to_str() {
         Some(name) if !is_file && named(name).is_ok() => SceneChoice::Bundled(name.to_owned()),
         _ => SceneChoice::File(arg.to_path_buf()),
@@ -74,14 +90,68 @@ pub fn file_label(path: &Path) -> String {
     )
 }
 
-/// The scene `choice` names, with its label.
-pub fn load(choice: &SceneChoice) -> Result<(Scene, String), String> {
+/// Whether `path` names an SVG drawing (by its extension, in any case).
+#[must_use]
+pub fn is_svg(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|x| x.eq_ignore_ascii_case("svg"))
+}
+
+/// The scene file at `path`: a `.ron`/`.json` scene, or an SVG drawing imported with default
+/// parameters (its point lights included), with its warnings. A file that does not load or
+/// import is an error naming it and why.
+pub fn open_file(path: &Path) -> Result<Opened, ViewerError> {
+    let (scene, warnings) = if is_svg(path) {
+        let drawing = flatland_svg::import_file(path, &flatland_svg::ImportParams::default())
+            .map_err(|source| ViewerError::Drawing {
+                path: path.to_path_buf(),
+                source,
+            })?;
+        let warnings = drawing.warnings().iter().map(ToString::to_string).collect();
+        let scene = drawing
+            .into_scene()
+            .map_err(|source| ViewerError::Drawing {
+                path: path.to_path_buf(),
+                source,
+            })?;
+        (scene, warnings)
+    } else {
+        let scene = Scene::load(path).map_err(|source| ViewerError::Scene {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        (scene, Vec::new())
+    };
+    Ok(Opened {
+        scene,
+        label: file_label(path),
+        warnings,
+    })
+}
+
+/// The scene `choice` names, opened.
+pub fn load(choice: &SceneChoice) -> Result<Opened, String> {
     match choice {
-        SceneChoice::Bundled(name) => named(name),
-        SceneChoice::File(path) => Scene::load(path)
-            .map(|s| (s, file_label(path)))
-            .map_err(|e| format!("could not open {}: {e}", path.display())),
+        SceneChoice::Bundled(name) => named(name).map(|(scene, label)| Opened {
+            scene,
+            label,
+            warnings: Vec::new(),
+        }),
+        SceneChoice::File(path) => open_file(path).map_err(|e| e.to_string()),
     }
+}
+
+/// The message line's note on `opened`'s import warnings: the first, and how many more (all of
+/// them are listed under the scene's name); `None` without warnings.
+#[must_use]
+pub fn warnings_note(opened: &Opened) -> Option<String> {
+    let first = opened.warnings.first()?;
+    let more = match opened.warnings.len() - 1 {
+        0 => String::new(),
+        1 => " (and 1 more warning: see Scene)".to_owned(),
+        n => format!(" (and {n} more warnings: see Scene)"),
+    };
+    Some(format!("imported {}: {first}{more}", opened.label))
 }
 
 #[cfg(test)]
@@ -124,5 +194,64 @@ mod tests {
             choice_for(Path::new("no-such-thing")),
             SceneChoice::File("no-such-thing".into())
         );
+        assert_eq!(
+            choice_for(Path::new("plan.SVG")),
+            SceneChoice::File("plan.SVG".into())
+        );
+    }
+
+    /// A scene file of the repository's `scenes/`.
+    fn repo_scene(name: &str) -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../scenes")
+            .join(name)
+    }
+
+    #[test]
+    fn an_svg_drawing_opens_as_the_scene_it_imports_to_with_its_warnings() {
+        let path = repo_scene("svg/floorplan.svg");
+        let opened = open_file(&path).unwrap();
+        let drawing =
+            flatland_svg::import_file(&path, &flatland_svg::ImportParams::default()).unwrap();
+        assert_eq!(opened.warnings.len(), drawing.warnings().len());
+        assert_eq!(opened.scene, drawing.into_scene().unwrap());
+        assert_eq!(opened.label, "floorplan.svg");
+        let from_choice = load(&SceneChoice::File(path)).unwrap();
+        assert_eq!(from_choice.scene, opened.scene);
+
+        // Warnings: the first in the note, the rest counted.
+        let warned = Opened {
+            warnings: vec!["text[0] (line 3): text is not geometry; skipped".into(); 3],
+            ..opened
+        };
+        let note = warnings_note(&warned).unwrap();
+        assert!(
+            note.starts_with("imported floorplan.svg: text[0] (line 3): text is not geometry")
+                && note.ends_with("(and 2 more warnings: see Scene)"),
+            "{note}"
+        );
+        let clean = Opened {
+            warnings: Vec::new(),
+            ..warned
+        };
+        assert_eq!(warnings_note(&clean), None);
+    }
+
+    #[test]
+    fn a_drawing_that_does_not_import_is_an_error_naming_the_file() {
+        let dir = std::env::temp_dir().join(format!("flatland-viewer-svg-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("broken.svg");
+        std::fs::write(&path, "<svg xmlns=\"http://www.w3.org/2000/svg\"><rect").unwrap();
+        let err = open_file(&path).unwrap_err();
+        assert!(matches!(err, ViewerError::Drawing { .. }), "{err}");
+        let text = err.to_string();
+        assert!(
+            text.starts_with("could not open") && text.contains("broken.svg"),
+            "{text}"
+        );
+        let missing = open_file(&dir.join("missing.ron")).unwrap_err();
+        assert!(matches!(missing, ViewerError::Scene { .. }), "{missing}");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

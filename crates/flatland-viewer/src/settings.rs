@@ -1,70 +1,43 @@
-//! What the viewer remembers between runs and the two learner presets. Which parameters a
-//! running fit can take is the learner's rule ([`kernel_fit::LiveParams`]), not the viewer's.
+//! What the viewer remembers between runs: the learner ([`Learner`]), the networks'
+//! parameters, the scene and the view. Which parameters a running fit can take is the
+//! learner's rule ([`kernel_fit::LiveParams`]), not the viewer's.
 //!
-//! Settings are stored by eframe (RON). They carry the preset the user chose and that preset's
-//! parameters as the build that saved them defined it, so a later build whose preset differs
-//! (the project's default learner changed) replaces the saved learner instead of running an
-//! older learner under the name "Default". Settings that do not decode at all load as defaults.
+//! Settings are stored by eframe (RON). They carry the network parameters and those of the
+//! preset they started from as the build that saved them defined it, so a later build whose
+//! preset differs (the network under that name changed) replaces the saved parameters instead
+//! of running an older learner under the current name. Settings saved before the one learner
+//! choice (a "light or network" choice and a preset) load as the learner they ran. Settings
+//! that do not decode at all load as defaults.
 
 use kernel_fit::{FitParams, Preset};
 use serde::{Deserialize, Serialize};
 
+use crate::learner::Learner;
 use crate::scenes::SceneChoice;
 
 /// Key of the settings in eframe's storage.
 pub const SETTINGS_KEY: &str = "flatland-viewer-settings";
-
-/// Which learner runs: the light-driven loop ([`flatland_light::LightFit`], what `flatland solve`
-/// runs by default) or a network ([`kernel_fit::Fit`], with [`Settings::preset`]'s parameters).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-pub enum LearnerChoice {
-    /// Rounds of solving and learning where the light flows (docs/ALGORITHM.md §4a).
-    #[default]
-    Light,
-    /// A growing cell structures network trained step by step (the θ-driven or the paper's).
-    Network,
-}
-
-/// A learner as the controls offer it, and as `--learner` names it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum LearnerName {
-    /// The light-driven loop (`light`).
-    Light,
-    /// The default network, [`Preset::Visibility`] (`theta`).
-    Theta,
-    /// The paper's network, [`Preset::Paper`] (`paper`).
-    Paper,
-}
-
-impl std::str::FromStr for LearnerName {
-    type Err = String;
-
-    fn from_str(text: &str) -> Result<LearnerName, String> {
-        match text {
-            "light" => Ok(LearnerName::Light),
-            "theta" => Ok(LearnerName::Theta),
-            "paper" => Ok(LearnerName::Paper),
-            _ => Err(format!(
-                "expected a learner: light, theta or paper; got {text:?}"
-            )),
-        }
-    }
-}
 
 /// Everything the viewer remembers between runs (eframe persistence).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct Settings {
     /// Which learner runs (settings saved before there was a choice: the light-driven one).
-    pub learner: LearnerChoice,
-    /// The network learner the parameters started from ([`Preset::Visibility`] or [`Preset::Paper`]).
-    pub preset: Preset,
-    /// The fit's parameters (the preset's, possibly changed in the panel).
+    pub learner: Learner,
+    /// The network's parameters: the running network's preset's, possibly changed in the
+    /// panel. Under the light-driven learner, which has none, the last network's (choosing a
+    /// network starts from its preset again, keeping the run's length and seed).
     pub params: FitParams,
-    /// `preset`'s parameters as the build that saved these settings defined them; `None` in
-    /// settings saved before presets existed. See [`Settings::upgraded`].
+    /// The parameters of the preset `params` started from, as the build that saved these
+    /// settings defined it; `None` in settings saved before presets existed. See
+    /// [`Settings::upgraded`].
     #[serde(default)]
     learner_defaults: Option<FitParams>,
+    /// The preset of settings saved before the one learner choice, when their learner was a
+    /// network: which network it was. Read, never written ([`Settings::upgraded`] takes it).
+    // Saved as a bare preset (`preset: Paper`), which RON does not read as an `Option`.
+    #[serde(default, skip_serializing, deserialize_with = "saved_preset")]
+    preset: Option<Preset>,
     /// The scene opened at start.
     pub scene: SceneChoice,
     /// Pieces per surface edge (1: the scene as written).
@@ -90,10 +63,10 @@ pub struct Settings {
 impl Default for Settings {
     fn default() -> Self {
         Settings {
-            learner: LearnerChoice::Light,
-            preset: Preset::Visibility,
+            learner: Learner::Light,
             params: FitParams::default(),
             learner_defaults: Some(Preset::Visibility.params()),
+            preset: None,
             scene: SceneChoice::Bundled(crate::scenes::DEFAULT.into()),
             subdivide: 1,
             // Slow enough to watch: the default 400 cells grow over 20 s.
@@ -130,59 +103,78 @@ impl Settings {
         }
     }
 
-    /// These settings with the learner brought up to date: when the saved preset's parameters
-    /// differ from what this build's preset is, they were saved by a build with another
-    /// learner under that name, and the learner parameters are replaced by this build's
-    /// preset ([`with_preset`]; target cells, seed and budgets are kept). Returns a note when
-    /// that happened.
+    /// These settings brought up to date. A network saved with a preset (before the one
+    /// learner choice) is that preset's network. When the parameters' preset as saved differs
+    /// from what this build's preset is, they were saved by a build with another learner under
+    /// that name, and the learner parameters are replaced by this build's preset
+    /// ([`with_preset`]; target cells, seed and budgets are kept). Returns a note when that
+    /// happened.
     #[must_use]
     pub fn upgraded(mut self) -> (Settings, Option<String>) {
-        let current = self.preset.params();
-        if self.learner_defaults == Some(current) {
+        if let Some(preset) = self.preset.take()
+            && self.learner != Learner::Light
+        {
+            self.learner = Learner::of_preset(preset);
+        }
+        let current = match self.learner.preset() {
+            Some(preset) => self.learner_defaults == Some(preset.params()),
+            // The last network's parameters, whichever network that was.
+            None => Preset::ALL
+                .iter()
+                .any(|p| self.learner_defaults == Some(p.params())),
+        };
+        if current {
             return (self, None);
         }
+        let preset = self.network();
         let note = match self.learner_defaults {
             None => format!(
-                "settings from an older viewer: learner reset to the {} preset",
-                self.preset.name()
+                "settings from an older viewer: the {}'s parameters restored",
+                Learner::of_preset(preset).title()
             ),
             Some(_) => format!(
-                "the {} learner changed since these settings were saved: its parameters were reset",
-                self.preset.name()
+                "the {} changed since these settings were saved: its parameters were reset",
+                Learner::of_preset(preset).title()
             ),
         };
-        self.choose_preset(self.preset);
+        self.restore_preset();
         (self, Some(note))
     }
 
-    /// Switches to `preset`: its learner, with target cells, seed and budgets kept.
-    pub fn choose_preset(&mut self, preset: Preset) {
-        self.preset = preset;
+    /// The network whose preset the parameters are measured against: the running one, or
+    /// under the light-driven learner the visibility network (the parameters' learner part
+    /// is replaced whenever a network is chosen).
+    fn network(&self) -> Preset {
+        self.learner.preset().unwrap_or(Preset::Visibility)
+    }
+
+    /// Switches to `learner`: a network with its preset's parameters (target cells, seed and
+    /// budgets kept); the light-driven learner keeps the parameters as they are.
+    pub fn choose_learner(&mut self, learner: Learner) {
+        self.learner = learner;
+        if learner.preset().is_some() {
+            self.restore_preset();
+        }
+    }
+
+    /// The network's preset parameters again, with target cells, seed and budgets kept.
+    pub fn restore_preset(&mut self) {
+        let preset = self.network();
         self.params = with_preset(preset, &self.params);
         self.learner_defaults = Some(preset.params());
     }
 
-    /// Switches to the learner `name` (a network's with its preset's parameters; target cells,
-    /// seed and budgets kept).
-    pub fn choose_learner(&mut self, name: LearnerName) {
-        match name {
-            LearnerName::Light => self.learner = LearnerChoice::Light,
-            LearnerName::Theta | LearnerName::Paper => {
-                self.learner = LearnerChoice::Network;
-                self.choose_preset(if name == LearnerName::Theta {
-                    Preset::Visibility
-                } else {
-                    Preset::Paper
-                });
-            }
-        }
-    }
-
-    /// Whether the parameters are the preset's (apart from target cells, seed and budgets).
+    /// Whether the parameters are the network's preset (apart from target cells, seed and
+    /// budgets).
     #[must_use]
     pub fn is_preset(&self) -> bool {
-        with_preset(self.preset, &self.params) == self.params
+        with_preset(self.network(), &self.params) == self.params
     }
+}
+
+/// A preset saved by an older viewer, as it was written: bare, not as an `Option`.
+fn saved_preset<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<Preset>, D::Error> {
+    Preset::deserialize(d).map(Some)
 }
 
 /// `preset`'s learner with the run's length and bookkeeping taken from `run`: target cells,
@@ -215,32 +207,30 @@ mod tests {
     fn a_learner_by_name_is_the_one_the_controls_would_pick() {
         let mut settings = Settings::default();
         settings.params.target_cells = 6400;
-        settings.choose_learner("paper".parse().unwrap());
-        assert_eq!(settings.learner, LearnerChoice::Network);
-        assert_eq!(settings.preset, Preset::Paper);
+        settings.choose_learner(Learner::parse("paper").unwrap());
+        assert_eq!(settings.learner, Learner::Paper);
         assert_eq!(settings.params.target_cells, 6400, "target cells kept");
         assert!(settings.is_preset());
-        settings.choose_learner("theta".parse().unwrap());
         assert_eq!(
-            (settings.learner, settings.preset),
-            (LearnerChoice::Network, Preset::Visibility)
+            settings.params,
+            with_preset(Preset::Paper, &settings.params)
         );
+        settings.choose_learner(Learner::parse("visibility").unwrap());
+        assert_eq!(settings.learner, Learner::Visibility);
         assert_eq!(
             settings.params,
             with_preset(Preset::Visibility, &settings.params)
         );
-        settings.choose_learner("light".parse().unwrap());
-        assert_eq!(settings.learner, LearnerChoice::Light);
+        settings.params.network.eta = 0.3;
+        settings.choose_learner(Learner::parse("light").unwrap());
+        assert_eq!(settings.learner, Learner::Light);
         assert_eq!(
-            settings.preset,
-            Preset::Visibility,
-            "the network's choice is kept for later"
+            settings.params.network.eta, 0.3,
+            "the light-driven learner leaves the network's parameters as they are"
         );
-        let err = "network".parse::<LearnerName>().unwrap_err();
-        assert!(
-            err.contains("light, theta or paper") && err.contains("\"network\""),
-            "{err}"
-        );
+        settings.choose_learner(Learner::Visibility);
+        assert!(settings.is_preset(), "a network starts from its preset");
+        assert_eq!(settings.params.target_cells, 6400);
     }
 
     /// eframe's storage in memory: the same RON encoding as on disk.
@@ -263,7 +253,7 @@ mod tests {
     #[test]
     fn settings_round_trip_through_eframe_storage_unchanged() {
         let mut settings = Settings::default();
-        settings.choose_preset(Preset::Paper);
+        settings.choose_learner(Learner::Paper);
         settings.params.target_cells = 77;
         settings.params.network.eta = 0.25;
         settings.lit = false;
@@ -297,7 +287,7 @@ mod tests {
     }
 
     #[test]
-    fn settings_saved_before_presets_load_with_the_current_default_learner() {
+    fn settings_saved_before_presets_load_with_the_light_learner_and_the_visibility_network() {
         let old = OldSettings {
             params: FitParams {
                 target_cells: 123,
@@ -318,7 +308,7 @@ mod tests {
         eframe::set_value(&mut storage, SETTINGS_KEY, &old);
         let (loaded, note) = Settings::load(Some(&storage));
         assert!(note.unwrap().contains("older viewer"));
-        assert_eq!(loaded.preset, Preset::Visibility);
+        assert_eq!(loaded.learner, Learner::Light);
         assert_eq!(loaded.params.target, Target::Visibility);
         assert_eq!(loaded.params.gating, Gating::Faces);
         assert_eq!(loaded.params.network.insertion, Insertion::WorstSample);
@@ -336,7 +326,7 @@ mod tests {
 
     #[test]
     fn a_preset_that_changed_since_saving_is_replaced_and_undecodable_settings_give_defaults() {
-        // As if an older build's default learner had another φ.
+        // As if an older build's visibility network had another φ.
         let mut settings = Settings {
             learner_defaults: Some(FitParams {
                 phi: 0.5,
@@ -359,13 +349,13 @@ mod tests {
     }
 
     #[test]
-    fn choosing_a_preset_takes_its_learner_and_keeps_the_run() {
+    fn choosing_a_network_takes_its_preset_and_keeps_the_run() {
         let mut settings = Settings::default();
         settings.params.target_cells = 50;
         settings.params.seed = 4;
         settings.params.eval_every = 500;
         settings.params.network.eta = 0.3;
-        settings.choose_preset(Preset::Paper);
+        settings.choose_learner(Learner::Paper);
         assert_eq!(settings.params.target, Target::Zeta);
         assert_eq!(settings.params.network, sgcs::Params::default());
         assert_eq!(
@@ -377,7 +367,7 @@ mod tests {
             (50, 4, 500)
         );
         assert!(settings.is_preset());
-        settings.choose_preset(Preset::Visibility);
+        settings.choose_learner(Learner::Visibility);
         assert_eq!(
             settings.params,
             FitParams {
@@ -387,5 +377,69 @@ mod tests {
                 ..FitParams::default()
             }
         );
+    }
+
+    /// The learner as the viewer saved it before the one learner choice: light or a network,
+    /// and the network's preset (once called "Default").
+    #[derive(Serialize)]
+    enum OldChoice {
+        Light,
+        Network,
+    }
+
+    #[derive(Serialize)]
+    #[serde(rename_all = "snake_case")]
+    enum OldPreset {
+        Default,
+        Paper,
+    }
+
+    #[derive(Serialize)]
+    struct ChoiceSettings {
+        learner: OldChoice,
+        preset: OldPreset,
+        params: FitParams,
+        learner_defaults: Option<FitParams>,
+        step_size: u64,
+    }
+
+    #[test]
+    fn a_learner_saved_as_a_choice_and_a_preset_loads_under_its_new_name() {
+        let saved = |learner, preset, network: Preset| {
+            let mut storage = Memory::default();
+            let params = FitParams {
+                target_cells: 321,
+                ..network.params()
+            };
+            let old = ChoiceSettings {
+                learner,
+                preset,
+                params,
+                learner_defaults: Some(network.params()),
+                step_size: 7,
+            };
+            eframe::set_value(&mut storage, SETTINGS_KEY, &old);
+            Settings::load(Some(&storage))
+        };
+        let (paper, note) = saved(OldChoice::Network, OldPreset::Paper, Preset::Paper);
+        assert_eq!((paper.learner, note), (Learner::Paper, None));
+        assert!(paper.is_preset());
+        assert_eq!((paper.params.target_cells, paper.step_size), (321, 7));
+        let (visibility, note) = saved(OldChoice::Network, OldPreset::Default, Preset::Visibility);
+        assert_eq!((visibility.learner, note), (Learner::Visibility, None));
+        let (light, note) = saved(OldChoice::Light, OldPreset::Paper, Preset::Paper);
+        assert_eq!((light.learner, note), (Learner::Light, None));
+        assert_eq!(
+            light.params,
+            FitParams {
+                target_cells: 321,
+                ..FitParams::paper()
+            },
+            "the paper's parameters kept for when a network is chosen"
+        );
+        // Saved again and read back: the new form, the same settings.
+        let mut storage = Memory::default();
+        eframe::set_value(&mut storage, SETTINGS_KEY, &paper);
+        assert_eq!(Settings::load(Some(&storage)), (paper, None));
     }
 }

@@ -11,7 +11,7 @@ use kernel_fit::{FitParams, HistoryPoint};
 
 use crate::prefix::Prefix;
 use crate::timeline::Moment;
-use crate::worker::{CellMark, Growth, Status, World};
+use crate::worker::{CellMark, Growth, Progress, Status, World};
 
 /// The text of every source file of the crate (`src/**.rs`).
 pub fn sources() -> Vec<String> {
@@ -64,7 +64,6 @@ pub fn moment(world: &Arc<World>, i: u64, cells: usize) -> Moment {
         .collect();
     let growth = Growth {
         steps: i * 100,
-        rays: i,
         cells: vec![
             CellMark {
                 st: Some([0.5, 0.5]),
@@ -75,9 +74,8 @@ pub fn moment(world: &Arc<World>, i: u64, cells: usize) -> Moment {
             cells
         ],
         face_edges: Vec::new(),
-        sets: 1,
         run_time: Duration::from_millis(100 * i),
-        light: None,
+        progress: Progress::Steps { rays: i, sets: 1 },
     };
     Moment {
         world: Arc::clone(world),

@@ -1,6 +1,5 @@
-//! The learner's thread and the UI's end of it. The thread owns the [`flatland_light::LightFit`] or
-//! the [`kernel_fit::Fit`]; the UI
-//! talks to it with [`Command`]s and reads what it publishes from a [`Mailbox`] with
+//! The learner's thread and the UI's end of it. The thread owns the running learner (the
+//! [`flatland_light::LightFit`] or a network's [`kernel_fit::Fit`]); the UI talks to it with [`Command`]s and reads what it publishes from a [`Mailbox`] with
 //! `try_lock`, so a frame never waits for training. Each publication also wakes whoever waits
 //! for one ([`WorkerHandle::wait`]: tests, which wait on what the learner says instead of
 //! sleeping), and every status says how many commands the learner has handled, so the UI knows
@@ -26,9 +25,10 @@ use kernel_fit::{FitParams, LearnedKernel, LiveParams};
 use rayon::prelude::*;
 
 use crate::background::Priority;
+use crate::learner::Learner;
 
 pub use published::{
-    APPROX_RES, Approx, CellMark, Growth, KernelGrid, LearnedGrid, LightRounds, Lit, LitState,
+    APPROX_RES, Approx, CellMark, Growth, KernelGrid, LearnedGrid, Lit, LitState, Progress,
     REFERENCE_RES, Status, World,
 };
 
@@ -41,17 +41,17 @@ pub enum Command {
     Pause,
     /// Train exactly this many steps (then pause).
     Step(u64),
-    /// Start a fresh fit on `scene` (subdivided `subdivide` times).
+    /// Start `learner` afresh on `scene` (subdivided `subdivide` times).
     Reset {
         /// The scene as the user sees it (not subdivided).
         scene: Scene,
         /// Pieces per surface edge.
         subdivide: usize,
-        /// The fit's parameters (of the network learners; the light-driven one keeps them
-        /// for when the user switches back).
+        /// The learner to run.
+        learner: Learner,
+        /// A network's parameters (the light-driven learner has none: its statuses carry
+        /// them, as the settings keep them for a network).
         params: FitParams,
-        /// Run the light-driven learner ([`flatland_light::LightFit`]) instead of the network.
-        light: bool,
     },
     /// New live parameters for the running fit (what else changes needs a new fit: `Reset`).
     Params(LiveParams),
@@ -131,7 +131,7 @@ impl WorkerHandle {
             .name("flatland-learner".into())
             .spawn(move || {
                 priority.apply_to_this_thread();
-                learner::Learner::new(rx, learner_end, Box::new(repaint)).run();
+                learner::LearnerThread::new(rx, learner_end, Box::new(repaint)).run();
             })
             .expect("spawning the learner thread");
         WorkerHandle {

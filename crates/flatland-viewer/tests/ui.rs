@@ -13,19 +13,19 @@ use egui::accesskit::Role;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use flatland_geom::DVec2;
-use flatland_viewer::{LearnerChoice, Options, Settings, ViewerApp};
+use flatland_viewer::{Learner, Options, Progress, Settings, ViewerApp};
 use kernel_fit::ModelFile;
-use kernel_fit::{Gating, Preset, StopReason, Target};
+use kernel_fit::{Gating, StopReason, Target};
 use sgcs::Insertion;
 
 /// Longest wait for one condition; reached only if something is broken.
 const DEADLINE: Duration = Duration::from_secs(120);
 
-/// Small, quick settings: fig3, the θ-driven network, few held-out points, a small S₀, growth
-/// as fast as it goes.
+/// Small, quick settings: fig3, the visibility network, few held-out points, a small S₀,
+/// growth as fast as it goes.
 fn quick_settings() -> Settings {
     let mut s = Settings::default();
-    s.learner = LearnerChoice::Network;
+    s.choose_learner(Learner::Visibility);
     s.scene = flatland_viewer::SceneChoice::Bundled("fig3".into());
     s.params.heldout = 256;
     s.params.initial_samples = 200;
@@ -260,23 +260,23 @@ fn moving_the_blocker_keeps_learning_from_the_current_network() {
 }
 
 #[test]
-fn switching_presets_starts_a_new_fit_with_that_learner() {
+fn switching_learners_starts_a_new_fit_with_that_learner() {
     let mut h = harness(quick_settings());
     wait_for(&mut h, "the reference", ready);
     settled(&mut h);
     let fit = h.state().fit_params().expect("a running fit");
     assert_eq!(fit.target, Target::Visibility, "the visibility network");
-    assert_eq!(h.state().settings().preset, Preset::Visibility);
-    let default_world = h.state().world_id();
+    assert_eq!(h.state().settings().learner, Learner::Visibility);
+    let visibility_world = h.state().world_id();
 
-    h.get_by_label("paper").click();
+    h.get_by_label("paper's network").click();
     wait_for(&mut h, "a fresh fit of the paper's network", |a| {
-        a.world_id() > default_world
+        a.world_id() > visibility_world
             && a.caught_up()
             && a.fit_params().is_some_and(|p| p.target == Target::Zeta)
     });
     let app = h.state();
-    assert_eq!(app.settings().preset, Preset::Paper);
+    assert_eq!(app.settings().learner, Learner::Paper);
     let fit = app.fit_params().unwrap();
     assert_eq!(fit.gating, Gating::Off);
     assert_eq!(fit.network, sgcs::Params::default(), "the paper's network");
@@ -291,36 +291,37 @@ fn switching_presets_starts_a_new_fit_with_that_learner() {
     });
 
     let paper_world = h.state().world_id();
-    h.get_by_label("θ-driven").click();
+    h.get_by_label("visibility network").click();
     wait_for(&mut h, "a fresh fit of the visibility network", |a| {
         a.world_id() > paper_world
             && a.caught_up()
             && a.fit_params()
                 .is_some_and(|p| p.target == Target::Visibility && p.gating == Gating::Faces)
     });
-    assert_eq!(h.state().settings().preset, Preset::Visibility);
+    assert_eq!(h.state().settings().learner, Learner::Visibility);
     assert!(h.state().settings().is_preset());
 
-    // The light-driven learner, and back: the θ-driven network as it was.
-    let theta_world = h.state().world_id();
-    h.get_by_label("light-driven (default)").click();
+    // The light-driven learner, and back: the visibility network as it was.
+    let visibility_world = h.state().world_id();
+    h.get_by_label("light-driven learner").click();
     h.get_by_label("Step").click();
     wait_for(&mut h, "a round of the light-driven learner", |a| {
-        a.world_id() > theta_world
+        a.world_id() > visibility_world
             && a.caught_up()
-            && a.shown()
-                .is_some_and(|m| m.status.growth.light.is_some_and(|l| l.rounds == 1))
+            && a.shown().is_some_and(|m| round_of(m) == Some(1))
     });
-    assert_eq!(h.state().settings().learner, LearnerChoice::Light);
+    assert_eq!(h.state().settings().learner, Learner::Light);
+    assert_eq!(h.state().fit_learner(), Learner::Light);
     assert!(!h.state().running(), "a step is one round");
     let light_world = h.state().world_id();
-    h.get_by_label("θ-driven").click();
-    wait_for(&mut h, "the θ-driven network again", |a| {
+    h.get_by_label("visibility network").click();
+    wait_for(&mut h, "the visibility network again", |a| {
         a.world_id() > light_world
             && a.caught_up()
-            && a.shown().is_some_and(|m| m.status.growth.light.is_none())
+            && a.shown()
+                .is_some_and(|m| matches!(m.status.growth.progress, Progress::Steps { .. }))
     });
-    assert_eq!(h.state().settings().learner, LearnerChoice::Network);
+    assert_eq!(h.state().settings().learner, Learner::Visibility);
     assert_eq!(h.state().fit_params().unwrap().target, Target::Visibility);
 }
 
@@ -454,10 +455,10 @@ fn temp_dir(name: &str) -> std::path::PathBuf {
 
 #[test]
 fn the_first_launch_grows_a_floor_plan_at_the_pace_not_at_the_machines_speed() {
-    // The defaults of a first launch (the floor plan, 20 cells per second) with the θ-driven
+    // The defaults of a first launch (the floor plan, 20 cells per second) with the visibility
     // network chosen, and a smaller held-out set so the reference is quick.
     let mut settings = Settings::default();
-    settings.learner = LearnerChoice::Network;
+    settings.choose_learner(Learner::Visibility);
     settings.params.heldout = 256;
     assert!(!settings.unlimited);
     let pace = settings.growth;
@@ -484,20 +485,23 @@ fn the_first_launch_grows_a_floor_plan_at_the_pace_not_at_the_machines_speed() {
 }
 
 /// The light-driven learner's round of the moment shown, if it is the one learning.
-fn round_of(m: &flatland_viewer::Moment) -> Option<usize> {
-    m.status.growth.light.map(|l| l.rounds)
+fn round_of(m: &flatland_viewer::Moment) -> Option<u64> {
+    match m.status.growth.progress {
+        Progress::Rounds { .. } => Some(m.steps()),
+        Progress::Steps { .. } => None,
+    }
 }
 
 #[test]
-fn the_default_learner_publishes_rounds_its_cells_grow_and_the_timeline_scrubs_to_round_1() {
+fn the_light_learner_publishes_rounds_its_cells_grow_and_the_timeline_scrubs_to_round_1() {
     // A first launch: the light-driven learner on the floor plan, revealing each round's cells
     // over time (a smaller held-out set so the reference is quick).
     let mut settings = Settings::default();
     settings.params.heldout = 256;
-    assert_eq!(settings.learner, LearnerChoice::Light);
+    assert_eq!(settings.learner, Learner::Light);
     let app = ViewerApp::with_options(egui::Context::default(), settings, &Options::default());
     let mut h = harness_of(app);
-    h.get_by_label("light-driven (default)");
+    h.get_by_label("light-driven learner");
     wait_for(&mut h, "three rounds without a click", |a| {
         a.running() && a.lit().is_some_and(|l| l.steps >= 3)
     });
@@ -740,5 +744,156 @@ fn the_view_and_the_model_are_saved_named_after_scene_learner_and_step() {
     model
         .check_scene(&fig3, std::path::Path::new("fig3"))
         .unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A file dropped on the window, as the windowing backend hands it to egui.
+#[derive(Debug)]
+struct Dropped(std::path::PathBuf);
+
+impl egui::DroppedFile for Dropped {
+    fn path(&self) -> &std::path::Path {
+        &self.0
+    }
+    fn bytes(&self) -> Result<Vec<u8>, String> {
+        std::fs::read(&self.0).map_err(|e| e.to_string())
+    }
+}
+
+/// Drops `path` on the window and runs the frame that takes it.
+fn drop_file(h: &mut Harness<'_, ViewerApp>, path: &std::path::Path) {
+    h.input_mut()
+        .dropped_files
+        .push(std::sync::Arc::new(Dropped(path.to_path_buf())));
+    h.run_steps(1);
+}
+
+/// A drawing of the repository's `scenes/svg/`.
+fn svg_scene(name: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenes/svg")
+        .join(name)
+}
+
+#[test]
+fn an_svg_drawing_opens_from_the_file_box_and_dropped_on_the_window() {
+    let mut h = harness(quick_settings());
+    wait_for(&mut h, "the reference", ready);
+    let fig3_world = h.state().world_id();
+
+    // The file box: the drawing's path typed in, then Open.
+    let floorplan = svg_scene("floorplan.svg");
+    // The scene file box: the text input whose hint names scene files (it is empty).
+    let file_box = egui_kittest::kittest::by()
+        .role(Role::TextInput)
+        .predicate(|node| {
+            node.placeholder()
+                .is_some_and(|p| p.starts_with("scene file"))
+        });
+    h.get(file_box)
+        .set_text_value_accesskit(&floorplan.display().to_string());
+    h.run_steps(1);
+    h.get_by_label("Open").click();
+    wait_for(&mut h, "the drawing's reference", |a| {
+        a.world_id() > fig3_world && ready(a)
+    });
+    let drawing =
+        flatland_svg::import_file(&floorplan, &flatland_svg::ImportParams::default()).unwrap();
+    let warnings = drawing.warnings().len();
+    let imported = drawing.into_scene().unwrap();
+    let app = h.state();
+    assert_eq!(app.scene_label(), "floorplan.svg");
+    assert_eq!(app.scene(), &imported);
+    assert_eq!(app.reference_scene().unwrap().edges(), imported.edges());
+    assert_eq!(
+        app.message().is_some(),
+        warnings > 0,
+        "its warnings, if any, on the message line: {:?}",
+        app.message()
+    );
+    assert_eq!(
+        app.settings().scene,
+        flatland_viewer::SceneChoice::File(floorplan.clone()),
+        "remembered"
+    );
+    let floorplan_world = app.world_id();
+
+    // Dropped on the window: a drawing with something the import skips, said on the message
+    // line and listed under the scene.
+    let dir = temp_dir("svg");
+    let room = dir.join("room.svg");
+    std::fs::write(
+        &room,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 4 3">
+  <rect width="4" height="3" fill="none" stroke="black" data-flatland-faces="in"/>
+  <line x1="1" y1="2.9" x2="3" y2="2.9" stroke="gold" data-flatland-emission="1"
+        data-flatland-faces="left"/>
+  <rect x="1.5" y="1" width="1" height="1"/>
+  <text x="0.5" y="0.5">kitchen</text>
+</svg>"#,
+    )
+    .unwrap();
+    drop_file(&mut h, &room);
+    wait_for(&mut h, "the dropped drawing's reference", |a| {
+        a.world_id() > floorplan_world && ready(a)
+    });
+    let app = h.state();
+    assert_eq!(app.scene_label(), "room.svg");
+    assert_eq!(app.scene().edges().len(), 4 + 1 + 4);
+    let (message, is_error) = app.message().expect("the import's warning");
+    assert!(
+        !is_error && message.contains("room.svg") && message.contains("text is not geometry"),
+        "{message}"
+    );
+    h.get_by_label_contains("text is not geometry");
+    h.get_by_label("1 import warning");
+    let room_world = h.state().world_id();
+
+    // A drawing that does not import: reported, the scene kept.
+    let broken = dir.join("broken.svg");
+    std::fs::write(&broken, "<svg xmlns=\"http://www.w3.org/2000/svg\"><rect").unwrap();
+    drop_file(&mut h, &broken);
+    h.run_steps(2);
+    let app = h.state();
+    let (message, is_error) = app.message().expect("why it did not open");
+    assert!(
+        is_error && message.contains("could not open") && message.contains("broken.svg"),
+        "{message}"
+    );
+    assert!(message.contains("(kept room.svg)"), "{message}");
+    assert_eq!(
+        (app.scene_label(), app.world_id()),
+        ("room.svg", room_world)
+    );
+    h.get_by_label_contains("could not open");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn the_learner_named_on_the_command_line_runs_and_names_the_exports() {
+    let dir = temp_dir("learner");
+    let options = Options {
+        paused: true,
+        learner: Some(Learner::parse("paper").unwrap()),
+        export_dir: Some(dir.clone()),
+        ..Options::default()
+    };
+    let mut settings = quick_settings();
+    settings.choose_learner(Learner::Light);
+    let app = ViewerApp::with_options(egui::Context::default(), settings, &options);
+    let mut h = harness_of(app);
+    wait_for(&mut h, "the paper's network", |a| {
+        ready(a) && a.caught_up() && a.fit_params().is_some_and(|p| p.target == Target::Zeta)
+    });
+    assert_eq!(h.state().settings().learner, Learner::Paper);
+    assert_eq!(h.state().fit_learner(), Learner::Paper);
+    h.get_by_label_contains("paper's network (ζ)");
+    h.get_by_label("Save model").click();
+    wait_until(&mut h, "the model file", |h| {
+        h.state()
+            .message()
+            .is_some_and(|(m, _)| m.starts_with("saved the model"))
+    });
+    assert!(dir.join("fig3-paper-step0.model.json").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -5,12 +5,11 @@ use std::path::Path;
 use std::time::Duration;
 
 use flatland_geom::{DVec2, Scene};
-use kernel_fit::Preset;
 
 use super::ViewerApp;
+use crate::learner::Learner;
 use crate::scenes;
 use crate::scenes::SceneChoice;
-use crate::settings::{LearnerChoice, LearnerName};
 use crate::views::{self, Hover};
 use crate::worker::Command;
 
@@ -37,79 +36,67 @@ impl ViewerApp {
         self.worker.send(Command::Pace(self.pace()));
     }
 
-    /// Starts a fresh fit of the current scene with the current parameters, seed, subdivision.
+    /// Starts the chosen learner afresh on the current scene with the current parameters,
+    /// seed, subdivision.
     pub fn reset(&mut self) {
         self.status = None;
         self.approx = None;
         self.lit = None;
         self.timeline.clear();
         self.go_live();
+        self.fit_learner = self.settings.learner;
         self.fit_params = self.settings.params;
         self.sent_params = self.settings.params;
         self.worker.send(Command::Reset {
             scene: self.scene.clone(),
             subdivide: self.settings.subdivide.max(1),
+            learner: self.settings.learner,
             params: self.settings.params,
-            light: self.settings.learner == LearnerChoice::Light,
         });
         self.fit_since = self.worker.sent();
         self.busy = Some("computing the reference kernel…");
     }
 
-    /// Switches to `preset`'s network learner (target cells and seed kept) and starts a fresh
-    /// fit.
-    pub fn choose_preset(&mut self, preset: Preset) {
-        self.settings.choose_learner(match preset {
-            Preset::Visibility => LearnerName::Theta,
-            Preset::Paper => LearnerName::Paper,
-        });
-        self.reset();
-    }
-
-    /// Switches to the light-driven learner and starts a fresh run.
-    pub fn choose_light(&mut self) {
-        self.settings.learner = LearnerChoice::Light;
+    /// Switches to `learner` (a network with its preset's parameters, target cells and seed
+    /// kept) and starts it afresh.
+    pub fn choose_learner(&mut self, learner: Learner) {
+        self.settings.choose_learner(learner);
         self.reset();
     }
 
     /// Switches to a scene the viewer offers by name (a fresh fit).
     pub fn open_bundled(&mut self, name: &str) {
-        match scenes::named(name) {
-            Ok((scene, label)) => {
-                self.settings.scene = SceneChoice::Bundled(name.into());
-                self.set_scene(scene, label);
+        let choice = SceneChoice::Bundled(name.into());
+        match scenes::load(&choice) {
+            Ok(opened) => {
+                self.settings.scene = choice;
+                self.set_scene(opened);
             }
             Err(e) => self.message = Some((e, true)),
         }
     }
 
-    /// Opens a scene file (a fresh fit). A file that does not load leaves the current scene as it
-    /// is and says why in the message line.
+    /// Opens a scene file, `.ron`/`.json` or an SVG drawing (a fresh fit); a drawing's import
+    /// warnings go to the message line. A file that does not load leaves the current scene as
+    /// it is and says why in the message line.
     pub fn open_file(&mut self, path: &Path) {
-        match Scene::load(path) {
-            Ok(scene) => {
+        match scenes::open_file(path) {
+            Ok(opened) => {
                 self.settings.scene = SceneChoice::File(path.to_path_buf());
                 self.path_input = path.display().to_string();
-                let label = scenes::file_label(path);
-                self.set_scene(scene, label);
+                self.set_scene(opened);
             }
             Err(e) => {
-                self.message = Some((
-                    format!(
-                        "could not open {}: {e} (kept {})",
-                        path.display(),
-                        self.scene_label
-                    ),
-                    true,
-                ));
+                self.message = Some((format!("{e} (kept {})", self.scene_label), true));
             }
         }
     }
 
-    fn set_scene(&mut self, scene: Scene, label: String) {
-        self.scene = scene;
-        self.scene_label = label;
-        self.message = None;
+    fn set_scene(&mut self, opened: scenes::Opened) {
+        self.message = scenes::warnings_note(&opened).map(|note| (note, false));
+        self.scene = opened.scene;
+        self.scene_label = opened.label;
+        self.scene_warnings = opened.warnings;
         self.hover = Hover::default();
         self.reset();
     }

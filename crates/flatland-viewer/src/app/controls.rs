@@ -1,4 +1,4 @@
-//! The controls panel: scene, run, learner (preset and what the network learns), network,
+//! The controls panel: scene, run, learner (which runs, and what a network learns), network,
 //! sampling, fit, view, export. Every parameter with its valid range and a hover text; a change
 //! to what only a new fit can change starts one (see `ViewerApp::sync_params`).
 
@@ -7,12 +7,12 @@ use std::path::PathBuf;
 use egui::{DragValue, RichText};
 use kernel_fit::Schema;
 use kernel_fit::schema::{Bound, Range};
-use kernel_fit::{Gating, Preset, Resampling, Target};
+use kernel_fit::{Gating, Resampling, Target};
 use sgcs::{InsertRule, Insertion, OutputMode, OutputRule, Resource};
 
 use super::ViewerApp;
+use crate::learner::Learner;
 use crate::scenes::SceneChoice;
-use crate::settings::{LearnerChoice, with_preset};
 use crate::worker::Command;
 
 impl ViewerApp {
@@ -24,7 +24,7 @@ impl ViewerApp {
         self.learner_controls(ui);
         ui.separator();
         // The light-driven learner has none of the network's parameters.
-        let network = self.settings.learner == LearnerChoice::Network;
+        let network = self.settings.learner.preset().is_some();
         ui.add_enabled_ui(network, |ui| {
             self.network_controls(ui);
             ui.separator();
@@ -53,9 +53,10 @@ impl ViewerApp {
             }
         });
         ui.label(RichText::new(&self.scene_label).strong());
+        self.import_warnings(ui);
         ui.horizontal(|ui| {
             let edit = egui::TextEdit::singleline(&mut self.path_input)
-                .hint_text("scene file (.ron/.json)")
+                .hint_text("scene file (.ron/.json/.svg)")
                 .desired_width(170.0);
             let r = ui.add(edit);
             let enter = r.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
@@ -76,6 +77,26 @@ impl ViewerApp {
             ui.label(RichText::new("[1, 1000], on Reset").small().weak());
             ui.end_row();
         });
+    }
+
+    /// What importing the scene's drawing said, folded under a count.
+    fn import_warnings(&self, ui: &mut egui::Ui) {
+        let n = self.scene_warnings.len();
+        if n == 0 {
+            return;
+        }
+        let title = if n == 1 {
+            "1 import warning".to_owned()
+        } else {
+            format!("{n} import warnings")
+        };
+        egui::CollapsingHeader::new(RichText::new(title).small())
+            .id_salt("import-warnings")
+            .show(ui, |ui| {
+                for warning in &self.scene_warnings {
+                    ui.label(RichText::new(warning).small().weak());
+                }
+            });
     }
 
     /// The pace of growth (see the learner's `train` module for why cells, not steps).
@@ -105,11 +126,11 @@ impl ViewerApp {
         });
     }
 
-    /// The preset and what the network learns (ALGORITHM.md §4).
+    /// Which learner runs, and what a network learns (ALGORITHM.md §4).
     fn learner_controls(&mut self, ui: &mut egui::Ui) {
         ui.heading("Learner");
-        self.preset_selector(ui);
-        let network = self.settings.learner == LearnerChoice::Network;
+        self.learner_selector(ui);
+        let network = self.settings.learner.preset().is_some();
         ui.add_enabled_ui(network, |ui| self.network_learner_controls(ui));
     }
 
@@ -177,51 +198,27 @@ impl ViewerApp {
         });
     }
 
-    /// Light-driven, θ-driven or paper: choosing one starts a new fit with that learner.
-    fn preset_selector(&mut self, ui: &mut egui::Ui) {
+    /// The light-driven learner, the visibility network or the paper's network: choosing one
+    /// starts it afresh. Labelled with the method's title; its name is `--learner`'s.
+    fn learner_selector(&mut self, ui: &mut egui::Ui) {
         ui.horizontal_wrapped(|ui| {
             ui.label("learner").on_hover_text(
-                "which learner runs; choosing one starts a new fit (target cells and seed are \
+                "which learner runs; choosing one starts it afresh (target cells and seed are \
                  kept)",
             );
-            let light = self.settings.learner == LearnerChoice::Light;
-            if ui
-                .selectable_label(light, "light-driven (default)")
-                .on_hover_text(
-                    "rounds of solving and learning: each round solves the scene with what is \
-                     learned, then probes the exact view of the points between whose \
-                     neighbours' views the most uncertain light flows (ALGORITHM.md §4a; what `flatland solve` runs). The network's \
-                     parameters below do not apply to it",
-                )
-                .clicked()
-            {
-                self.choose_light();
-            }
-            let presets = [
-                (
-                    Preset::Visibility,
-                    "θ-driven",
-                    "learns only the visibility V, where geometry cannot decide it, in cells \
-                     that never straddle a shadow boundary (ALGORITHM.md §4)",
-                ),
-                (
-                    Preset::Paper,
-                    "paper",
-                    "the paper's network: learns ζ everywhere from γ(s, t), with least-squares \
-                     refit (ALGORITHM.md §3)",
-                ),
-            ];
-            for (preset, name, hover) in presets {
-                let selected = !light && self.settings.preset == preset;
+            for learner in Learner::ALL {
+                let selected = self.settings.learner == learner;
+                let about = learner_about(learner);
+                let hover = format!("{about} (`--learner {}`)", learner.name());
                 if ui
-                    .selectable_label(selected, name)
+                    .selectable_label(selected, learner.title())
                     .on_hover_text(hover)
                     .clicked()
                 {
-                    self.choose_preset(preset);
+                    self.choose_learner(learner);
                 }
             }
-            if !light && !self.settings.is_preset() {
+            if self.settings.learner.preset().is_some() && !self.settings.is_preset() {
                 ui.label(RichText::new("(changed)").weak())
                     .on_hover_text("parameters differ from the preset's");
             }
@@ -328,12 +325,13 @@ impl ViewerApp {
         if lit.changed() {
             self.worker.send(Command::Lit(self.settings.lit));
         }
+        let network = self.settings.learner.preset().is_some();
         if ui
-            .button("Restore preset")
-            .on_hover_text("the preset's parameters (target cells, seed kept)")
+            .add_enabled(network, egui::Button::new("Restore preset"))
+            .on_hover_text("the network's preset parameters (target cells, seed kept)")
             .clicked()
         {
-            self.settings.params = with_preset(self.settings.preset, &self.settings.params);
+            self.settings.restore_preset();
         }
     }
 
@@ -597,4 +595,24 @@ fn row<T: egui::emath::Numeric>(
     .on_hover_text(meaning);
     ui.label(RichText::new(valid).small().weak());
     ui.end_row();
+}
+
+/// What each learner does, for its hover text.
+fn learner_about(learner: Learner) -> &'static str {
+    match learner {
+        Learner::Light => {
+            "the default, what `flatland solve` runs: rounds of solving the scene with what is \
+             learned, then probing the exact view of the points between whose neighbours' \
+             views the most uncertain light flows (ALGORITHM.md §4a). The network's \
+             parameters below do not apply to it"
+        }
+        Learner::Visibility => {
+            "learns only the visibility V, where geometry cannot decide it, in cells that never \
+             straddle a shadow boundary (ALGORITHM.md §4)"
+        }
+        Learner::Paper => {
+            "the paper's network: learns ζ everywhere from γ(s, t), with least-squares refit \
+             (ALGORITHM.md §3)"
+        }
+    }
 }

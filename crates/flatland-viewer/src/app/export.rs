@@ -10,7 +10,6 @@ use std::sync::mpsc::{self, Receiver, Sender};
 use egui::{ColorImage, ScreenshotCallback, ViewportCommand};
 
 use super::ViewerApp;
-use super::top_bar::learner_parts;
 use crate::worker::Command;
 
 /// Where exports go and the screenshots under way.
@@ -79,7 +78,10 @@ pub fn write_png(path: &Path, image: &ColorImage) -> Result<(), String> {
 /// A scene label as a file name part: letters, digits, `-` and `_` (the file's extension
 /// dropped, "(edited)" a word).
 fn file_part(label: &str) -> String {
-    let label = label.replace(".ron", "").replace(".json", "");
+    let label = label
+        .replace(".ron", "")
+        .replace(".json", "")
+        .replace(".svg", "");
     let mut part = String::new();
     for c in label.chars() {
         if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
@@ -92,23 +94,14 @@ fn file_part(label: &str) -> String {
 }
 
 impl ViewerApp {
-    /// Files of this run start with the scene and the learner: `floorplan-light`,
-    /// `floorplan-default`.
+    /// Files of this run start with the scene and the learner's name: `floorplan-light`,
+    /// `floorplan-visibility`.
     fn export_stem(&self) -> String {
         let scene = file_part(&self.scene_label);
-        let (preset, _) = learner_parts(&self.fit_params);
-        let light = self
-            .status
-            .as_ref()
-            .is_some_and(|s| s.growth.light.is_some());
-        let learner = match preset {
-            _ if light => "light",
-            Some(preset) => preset.name(),
-            None => "custom",
-        };
         format!(
-            "{}-{learner}",
-            if scene.is_empty() { "scene" } else { &scene }
+            "{}-{}",
+            if scene.is_empty() { "scene" } else { &scene },
+            self.fit_learner.name()
         )
     }
 
@@ -150,6 +143,7 @@ mod tests {
         assert_eq!(file_part("a.json"), "a");
         assert_eq!(file_part("maze.ron (edited)"), "maze-edited");
         assert_eq!(file_part("(((.ron"), "");
+        assert_eq!(file_part("floorplan.svg"), "floorplan");
     }
 
     #[test]

@@ -13,7 +13,7 @@ use flatland_pictures::colormap::Scale;
 use super::Shown;
 use crate::colormap::{grid_image, samples_image};
 use crate::views::{self, Marks};
-use crate::worker::{APPROX_RES, REFERENCE_RES};
+use crate::worker::{APPROX_RES, Progress, REFERENCE_RES};
 
 /// An image kept to be composited, and the key of the data it was made from.
 struct Layer {
@@ -205,12 +205,11 @@ impl Textures {
 fn samples<'s>(slot: &'s mut Option<Layer>, shown: &Shown, req: &Request) -> Option<&'s Layer> {
     let m = shown.moment.as_ref().filter(|_| req.show_samples)?;
     let samples = &m.status.samples;
-    let key = [
-        shown.world.id,
-        samples.len() as u64,
-        m.status.growth.sets as u64,
-        0,
-    ];
+    // Samples are a network's: the light-driven learner draws none.
+    let Progress::Steps { sets, .. } = m.status.growth.progress else {
+        return None;
+    };
+    let key = [shown.world.id, samples.len() as u64, sets as u64, 0];
     Some(layer(slot, key, || {
         samples_image(samples.as_slice(), 2 * REFERENCE_RES)
     }))

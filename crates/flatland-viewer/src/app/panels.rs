@@ -11,7 +11,7 @@ use super::readout::{Learned, readout_text};
 use super::top_bar::error_text;
 use super::{Shown, ViewerApp};
 use crate::views::{self, LitPaint, NEW_FOR, PlotFrame};
-use crate::worker::{Command, Lit, LitState};
+use crate::worker::{Command, Lit, LitState, Progress};
 
 /// The kernel plot's exact ζ is computed at its width in pixels rounded up to a multiple of
 /// this (so a window resized by a few pixels does not ask again).
@@ -28,11 +28,13 @@ impl ViewerApp {
             _ => Arc::clone(self.world.as_ref()?),
         };
         let moment = moment.filter(|m| m.world.id == world.id);
-        // The light-driven learner's new cells are its newest round's.
-        let new_from = moment.as_ref().map_or(0, |m| match &m.status.growth.light {
-            Some(light) => light.newest_from,
-            None => self.timeline.cells_at(m.at().saturating_sub(NEW_FOR)),
-        });
+        // The light-driven learner's new probes are its newest round's.
+        let new_from = moment
+            .as_ref()
+            .map_or(0, |m| match m.status.growth.progress {
+                Progress::Rounds { newest_from, .. } => newest_from,
+                Progress::Steps { .. } => self.timeline.cells_at(m.at().saturating_sub(NEW_FOR)),
+            });
         let kernel_grid = self.kernel_grid.clone().filter(|g| g.world == world.id);
         Some(Shown {
             world,
@@ -98,22 +100,26 @@ impl ViewerApp {
         }
         let textures = self.textures.of(&ctx, shown, &request);
         kernel_frame.scale = Some(textures.scale);
+        let progress = shown.moment.as_ref().map(|m| m.status.growth.progress);
+        let rounds = matches!(progress, Some(Progress::Rounds { .. }));
         let big = views::Overlay {
             ticks: textures.ticks,
-            face_cells: shown
-                .moment
-                .as_ref()
-                .is_some_and(|m| m.status.growth.light.is_some()),
+            probes: rounds,
         };
         let small = views::Overlay::default();
         let learned_title = match shown.moment.as_ref().map(|m| m.status.params.target) {
+            _ if rounds => "learned ζ (the probes' rows)",
             Some(kernel_fit::Target::Visibility) => "learned ζ (unoccluded ζ × V)",
             _ => "learned ζ (SGCS)",
         };
         let panels = [
             (
                 kernel_frame,
-                "ζ(s, t) exact, with the cells",
+                if rounds {
+                    "ζ(s, t) exact, with the probes"
+                } else {
+                    "ζ(s, t) exact, with the cells"
+                },
                 Some(textures.kernel),
                 big,
             ),

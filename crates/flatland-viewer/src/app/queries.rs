@@ -28,7 +28,8 @@ impl ViewerApp {
     pub fn scene(&self) -> &Scene {
         &self.scene
     }
-    /// Training steps in the newest snapshot (0 before the first one).
+    /// Training steps (rounds of the light-driven learner) in the newest snapshot (0 before
+    /// the first one).
     pub fn steps(&self) -> u64 {
         self.status.as_ref().map_or(0, |s| s.growth.steps)
     }
@@ -36,9 +37,13 @@ impl ViewerApp {
     pub fn cells(&self) -> usize {
         self.status.as_ref().map_or(0, |s| s.growth.cells.len())
     }
-    /// Rays cast, as of the newest snapshot.
+    /// Rays cast, as of the newest snapshot (none by the light-driven learner).
     pub fn rays(&self) -> u64 {
-        self.status.as_ref().map_or(0, |s| s.growth.rays)
+        self.status.as_ref().map_or(0, |s| s.growth.progress.rays())
+    }
+    /// The learner the last Reset started.
+    pub fn fit_learner(&self) -> crate::Learner {
+        self.fit_learner
     }
     /// Whether the learner reports that it is training continuously.
     pub fn running(&self) -> bool {

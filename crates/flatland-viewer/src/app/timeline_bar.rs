@@ -4,6 +4,7 @@
 use egui::{RichText, Slider};
 
 use super::ViewerApp;
+use crate::worker::Progress;
 
 /// The replay speeds offered, times the speed the run was recorded at.
 const SPEEDS: [f32; 6] = [0.25, 0.5, 1.0, 2.0, 4.0, 8.0];
@@ -82,14 +83,13 @@ impl ViewerApp {
             }
         }
         if let Some(m) = self.shown() {
-            // The light-driven learner's steps are rounds.
-            let step = if m.status.growth.light.is_some() {
-                "round"
-            } else {
-                "step"
+            // The light-driven learner's steps are rounds, its cells probes.
+            let (step, cells) = match m.status.growth.progress {
+                Progress::Rounds { .. } => ("round", "probes"),
+                Progress::Steps { .. } => ("step", "cells"),
             };
             let text = format!(
-                "{} {}/{} · {:.1} s · {step} {} · {} cells",
+                "{} {}/{} · {:.1} s · {step} {} · {} {cells}",
                 if self.is_live() { "live" } else { "moment" },
                 position + 1,
                 n,

@@ -4,29 +4,34 @@
 use egui::{Color32, DragValue, RichText};
 use flatland_light::LightStop;
 use flatland_solve::Errors;
-use kernel_fit::{FitParams, Preset, StopReason};
+use kernel_fit::{FitParams, StopReason};
 
 use super::ViewerApp;
-use crate::worker::{LightRounds, Lit, Status};
+use crate::learner::Learner;
+use crate::settings::with_preset;
+use crate::worker::{Lit, Progress, Status};
 
 impl ViewerApp {
     /// The top bar's numbers: the learner, its progress, the held-out error of ζ and (with the
     /// lit scene) of the solved `B − E`, its speed.
     fn stats_text(&self, st: &Status, lit: Option<&Lit>, heldout_defined: bool) -> String {
         let g = &st.growth;
-        if let Some(light) = &g.light {
-            return light_stats(light, g.rays, g.cells.len(), lit);
-        }
+        let (rays, sets) = match g.progress {
+            Progress::Steps { rays, sets } => (rays, sets),
+            Progress::Rounds {
+                estimated_error, ..
+            } => return light_stats(g.steps, estimated_error, g.cells.len(), lit),
+        };
         let mut parts = vec![
-            learner_name(&st.params),
+            learner_name(self.fit_learner, &st.params),
             format!("steps {}", g.steps),
-            format!("rays {}", g.rays),
+            format!("rays {rays}"),
             format!("cells {}/{}", g.cells.len(), self.sent_params.target_cells),
         ];
         if let Some(faces) = st.occupied_faces {
             parts.push(format!("in {faces} faces"));
         }
-        parts.push(format!("samples {} in {} sets", st.samples.len(), g.sets));
+        parts.push(format!("samples {} in {sets} sets", st.samples.len()));
         let err = st.history.as_slice().last().map_or("–".into(), |h| {
             error_text(h.rel_l2_heldout, heldout_defined)
         });
@@ -110,10 +115,8 @@ impl ViewerApp {
             return Some((m.clone(), *e));
         }
         let st = self.status.as_ref()?;
-        if let Some(light) = &st.growth.light {
-            return light
-                .stopped
-                .map(|r| (format!("stopped: {}", light_stop_text(r)), false));
+        if let Progress::Rounds { stopped, .. } = st.growth.progress {
+            return stopped.map(|r| (format!("stopped: {}", light_stop_text(r)), false));
         }
         let r = st.stopped?;
         let errs = st
@@ -135,16 +138,15 @@ impl ViewerApp {
     }
 }
 
-/// The light-driven learner's numbers: its rounds, rays and cells, its own estimate of the
-/// error of `B − E` and the error measured against the exact solve.
-fn light_stats(light: &LightRounds, rays: u64, cells: usize, lit: Option<&Lit>) -> String {
+/// The light-driven learner's numbers: its rounds and probes, its own estimate of the error of
+/// `B − E` and the error measured against the exact solve.
+fn light_stats(rounds: u64, estimated: Option<f64>, probes: usize, lit: Option<&Lit>) -> String {
     let mut parts = vec![
-        "light-driven".to_string(),
-        format!("round {}", light.rounds),
-        format!("rays {rays}"),
-        format!("cells {cells} (one per face)"),
+        Learner::Light.title().to_string(),
+        format!("round {rounds}"),
+        format!("probes {probes}"),
     ];
-    if let Some(e) = light.estimated_error {
+    if let Some(e) = estimated {
         parts.push(format!("estimated B−E {}", error_text(e, true)));
     }
     if let Some(l) = lit {
@@ -183,26 +185,23 @@ pub fn stop_text(reason: StopReason) -> &'static str {
     }
 }
 
-/// The learner a fit runs, in a few words.
-pub(super) fn learner_name(p: &FitParams) -> String {
-    let (preset, target) = learner_parts(p);
-    match preset {
-        Some(preset) => format!("{} ({target})", preset.name()),
-        None => format!("custom ({target})"),
-    }
-}
-
-/// The learner's preset, if its parameters are one, and what it learns.
-pub(super) fn learner_parts(p: &FitParams) -> (Option<Preset>, &'static str) {
-    let preset = Preset::ALL
-        .into_iter()
-        .find(|&preset| crate::settings::with_preset(preset, p) == *p);
+/// A network as it runs, in a few words: its title, whether its parameters are its preset's,
+/// and what it learns.
+fn learner_name(learner: Learner, p: &FitParams) -> String {
     let target = match p.target {
         kernel_fit::Target::Visibility => "V",
         kernel_fit::Target::Zeta => "ζ",
         kernel_fit::Target::FactoredEmission => "k",
     };
-    (preset, target)
+    let changed = learner
+        .preset()
+        .is_some_and(|preset| with_preset(preset, p) != *p);
+    let title = learner.title();
+    if changed {
+        format!("{title}, changed ({target})")
+    } else {
+        format!("{title} ({target})")
+    }
 }
 
 /// Both final errors, formatted; "undefined" where [`crate::worker::World::defined`] says so.

@@ -189,8 +189,8 @@ pub fn curves(ui: &mut egui::Ui, history: &[HistoryPoint], lit: Option<&Lit>) {
     });
 }
 
-/// Cells and samples against steps; for the light-driven learner (`rounds`), its cells against
-/// rounds.
+/// Cells and samples against steps; for the light-driven learner (`rounds`), its probes
+/// against rounds.
 fn counts(
     ui: &mut egui::Ui,
     history: &[HistoryPoint],
@@ -199,7 +199,7 @@ fn counts(
     height: f32,
 ) {
     ui.label(if rounds {
-        "cells vs rounds"
+        "probes vs rounds"
     } else {
         "cells and samples vs steps"
     });
@@ -207,14 +207,15 @@ fn counts(
         history.iter().map(f).collect()
     };
     fixed_plot("counts", height).show(ui, |p| {
-        p.line(curve("cells", series(&|h| [h.steps as f64, h.cells as f64])).width(2.5));
         if rounds {
-            let cells: PlotPoints<'static> = lit_history
+            let probes: PlotPoints<'static> = lit_history
                 .iter()
                 .map(|h| [h.steps as f64, h.cells as f64])
                 .collect();
-            p.line(curve("cells", cells).width(2.5));
+            p.line(curve("probes", probes).width(2.5));
+            return;
         }
+        p.line(curve("cells", series(&|h| [h.steps as f64, h.cells as f64])).width(2.5));
         p.line(
             curve(
                 "samples / 20",

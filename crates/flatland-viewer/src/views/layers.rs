@@ -2,10 +2,10 @@
 //! image on the CPU. Drawn as separate textures, every layer costs a software rasterizer a
 //! blended fill of the whole plot on every frame; they change only when their data does.
 //!
-//! Measured under Xvfb with Mesa's llvmpipe on 2 cores (`floorplan-1000`, θ-driven network,
-//! paused, the pointer sweeping the kernel plot): the rasterizer's CPU per frame went from 18.7
-//! to 14.4 ms, and the UI thread's from 4.9 to 4.1 ms (the layers change far less often than
-//! frames are drawn).
+//! Measured under Xvfb with Mesa's llvmpipe on 2 cores (`floorplan-1000`, the visibility
+//! network, paused, the pointer sweeping the kernel plot): the rasterizer's CPU per frame went
+//! from 18.7 to 14.4 ms, and the UI thread's from 4.9 to 4.1 ms (the layers change far less
+//! often than frames are drawn).
 
 use egui::{Color32, ColorImage};
 

@@ -82,8 +82,8 @@ impl PlotFrame {
 pub struct Overlay<'a> {
     /// The parameters of the surface edges' boundaries drawn (for the axis ticks).
     pub ticks: &'a [f64],
-    /// The cells are the light-driven learner's (one per face): the legend says so.
-    pub face_cells: bool,
+    /// The cells are the light-driven learner's probes: the legend says so.
+    pub probes: bool,
 }
 
 /// One (s, t) panel: its image (heatmap and overlays), axes, labels, hover marks. Returns
@@ -128,7 +128,7 @@ pub fn kernel_plot(
         axis_ticks(&painter, frame, overlay.ticks, weak);
         edge_labels(&painter, frame, scene, weak);
         axis_titles(&painter, frame, weak);
-        marks_legend(&painter, frame, weak, overlay.face_cells);
+        marks_legend(&painter, frame, weak, overlay.probes);
         if let Some(scale) = frame.scale {
             scale_bar(&painter, frame, scale, weak);
         }
@@ -249,7 +249,7 @@ fn axis_titles(painter: &Painter, frame: &PlotFrame, color: Color32) {
 }
 
 /// What each mark over the kernel means, on a row under the plot (drawn as the marks are).
-fn marks_legend(painter: &Painter, frame: &PlotFrame, color: Color32, face_cells: bool) {
+fn marks_legend(painter: &Painter, frame: &PlotFrame, color: Color32, probes: bool) {
     let y = frame.plot.bottom() + 30.0 + LEGEND_H / 2.0;
     let mut x = frame.plot.left();
     let font = FontId::proportional(10.0);
@@ -269,7 +269,7 @@ fn marks_legend(painter: &Painter, frame: &PlotFrame, color: Color32, face_cells
             painter.circle(p, 3.0, fill, Stroke::new(1.0, rim));
         }
     };
-    if face_cells {
+    if probes {
         entry(
             &mut x,
             &disc(FACE_VISIBLE, Color32::BLACK),

@@ -1,7 +1,8 @@
 //! The learner's loop: read commands, train a slice at the pace asked for, publish, start and
-//! pick up the lit scene's solves. Training and pacing are in [`train`], publishing in
-//! [`publish`], the lit scene (solved beside the learner, on a thread of its own) in [`lit`],
-//! the light-driven learner (rounds instead of steps) in [`light`].
+//! pick up the lit scene's solves. What runs is one [`Running`] learner: a network, trained
+//! and paced in [`train`] and published in [`publish`], or the light-driven learner (rounds
+//! instead of steps) in [`light`]. The lit scene (solved beside the learner, on a thread of its
+//! own) is in [`lit`].
 
 mod light;
 mod lit;
@@ -19,18 +20,39 @@ use kernel_fit::{Fit, FitParams, FitSummary, LiveParams, ModelFile, StopReason};
 
 use super::published::{APPROX_RES, LitState, REFERENCE_RES, World};
 use super::{Command, Mailbox, Shared};
+use crate::learner::Learner;
+use crate::lit::Integration;
+use light::LightRun;
 use lit::LitWork;
 use publish::PublishState;
 use train::Pace;
 
-/// The thread's state: the fit, the scene's world, what was last published.
-pub(super) struct Learner {
+/// The learner running: the light-driven one round by round, or a network step by step.
+pub(super) enum Running {
+    /// The light-driven learner ([`flatland_light::LightFit`]) and how much of it was shown.
+    Light(Box<LightRun>),
+    /// A network: the visibility network or the paper's (its parameters say which).
+    Network(Box<Fit>),
+}
+
+impl Running {
+    /// How the lit view integrates what this learner learned: exactly (the light-driven
+    /// learner's rows, a network of V), or by quadrature of ζ̃ (a network of ζ or k).
+    fn integration(&self) -> Integration {
+        match self {
+            Running::Light(_) => Integration::Exact,
+            Running::Network(fit) => Integration::of_target(fit.params().target),
+        }
+    }
+}
+
+/// The thread's state: the running learner, the scene's world, what was last published.
+pub(super) struct LearnerThread {
     rx: Receiver<Command>,
     shared: Arc<Shared>,
     repaint: Box<dyn Fn() + Send>,
-    fit: Option<Fit>,
-    /// The light-driven learner, when it is the one learning (then `fit` is `None`).
-    light: Option<light::LightRun>,
+    /// The learner running (`None` before the first reset, or after it failed to start).
+    learning: Option<Running>,
     world: Option<Arc<World>>,
     next_world: u64,
     running: bool,
@@ -49,19 +71,18 @@ pub(super) struct Learner {
     lit: LitWork,
 }
 
-impl Learner {
+impl LearnerThread {
     pub(super) fn new(
         rx: Receiver<Command>,
         shared: Arc<Shared>,
         repaint: Box<dyn Fn() + Send>,
     ) -> Self {
         let now = Instant::now();
-        Learner {
+        LearnerThread {
             rx,
             shared,
             repaint,
-            fit: None,
-            light: None,
+            learning: None,
             world: None,
             next_world: 1,
             running: false,
@@ -86,6 +107,14 @@ impl Learner {
         }
         self.shared.posted.notify_all();
         (self.repaint)();
+    }
+
+    /// The network, when one is running.
+    fn fit(&self) -> Option<&Fit> {
+        match &self.learning {
+            Some(Running::Network(fit)) => Some(fit),
+            _ => None,
+        }
     }
 
     /// Whether it trains now (continuously, or steps asked for).
@@ -147,7 +176,7 @@ impl Learner {
         match command {
             Command::Play => {
                 self.running = true;
-                if let Some(run) = &mut self.light {
+                if let Some(Running::Light(run)) = &mut self.learning {
                     run.resume();
                 }
                 self.last_tick = Instant::now();
@@ -166,9 +195,9 @@ impl Learner {
             Command::Reset {
                 scene,
                 subdivide,
+                learner,
                 params,
-                light,
-            } => self.reset(scene, subdivide, params, light),
+            } => self.reset(scene, subdivide, learner, params),
             Command::Params(params) => self.set_params(params),
             Command::Edit { scene, subdivide } => self.edit(scene, subdivide),
             Command::Lit(on) => self.switch_lit(on),
@@ -180,7 +209,7 @@ impl Learner {
     }
 
     fn set_params(&mut self, live: LiveParams) {
-        let Some(fit) = &mut self.fit else {
+        let Some(Running::Network(fit)) = &mut self.learning else {
             return;
         };
         match fit.set_params(live) {
@@ -203,15 +232,18 @@ impl Learner {
     /// Saves the running fit (its model as it is now, with the final errors if it finished) as
     /// the model file `flatland eval` reads.
     fn export_model(&self, dir: &Path, stem: &str) {
-        if self.light.is_some() {
-            return self.report(
-                "the light-driven learner keeps no network: its model is the mesh's blocks \
-                 (choose the θ-driven learner to save a model file)"
-                    .into(),
-            );
-        }
-        let Some(fit) = &self.fit else {
-            return self.report("no fit to save yet".into());
+        let fit = match &self.learning {
+            Some(Running::Network(fit)) => fit,
+            Some(Running::Light(_)) => {
+                return self.report(format!(
+                    "the {} keeps no network: its model is the mesh's rows (choose the {} or \
+                     the {} to save a model file)",
+                    Learner::Light.title(),
+                    Learner::Visibility.title(),
+                    Learner::Paper.title()
+                ));
+            }
+            None => return self.report("no fit to save yet".into()),
         };
         let path = dir.join(format!("{stem}-step{}.model.json", fit.steps()));
         let file = ModelFile::new(fit.model().clone(), *fit.params(), self.summary.clone());
@@ -265,7 +297,9 @@ impl Learner {
         result
     }
 
-    fn reset(&mut self, scene: Scene, subdivide: usize, params: FitParams, light: bool) {
+    /// Starts `learner` afresh on `scene`; a bad parameter or scene is reported and what runs
+    /// goes on.
+    fn reset(&mut self, scene: Scene, subdivide: usize, learner: Learner, params: FitParams) {
         if let Err(e) = params.validate() {
             self.report(e.to_string());
             return;
@@ -276,46 +310,41 @@ impl Learner {
         };
         self.running = false;
         self.steps_left = 0;
-        if light {
-            self.start_light(params);
-            self.run_time = Duration::ZERO;
-            self.lit.history.clear();
-            return self.install(world);
-        }
-        self.light = None;
-        match Fit::new(
-            Arc::clone(&world.kernel),
-            Arc::clone(&world.reference),
-            params,
-        ) {
-            Ok(fit) => {
-                self.fit = Some(fit);
-                self.run_time = Duration::ZERO;
-                self.lit.history.clear();
-                self.install(world);
-            }
-            Err(e) => self.report(e.to_string()),
-        }
-        self.running = false;
-        self.steps_left = 0;
+        let running = match learner {
+            // Its fit is made on the lit view's mesh, once that is there (`light_slice`).
+            Learner::Light => Running::Light(Box::new(LightRun::new(params))),
+            Learner::Visibility | Learner::Paper => match Fit::new(
+                Arc::clone(&world.kernel),
+                Arc::clone(&world.reference),
+                params,
+            ) {
+                Ok(fit) => Running::Network(Box::new(fit)),
+                Err(e) => return self.report(e.to_string()),
+            },
+        };
+        self.learning = Some(running);
+        self.run_time = Duration::ZERO;
+        self.lit.history.clear();
+        self.install(world);
     }
 
     fn edit(&mut self, scene: Scene, subdivide: usize) {
-        if let Some(run) = &self.light {
-            // Its blocks belong to the old mesh: a fresh run on the changed scene.
-            let (params, running) = (run.params, self.running);
-            self.reset(scene, subdivide, params, true);
-            self.running = running;
-            return;
-        }
-        let Some(params) = self.fit.as_ref().map(|f| *f.params()) else {
-            return;
+        let params = match &self.learning {
+            Some(Running::Light(run)) => {
+                // Its rows belong to the old mesh: a fresh run on the changed scene.
+                let (params, running) = (run.params, self.running);
+                self.reset(scene, subdivide, Learner::Light, params);
+                self.running = running;
+                return;
+            }
+            Some(Running::Network(fit)) => *fit.params(),
+            None => return,
         };
         let world = match self.build_world(scene, subdivide, &params) {
             Ok(w) => w,
             Err(e) => return self.report(e),
         };
-        if let Some(fit) = &mut self.fit {
+        if let Some(Running::Network(fit)) = &mut self.learning {
             fit.set_kernel(Arc::clone(&world.kernel), Arc::clone(&world.reference));
         }
         self.install(world);
@@ -344,7 +373,7 @@ impl Learner {
 
     /// The final errors (after the paper's refit) of a fit that has stopped, once per stop.
     fn finish_if_stopped(&mut self) {
-        let Some(fit) = &mut self.fit else {
+        let Some(fit) = self.fit() else {
             return;
         };
         let Some(reason) = fit.stopped() else {
@@ -359,7 +388,10 @@ impl Learner {
         } else {
             "final errors…"
         }));
-        let finished = self.fit.as_mut().map(Fit::finish);
+        let finished = match &mut self.learning {
+            Some(Running::Network(fit)) => Some(fit.finish()),
+            _ => None,
+        };
         self.set_busy(None);
         match finished {
             Some(Ok(summary)) => self.summary = Some(summary),

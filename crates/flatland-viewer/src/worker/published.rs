@@ -54,39 +54,60 @@ pub struct CellMark {
     pub seen: std::sync::Arc<[[f32; 2]]>,
 }
 
-/// The network at one moment: what the overlay and the counts show.
-#[derive(Debug, Default)]
+/// The learner at one moment: what the overlay and the counts show.
+#[derive(Debug)]
 pub struct Growth {
-    /// Training steps so far.
+    /// What the learner's progress is counted in: training steps of a network, rounds of the
+    /// light-driven learner ([`Progress`] says which). Every moment, learned grid and lit
+    /// scene is tagged with it.
     pub steps: u64,
-    /// Rays cast for training so far.
-    pub rays: u64,
-    /// The cells, by id (a new cell gets the next id; none is ever removed).
+    /// The cells, by id (a new cell gets the next id; none is ever removed): a network's
+    /// cells, or the light-driven learner's probes.
     pub cells: Vec<CellMark>,
     /// The network's edges that join two cells of one face of the visibility structure (for
     /// a network without faces: of one pair of surface edges), as cell ids. An edge across
     /// faces joins cells that never answer the same ray; drawn, those edges hide the kernel.
+    /// Empty for the light-driven learner.
     pub face_edges: Vec<[u32; 2]>,
-    /// Sample sets so far (S₀ is set 0).
-    pub sets: usize,
     /// Time spent learning since the fit started, pauses excluded: the timeline's clock.
     pub run_time: Duration,
-    /// The light-driven learner's rounds, when it is the one learning.
-    pub light: Option<LightRounds>,
+    /// Steps or rounds, and what comes with each.
+    pub progress: Progress,
 }
 
-/// Where the light-driven learner is: its rounds so far, and which cells its newest round
-/// learned (the overlay rings them).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct LightRounds {
-    /// Rounds solved so far.
-    pub rounds: usize,
-    /// Cells with this index or more were learned by the newest round.
-    pub newest_from: usize,
-    /// The estimated relative L2 error of the solved `B − E` after the newest round.
-    pub estimated_error: Option<f64>,
-    /// Why it stopped, once it has.
-    pub stopped: Option<LightStop>,
+/// What a learner's progress is made of: a network's steps, or the light-driven learner's
+/// rounds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Progress {
+    /// A network trained step by step ([`Growth::steps`] counts its steps).
+    Steps {
+        /// Rays cast for training so far.
+        rays: u64,
+        /// Sample sets so far (S₀ is set 0).
+        sets: usize,
+    },
+    /// The light-driven learner, round by round ([`Growth::steps`] counts its rounds). Its
+    /// probes sweep whole views: it casts no ray.
+    Rounds {
+        /// Probes with this index or more were placed by the newest round (the overlay rings
+        /// them).
+        newest_from: usize,
+        /// The estimated relative L2 error of the solved `B − E` after the newest round.
+        estimated_error: Option<f64>,
+        /// Why it stopped, once it has (and every probe is shown).
+        stopped: Option<LightStop>,
+    },
+}
+
+impl Progress {
+    /// Rays cast so far (none by the light-driven learner).
+    #[must_use]
+    pub fn rays(self) -> u64 {
+        match self {
+            Progress::Steps { rays, .. } => rays,
+            Progress::Rounds { .. } => 0,
+        }
+    }
 }
 
 /// The learner's state as published at one moment.

@@ -20,11 +20,11 @@ use flatland_solve::{Representation, solve_errors};
 use kernel_fit::FitParams;
 use rayon::prelude::*;
 
-use super::Learner;
+use super::{LearnerThread, Running};
 use crate::lit::{LitPoint, LitSolve};
 use crate::prefix::Prefix;
 use crate::worker::published::{
-    APPROX_RES, Approx, CellMark, Growth, LearnedGrid, LightRounds, Lit, LitState, Status,
+    APPROX_RES, Approx, CellMark, Growth, LearnedGrid, Lit, LitState, Progress, Status,
 };
 
 /// Longest a round's new cells take to appear, in seconds of wall time.
@@ -33,12 +33,12 @@ pub const ROUND_SECONDS: f64 = 8.0;
 const REVEAL_WAIT: Duration = Duration::from_millis(10);
 
 /// The light-driven learner and how much of it the user has seen.
-pub(super) struct LightRun {
+pub(in crate::worker) struct LightRun {
     /// The fit, once the lit view's mesh is made (it learns on that mesh).
     fit: Option<LightFit>,
     /// The network parameters the user had, kept for the status (and a switch back).
     pub(super) params: FitParams,
-    /// Cells shown so far (the first ones of `fit.cells()`).
+    /// Probes shown so far (the first ones of `fit.cells()`).
     shown: usize,
     /// Cells before the newest round: from here on they are the newest round's.
     newest_from: usize,
@@ -108,27 +108,31 @@ fn mark(fit: &LightFit, id: usize, t: f64) -> CellMark {
     }
 }
 
-impl Learner {
-    /// Starts the light-driven learner on the current world (its mesh comes with the lit
-    /// view's setup).
-    pub(super) fn start_light(&mut self, params: FitParams) {
-        self.fit = None;
-        self.light = Some(LightRun::new(params));
+impl LearnerThread {
+    /// The light-driven learner, when it is the one running.
+    fn light_run(&self) -> Option<&LightRun> {
+        match &self.learning {
+            Some(Running::Light(run)) => Some(run),
+            _ => None,
+        }
     }
 
     /// One slice of the light-driven learner: make the fit once the mesh is there, reveal the
     /// newest round's cells, or run the next round.
     pub(super) fn light_slice(&mut self) {
-        if self.light.is_none() || !self.training() {
+        let Some(run) = self.light_run() else { return };
+        if !self.training() {
             return;
         }
-        if self.light.as_ref().is_some_and(|l| l.fit.is_none()) && !self.make_light_fit() {
+        if run.fit.is_none() && !self.make_light_fit() {
             std::thread::sleep(REVEAL_WAIT);
             return;
         }
         let stepping = self.steps_left > 0;
         let per_s = self.pace.per_s();
-        let Some(run) = &mut self.light else { return };
+        let Some(Running::Light(run)) = &mut self.learning else {
+            return;
+        };
         let Some(fit) = &mut run.fit else { return };
         let learned = fit.cells().len();
         if run.shown < learned {
@@ -154,7 +158,9 @@ impl Learner {
         }
         // Every cell learned so far is shown: ζ̃ with them all, then the next round.
         self.publish_light_approx();
-        let Some(run) = &mut self.light else { return };
+        let Some(Running::Light(run)) = &mut self.learning else {
+            return;
+        };
         let Some(fit) = &mut run.fit else { return };
         let started = Instant::now();
         match fit.round(&|| false) {
@@ -199,13 +205,13 @@ impl Learner {
         );
         match made {
             Ok(fit) => {
-                if let Some(run) = &mut self.light {
+                if let Some(Running::Light(run)) = &mut self.learning {
                     run.fit = Some(fit);
                 }
                 true
             }
             Err(e) => {
-                self.light = None;
+                self.learning = None;
                 self.running = false;
                 self.report(format!("the light-driven learner did not start: {e}"));
                 false
@@ -216,7 +222,7 @@ impl Learner {
     /// The learned ζ̃ on the display grid, with every cell learned so far (once per cell
     /// count).
     fn publish_light_approx(&mut self) {
-        let (Some(run), Some(world)) = (&mut self.light, &self.world) else {
+        let (Some(Running::Light(run)), Some(world)) = (&mut self.learning, &self.world) else {
             return;
         };
         let Some(fit) = &run.fit else { return };
@@ -253,7 +259,9 @@ impl Learner {
         else {
             return;
         };
-        let Some(run) = &mut self.light else { return };
+        let Some(Running::Light(run)) = &mut self.learning else {
+            return;
+        };
         let Some(fit) = &run.fit else { return };
         let b = fit.radiosity().to_vec();
         let errors = solve_errors(setup.mesh(), &b, setup.exact());
@@ -284,31 +292,26 @@ impl Learner {
 
     /// A status of the light-driven learner (throttled unless `force`).
     pub(super) fn publish_light(&mut self, force: bool) {
-        let Some(run) = &self.light else { return };
+        let Some(run) = self.light_run() else { return };
         let due = self.published.since_last() >= super::publish::PUBLISH_EVERY;
         let changed = run.published != Some(run.shown);
         if !(force || (due && (changed || self.dirty))) {
             return;
         }
-        let (rounds, estimated_error, stopped) = run.fit.as_ref().map_or((0, None, None), |f| {
-            (f.history().len(), f.estimated_error(), f.stopped())
-        });
-        // Probes sweep whole views, as the exact operator's rows do: no ray is cast.
-        let rays = 0;
-        let stopped = stopped.filter(|_| run.stopped().is_some());
+        let (rounds, estimated_error) = run
+            .fit
+            .as_ref()
+            .map_or((0, None), |f| (f.history().len(), f.estimated_error()));
         let growth = Growth {
             steps: rounds as u64,
-            rays,
             cells: run.marks.clone(),
             face_edges: Vec::new(),
-            sets: 0,
             run_time: self.run_time,
-            light: Some(LightRounds {
-                rounds,
+            progress: Progress::Rounds {
                 newest_from: run.newest_from,
                 estimated_error,
-                stopped,
-            }),
+                stopped: run.stopped(),
+            },
         };
         let status = Status {
             growth: Arc::new(growth),
@@ -324,7 +327,7 @@ impl Learner {
             occupied_faces: None,
         };
         let shown = run.shown;
-        if let Some(run) = &mut self.light {
+        if let Some(Running::Light(run)) = &mut self.learning {
             run.published = Some(shown);
         }
         self.published.mark_published();

@@ -12,9 +12,8 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use flatland_solve::{SolveError, Stop};
-use kernel_fit::Target;
 
-use super::Learner;
+use super::{LearnerThread, Running};
 use crate::lit::{LitPoint, LitSetup, LitSolve, solve_interval};
 use crate::worker::published::{Lit, LitState};
 
@@ -137,7 +136,7 @@ impl LitWork {
     }
 }
 
-impl Learner {
+impl LearnerThread {
     pub(super) fn switch_lit(&mut self, on: bool) {
         self.lit.enabled = on;
         self.lit.steps = None;
@@ -152,10 +151,12 @@ impl Learner {
     /// Whether the lit scene has work that is due now (so the loop must not sleep): work done
     /// beside the learner to pick up, a setup to start, or a solve.
     pub(super) fn lit_pending(&self) -> bool {
-        if self.light.is_some() {
-            return self.light_setup_pending();
-        }
-        let (Some(fit), Some(world)) = (&self.fit, &self.world) else {
+        let fit = match &self.learning {
+            Some(Running::Network(fit)) => fit,
+            Some(Running::Light(_)) => return self.light_setup_pending(),
+            None => return false,
+        };
+        let Some(world) = &self.world else {
             return false;
         };
         if !self.lit.enabled || self.lit.failed == Some(world.id) {
@@ -190,12 +191,7 @@ impl Learner {
     /// it is not) or when it failed (then said in the mailbox).
     pub(super) fn lit_setup(&mut self) -> Option<Arc<LitSetup>> {
         let world = self.world.as_ref()?;
-        // The light-driven learner learns visibility on the lit view's mesh.
-        let target = match (&self.fit, &self.light) {
-            (Some(fit), _) => fit.params().target,
-            (None, Some(_)) => Target::Visibility,
-            (None, None) => return None,
-        };
+        let integration = self.learning.as_ref()?.integration();
         if let Some(s) = &self.lit.setup
             && s.world == world.id
         {
@@ -205,7 +201,8 @@ impl Learner {
             Some((w, b)) if *w == world.id => b.take()?,
             _ => {
                 let (id, kernel) = (world.id, Arc::clone(&world.kernel));
-                let work = Background::start(move |stop| LitSetup::build(id, kernel, target, stop));
+                let work =
+                    Background::start(move |stop| LitSetup::build(id, kernel, integration, stop));
                 self.lit.building = Some((id, work));
                 return None;
             }
@@ -237,7 +234,9 @@ impl Learner {
         let Some(setup) = self.lit_setup() else {
             return;
         };
-        let Some(fit) = &self.fit else { return };
+        let Some(Running::Network(fit)) = &self.learning else {
+            return;
+        };
         if self.lit.solving.is_some() || self.lit.steps == Some(fit.steps()) {
             return;
         }

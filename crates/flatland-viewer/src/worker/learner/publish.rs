@@ -9,12 +9,12 @@ use std::time::{Duration, Instant};
 
 use kernel_fit::{Fit, HistoryPoint, Snapshot};
 
-use super::Learner;
+use super::{LearnerThread, Running};
 use crate::prefix::Prefix;
 use crate::worker::approx_grid;
 use crate::worker::faces::{cell_groups, face_edges};
 use crate::worker::published::{
-    APPROX_RES, Approx, CellMark, Growth, KernelGrid, LearnedGrid, SamplePoint, Status,
+    APPROX_RES, Approx, CellMark, Growth, KernelGrid, LearnedGrid, Progress, SamplePoint, Status,
 };
 
 /// Shortest time between two published snapshots.
@@ -138,7 +138,6 @@ fn growth(fit: &Fit, snap: &Snapshot, run_time: Duration) -> Growth {
     let groups = cell_groups(fit.model(), &st);
     Growth {
         steps: snap.steps,
-        rays: snap.rays,
         cells: snap
             .cells
             .iter()
@@ -154,18 +153,25 @@ fn growth(fit: &Fit, snap: &Snapshot, run_time: Duration) -> Growth {
             })
             .collect(),
         face_edges: face_edges(&fit.network().edges(), &groups),
-        sets: snap.sets,
         run_time,
-        light: None,
+        progress: Progress::Steps {
+            rays: snap.rays,
+            sets: snap.sets,
+        },
     }
 }
 
-impl Learner {
+impl LearnerThread {
     /// Publishes a status (throttled unless `force`) and, less often, the approximation.
     pub(super) fn publish(&mut self, force: bool) {
-        let Some(fit) = &self.fit else {
-            self.dirty = false; // nothing to show yet
-            return;
+        let fit = match &self.learning {
+            Some(Running::Network(fit)) => fit,
+            // Its statuses are `publish_light`'s.
+            Some(Running::Light(_)) => return,
+            None => {
+                self.dirty = false; // nothing to show yet
+                return;
+            }
         };
         let steps = fit.steps();
         let now = Instant::now();
@@ -224,7 +230,7 @@ impl Learner {
 
     /// The learned ζ̃ on the display grid, when it changed and is due.
     fn publish_approx(&mut self, busy: bool) {
-        let (Some(fit), Some(world)) = (&self.fit, &self.world) else {
+        let (Some(Running::Network(fit)), Some(world)) = (&self.learning, &self.world) else {
             return;
         };
         let steps = fit.steps();

@@ -1,16 +1,16 @@
-//! Training in slices at a pace of cells per second.
+//! Training a network in slices at a pace of cells per second.
 //!
 //! Why a pace of growth and not of steps: how many steps make a cell depends on the learner
 //! (λ, stalls, resampling) and how fast a step runs on the machine; on a fast machine the
-//! default learner is exact on a small scene in a fraction of a second, over before the window
-//! shows it. So the learner trains freely between insertions, and an insertion waits for its
+//! visibility network is exact on a small scene in a fraction of a second, over before the
+//! window shows it. So the learner trains freely between insertions, and an insertion waits for its
 //! credit: cells appear at the pace asked for on any machine fast enough, and as fast as the
 //! machine goes on a slower one. Training without growth (the last growth period, a stall
 //! before convergence) is not slowed.
 
 use std::time::{Duration, Instant};
 
-use super::Learner;
+use super::{LearnerThread, Running};
 
 /// Longest uninterrupted training slice: commands are read at least this often.
 const SLICE: Duration = Duration::from_millis(15);
@@ -95,7 +95,7 @@ impl Pace {
     }
 }
 
-impl Learner {
+impl LearnerThread {
     /// Trains for at most one [`SLICE`]: pending single steps, or continuously at the pace.
     pub(super) fn train_slice(&mut self) {
         let now = Instant::now();
@@ -105,7 +105,7 @@ impl Learner {
             return;
         }
         self.run_time += dt;
-        let Some(fit) = &mut self.fit else {
+        let Some(Running::Network(fit)) = &mut self.learning else {
             return;
         };
         let stepping = self.steps_left > 0;
