@@ -8,8 +8,8 @@
 # SECONDS after launch (default 12) may be a list, "6,12": one screenshot each, OUT-6.png and
 # OUT-12.png, and for each pair the number of pixels that differ over the plots (ImageMagick
 # `compare -metric AE`; the controls, the top bar and the timeline bar are left out).
-# VIEWER ARGS go to the viewer example: --scene FILE|NAME, --learner light|theta|paper, --cells N,
-# --growth N|max, --paused.
+# VIEWER ARGS go to the viewer example: --scene FILE|NAME (FILE may be an .svg drawing),
+# --learner light|visibility|paper, --cells N, --growth N|max, --paused.
 #
 # docs/viewer.png is `scripts/screenshot.sh 12 docs/viewer.png`: the default launch (the floor
 # plan, 20 cells per second). The growth check is `scripts/screenshot.sh 6,12 /tmp/growth.png`;
