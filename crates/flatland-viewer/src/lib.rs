@@ -134,8 +134,8 @@ pub enum ViewerError {
     Drawing {
         /// The file.
         path: PathBuf,
-        /// Why.
-        source: flatland_svg::SvgError,
+        /// Why (boxed: the importer's error is large, and rare).
+        source: Box<flatland_svg::SvgError>,
     },
     /// The window could not be opened (no display, no OpenGL, …).
     #[error("could not open the viewer window: {0}")]

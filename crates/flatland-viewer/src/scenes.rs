@@ -105,14 +105,14 @@ pub fn open_file(path: &Path) -> Result<Opened, ViewerError> {
         let drawing = flatland_svg::import_file(path, &flatland_svg::ImportParams::default())
             .map_err(|source| ViewerError::Drawing {
                 path: path.to_path_buf(),
-                source,
+                source: Box::new(source),
             })?;
         let warnings = drawing.warnings().iter().map(ToString::to_string).collect();
         let scene = drawing
             .into_scene()
             .map_err(|source| ViewerError::Drawing {
                 path: path.to_path_buf(),
-                source,
+                source: Box::new(source),
             })?;
         (scene, warnings)
     } else {
