@@ -18,7 +18,7 @@ scenes=(
   "floorplan 300 21" "floorplan 300 22" "hall 300 23" "hall 300 24"
   "floorplan 1000 25" "hall 1000 26" "floorplan 3000 27" "hall 3000 28"
 )
-kernels=(exact default first-shot hr clustered uniform-exact)
+kernels=(exact light visibility hr clustered uniform-exact)
 
 {
   echo "# Real scenes: the lit scene with every kernel, default arguments"
@@ -27,7 +27,7 @@ kernels=(exact default first-shot hr clustered uniform-exact)
   echo "measured by it. Scenes: \`flatland scene KIND --size N --seed S\`, seeds never used to choose a"
   echo "default. Error: relative L2 of the solved reflected radiosity B − E against the exact kernel's"
   echo "solve on twice the elements (so it includes the mesh's own discretization error, estimated"
-  echo "in the last column). \"Estimate\" is the default learner's own estimate of its error against the"
+  echo "in the last column). \"Estimate\" is the light-driven learner's own estimate of its error against the"
   echo "exact kernel on the same elements. Build: building the kernel representation; total: the"
   echo "whole command, reference solve included. Times are wall-clock on a shared machine."
   echo
