@@ -59,7 +59,7 @@
 //!   network of up to 1024 cells scans them all instead: its supports are wide, so a tree query
 //!   would visit most leaves anyway. Measured (`benches/sgcs_step.rs`, n = 4, m = 1, a shared
 //!   2-core machine): with [`Params::default`] a step takes 2.2 µs at 100 cells, 6.0 µs at 400
-//!   and 12.8 µs at 4000; configured like kernel-fit's default learner, 0.44, 0.69 and 1.7 µs.
+//!   and 12.8 µs at 4000; configured like kernel-fit's visibility network, 0.44, 0.69 and 1.7 µs.
 //!   Widths are cached and refreshed for the cells whose edges moved.
 //! - **Numbers.** Inputs and targets must be finite and at most `1e100` in magnitude
 //!   ([`Network::try_step`] rejects others); widths are floored at `1e-100`. No value becomes NaN
