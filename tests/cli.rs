@@ -1751,3 +1751,51 @@ fn regression_ctrl_c_keeps_the_positions_relit() {
         &text[..40]
     );
 }
+
+/// `bench` with its defaults (a whole-run budget, here shortened so the test is quick) runs
+/// every method at least at its first setting, notes the sweeps the budget cut, and says
+/// what is left as it goes.
+#[test]
+fn bench_defaults_give_every_method_a_row_within_the_budget() {
+    let dir = temp_dir("bench-defaults");
+    let out = flatland(&[
+        "bench",
+        "--scene",
+        as_str(&scene("fig3")),
+        "--budget-seconds",
+        "5",
+        "--out",
+        as_str(&dir),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let csv = std::fs::read_to_string(dir.join("results.csv")).unwrap();
+    let methods: std::collections::BTreeSet<&str> = csv
+        .lines()
+        .skip(1)
+        .filter_map(|l| l.split(',').nth(1))
+        .collect();
+    for method in [
+        "light",
+        "visibility",
+        "paper",
+        "paper-norefit",
+        "hr",
+        "clustered",
+        "uniform",
+        "exact",
+        "tracer",
+    ] {
+        assert!(methods.contains(method), "{method} missing: {methods:?}");
+    }
+    assert!(csv.contains("cut by the time budget"), "{csv}");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("s of the sweeps'") && err.contains("after it"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

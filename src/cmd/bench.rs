@@ -1,14 +1,17 @@
 //! `flatland bench`: every method judged at equal time — the light-driven learner by
 //! tolerance, the other learners, hierarchical radiosity and the uniform grid by basis
 //! functions, the exact solve by elements, the light tracer by photons — each row timed to its
-//! lit scene and scored against one independent exact reference. `--scaling` (cost against
-//! scene size) is its own module, `scaling`.
+//! lit scene and scored against one independent exact reference, within a whole-run time
+//! budget (`budget`; `--full` for the long sweep). `--scaling` (cost against scene size) is its
+//! own module, `scaling`.
 
+mod budget;
 mod scaling;
 mod walk;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use std::time::Instant;
 
 use anyhow::{Context, Result};
 use flatland_lab::report::timed::{
@@ -16,7 +19,8 @@ use flatland_lab::report::timed::{
     write_relight, write_rows,
 };
 use flatland_lab::timed::{
-    DEFAULT_MAX_SECONDS, DEFAULT_TRACER_SECONDS, Scorer, TimedPlan, TimedRow, run_timed,
+    DEFAULT_MAX_SECONDS, DEFAULT_TRACER_SECONDS, RelightBudget, Scorer, TimedPlan, TimedRow,
+    run_timed,
 };
 use flatland_lab::{interrupt, output};
 use flatland_methods::Method;
@@ -65,6 +69,14 @@ pub struct Args {
     /// Lightings of the relighting comparison (0: none; at most 1000).
     #[arg(long, default_value_t = flatland_lab::timed::relight::LIGHTINGS)]
     pub lightings: usize,
+    /// The whole run's time budget in seconds (reference solves, sweeps and relighting), more
+    /// than 0: each method's sweep gets its share and is cut, with a note, where its next row
+    /// would not fit. Default 120.
+    #[arg(long, value_name = "S", conflicts_with = "full")]
+    pub budget_seconds: Option<f64>,
+    /// The long sweep: no whole-run budget, every method to --max-seconds, every lighting.
+    #[arg(long)]
+    pub full: bool,
     /// Instead of one scene: cost against scene size, each method with its default arguments
     /// on generated floor plans and halls of --sizes edges (time, peak memory, rays, error,
     /// log–log slopes, relighting up to 10⁴ edges); --scene is not used.
@@ -152,7 +164,9 @@ pub fn run(args: &Args) -> Result<()> {
     if args.scaling {
         return scaling::run(args);
     }
-    let plan = args.plan()?;
+    let started = Instant::now();
+    let mut plan = args.plan()?;
+    let budget = budget::of(args, started)?;
     let (kernel, label) = args.scene.kernel()?;
     output::folder(
         &args.out,
@@ -161,7 +175,8 @@ pub fn run(args: &Args) -> Result<()> {
     )?;
     let kernel = Arc::new(kernel);
     let stop: &Stop = &interrupt::requested;
-    let scorer = scorer(&kernel, args, &plan, stop)?;
+    let (scorer, reference_s) = scorer(&kernel, args, &plan, stop)?;
+    plan.budget = budget.map(|b| budget::sweeps(b, args.lightings));
     let partial = args.out.join(PARTIAL);
     eprintln!(
         "bench of {label}: solving on {} elements against a reference on {}; rows are kept in \
@@ -174,6 +189,7 @@ pub fn run(args: &Args) -> Result<()> {
         write_rows(&args.out, PARTIAL, &label, rows)?;
         let last = rows.last().expect("called after a row");
         report_row(last, rows.len(), &partial);
+        budget::progress(&plan, last);
         Ok(())
     })?;
     write_rows(&args.out, RESULTS, &label, &rows)?;
@@ -184,27 +200,42 @@ pub fn run(args: &Args) -> Result<()> {
     print!("{}", within_table(&rows));
     println!("wrote {} and plots", args.out.join(RESULTS).display());
     if args.lightings > 0 {
-        relight(args, &kernel, &scorer, &plan, &rows, &label)?;
+        let fitted = budget::relighting(budget, reference_s, &scorer, &plan, &rows, args.lightings);
+        if fitted.lightings > 0 {
+            relight(args, &kernel, &scorer, &fitted, &label)?;
+        }
+    }
+    if let Some(budget) = budget {
+        eprintln!(
+            "bench: done in {:.0} s of a {:.0} s budget",
+            budget.spent(),
+            budget.seconds()
+        );
     }
     Ok(())
 }
 
-/// The relighting comparison: `relight.csv` and a summary line per method.
+/// The relighting comparison `fitted` asks for: `relight.csv` and a summary line per method.
 fn relight(
     args: &Args,
     kernel: &Arc<flatland_geom::Kernel>,
     scorer: &Scorer,
-    plan: &TimedPlan,
-    rows: &[TimedRow],
+    fitted: &RelightBudget,
     label: &str,
 ) -> Result<()> {
     eprintln!(
         "bench: relighting {label} under {} lightings",
-        args.lightings
+        fitted.lightings
     );
     let stop: &Stop = &interrupt::requested;
-    let (relit, failures) =
-        flatland_lab::timed::relight::relight(scorer, kernel, plan, rows, args.lightings, stop)?;
+    let (relit, failures) = flatland_lab::timed::relight::relight(
+        scorer,
+        kernel,
+        &fitted.plan,
+        &fitted.rows,
+        fitted.lightings,
+        stop,
+    )?;
     interrupt::check()?;
     for (method, why) in failures {
         eprintln!("bench: relighting with {} failed: {why}", method.name());
@@ -216,14 +247,20 @@ fn relight(
 }
 
 /// The mesh as `flatland solve` chooses it (or `--solve-elements`) and the exact reference on
-/// four times as many elements.
+/// four times as many elements, and the seconds the lit scene took (about what each
+/// relighting's exact reference costs).
 fn scorer(
     kernel: &Arc<flatland_geom::Kernel>,
     args: &Args,
     plan: &TimedPlan,
     stop: &Stop,
-) -> Result<Scorer> {
-    let zeta = Arc::new(flatland_lab::reference(kernel, args.res, &plan.fit));
+) -> Result<(Scorer, f64)> {
+    let zeta = Arc::new(flatland_lab::reference(
+        kernel,
+        args.res,
+        &plan.recipes.visibility,
+    ));
+    let started = Instant::now();
     let lit = match args.solve_elements {
         Some(n) => {
             let reference = ExactReference::default_elements_for(kernel, n);
@@ -239,8 +276,9 @@ fn scorer(
         }
     };
     let lit = lit.context("the exact reference solve")?;
+    let lit_s = started.elapsed().as_secs_f64();
     interrupt::check()?;
-    Ok(Scorer::with_zeta(lit, zeta))
+    Ok((Scorer::with_zeta(lit, zeta), lit_s))
 }
 
 /// One line on stderr per row (a failure with its reason), and the Ctrl-C note.

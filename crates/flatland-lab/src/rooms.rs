@@ -10,6 +10,7 @@
 
 use flatland_geom::{DVec2, Edge, GeomError, Scene};
 use rand::RngExt;
+use rand_chacha::ChaCha8Rng;
 
 /// The seed stream of the rooms (`flatland_solve::seeds::stream`): no other draw of a seed
 /// shares it.
@@ -18,10 +19,25 @@ const ROOMS_STREAM: u64 = 0x5ce7e;
 /// The random room of `seed` (see the module docs).
 pub fn random_room(seed: u64) -> Result<Scene, GeomError> {
     let mut r = flatland_solve::seeds::stream(seed, ROOMS_STREAM);
-    let v = DVec2::new;
     let (w, h) = (r.random_range(2.0..8.0), r.random_range(2.0..5.0));
     let kind = r.random_range(0..3);
-    let corners: Vec<DVec2> = match kind {
+    let corners = room_corners(&mut r, kind, w, h);
+    let mut edges = walls(&mut r, &corners);
+    floating(&mut r, &corners, w, h, &mut edges);
+    if kind == 0 && r.random_bool(0.5) {
+        let x = r.random_range(0.2..0.8) * w;
+        let top = r.random_range(0.3..0.7) * h;
+        let (p, q) = (DVec2::new(x, 0.0), DVec2::new(x, top));
+        edges.extend([Edge::surface(p, q, 0.5), Edge::surface(q, p, 0.5)]);
+    }
+    Scene::new(edges)
+}
+
+/// The corners of a room of `kind` (a rectangle, a notched rectangle, a convex polygon) `w`
+/// wide and `h` high, counter-clockwise.
+fn room_corners(r: &mut ChaCha8Rng, kind: i32, w: f64, h: f64) -> Vec<DVec2> {
+    let v = DVec2::new;
+    match kind {
         0 => vec![v(0.0, 0.0), v(w, 0.0), v(w, h), v(0.0, h)],
         1 => {
             let (a, b) = (r.random_range(0.2..0.5) * w, r.random_range(0.55..0.85) * w);
@@ -47,7 +63,11 @@ pub fn random_room(seed: u64) -> Result<Scene, GeomError> {
                 })
                 .collect()
         }
-    };
+    }
+}
+
+/// The walls between `corners`, one or two of them carrying a light in their middle.
+fn walls(r: &mut ChaCha8Rng, corners: &[DVec2]) -> Vec<Edge> {
     let n = corners.len();
     let lights = r.random_range(1..=2);
     let light_walls: Vec<usize> = (0..lights).map(|_| r.random_range(0..n)).collect();
@@ -65,6 +85,14 @@ pub fn random_room(seed: u64) -> Result<Scene, GeomError> {
             edges.push(Edge::surface(a, b, rho));
         }
     }
+    edges
+}
+
+/// Up to 12 short segments floating inside the room of `corners` (`w` × `h`), clear of its
+/// walls: blockers, or one in four a thin shelf.
+fn floating(r: &mut ChaCha8Rng, corners: &[DVec2], w: f64, h: f64, edges: &mut Vec<Edge>) {
+    let v = DVec2::new;
+    let n = corners.len();
     // Strictly inside every wall's half-plane, clear of the walls.
     let inside = |p: DVec2| {
         (0..n).all(|i| {
@@ -92,13 +120,6 @@ pub fn random_room(seed: u64) -> Result<Scene, GeomError> {
         }
         placed += 1;
     }
-    if kind == 0 && r.random_bool(0.5) {
-        let x = r.random_range(0.2..0.8) * w;
-        let top = r.random_range(0.3..0.7) * h;
-        let (p, q) = (v(x, 0.0), v(x, top));
-        edges.extend([Edge::surface(p, q, 0.5), Edge::surface(q, p, 0.5)]);
-    }
-    Scene::new(edges)
 }
 
 #[cfg(test)]

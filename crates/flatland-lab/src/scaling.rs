@@ -273,12 +273,7 @@ fn scene_rows(
     kept: &mut impl FnMut(&Scaling) -> Result<()>,
 ) -> Result<()> {
     let timed = timed_plan(plan);
-    let cx = Context {
-        kernel,
-        scorer,
-        plan: &timed,
-        stop,
-    };
+    let cx = Context::new(kernel, scorer, &timed, stop);
     let name = all.scenes[scene].name.clone();
     let edges = all.scenes[scene].edges;
     for &method in &plan.methods {

@@ -131,7 +131,7 @@ pub fn csv_text(scene: &str, rows: &[TimedRow]) -> Result<Vec<u8>> {
             r.total_s.to_string(),
             r.bytes.to_string(),
             r.rays.to_string(),
-            optional(r.zeta_error),
+            optional(r.zeta_error()),
             optional(r.reflected_error()),
             optional(r.solve.map(|e| e.rel_l2_b)),
             optional(r.estimated_error),
@@ -151,7 +151,7 @@ pub fn write_rows(dir: &Path, name: &str, scene: &str, rows: &[TimedRow]) -> Res
 }
 
 /// What a plot puts on its x axis (`None`: the row is not drawn).
-type XAxis = fn(&TimedRow) -> Option<f64>;
+pub(crate) type XAxis = fn(&TimedRow) -> Option<f64>;
 
 /// The plots of one scene's rows: the solved `B − E` error against total time, bytes and basis
 /// functions (one curve per method), and ζ's held-out error against basis functions.
@@ -174,7 +174,7 @@ pub fn write_plots(dir: &Path, scene: &str, rows: &[TimedRow]) -> Result<()> {
     let zeta = series(
         rows,
         |r| r.basis_functions.map(|n| n as f64),
-        |r| r.zeta_error,
+        TimedRow::zeta_error,
     );
     if zeta.iter().any(|s| !s.points.is_empty()) {
         let png = log_log(
@@ -202,7 +202,7 @@ fn groups(rows: &[TimedRow]) -> BTreeMap<Method, Vec<Vec<&TimedRow>>> {
 }
 
 /// Per method and setting: the mean x and the mean, min and max of `y` over seeds.
-fn series(rows: &[TimedRow], x: XAxis, y: fn(&TimedRow) -> Option<f64>) -> Vec<Series> {
+pub(crate) fn series(rows: &[TimedRow], x: XAxis, y: fn(&TimedRow) -> Option<f64>) -> Vec<Series> {
     groups(rows)
         .into_iter()
         .map(|(method, settings)| {
@@ -259,7 +259,7 @@ pub fn table(rows: &[TimedRow]) -> String {
                 mean(&|r| r.solve_s),
                 mean(&|r| r.total_s),
                 mean(&|r| r.bytes as f64),
-                text(mean_of(&|r| r.zeta_error)),
+                text(mean_of(&TimedRow::zeta_error)),
                 text(mean_of(&TimedRow::reflected_error)),
                 text(mean_of(&|r| r.estimated_error)),
                 g.last().map_or("", |r| r.note.as_str()),

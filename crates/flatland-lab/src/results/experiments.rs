@@ -5,14 +5,15 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use crate::ablation::{self, VariantRow};
-use crate::bench::{BenchPlan, BenchRow, Method, run_bench};
 use anyhow::Result;
-use flatland_baselines::{BlockValue, HrParams, Oracle, count_initial_links, run_hr_at_budget};
+use flatland_baselines::{HrParams, Oracle, count_initial_links, run_hr_at_budget};
 use flatland_geom::Kernel;
-use flatland_solve::{Errors, Reference, SolveErrors, density_ratio, discontinuity_mask};
+use flatland_solve::{
+    Errors, ExactReference, Reference, SolveErrors, density_ratio, discontinuity_mask,
+};
 use kernel_fit::{Fit, FitParams, FitSummary, Preset, Resampling};
 
-use crate::report::bench::run_kept;
+use crate::timed::{Method, Scorer, TimedPlan, TimedRow, run_timed};
 use crate::{Defined, interrupt};
 
 /// The reference grid's resolution.
@@ -199,7 +200,8 @@ pub fn ablation(
 pub struct SceneBench {
     pub scene: String,
     pub defined: Defined,
-    pub rows: Vec<BenchRow>,
+    /// The rows of the R4 plan ([`plan`]).
+    pub rows: Vec<TimedRow>,
     /// HR with the plain form-factor oracle at [`HEADLINE_BUDGET`]: (links, errors).
     pub hr_form_factor: Option<(usize, Errors)>,
     /// The radiosity solved with exact 20 × 20 block means of k (no rays; the best
@@ -207,31 +209,43 @@ pub struct SceneBench {
     pub exact_blocks: Option<SolveErrors>,
 }
 
+/// What the R4 rows of `kernel` are scored against: the radiosity solved on
+/// [`SOLVE_ELEMENTS`] against the exact solve on four times as many (2048 at least), ζ on
+/// `reference`.
+fn scorer(kernel: &Arc<Kernel>, reference: &Arc<Reference>) -> Result<Scorer> {
+    let reference_elements = ExactReference::default_elements_for(kernel, SOLVE_ELEMENTS);
+    Scorer::new(
+        kernel,
+        SOLVE_ELEMENTS,
+        reference_elements,
+        Arc::clone(reference),
+        &interrupt::requested,
+    )
+}
+
 /// The solve errors of exact `g × g` block means of k at [`HEADLINE_BUDGET`] blocks.
-fn exact_blocks(kernel: &Arc<Kernel>, reference: &Arc<Reference>) -> Result<Option<SolveErrors>> {
+fn exact_blocks(kernel: &Arc<Kernel>, scorer: &Scorer) -> Result<Option<SolveErrors>> {
     let mut plan = plan(vec![HEADLINE_BUDGET], 1);
-    plan.methods = vec![Method::Uniform];
-    plan.uniform.block_value = BlockValue::ExactKernelMean;
-    let rows = run_bench(kernel, reference, &plan, |_, _| {})?;
+    plan.methods = vec![Method::UniformExact];
+    let rows = run_timed(kernel, scorer, &plan, &interrupt::requested, |_| Ok(()))?;
     Ok(rows.first().and_then(|r| r.solve))
 }
 
-/// The plan every scene is benched with.
-pub fn plan(budgets: Vec<usize>, seeds: u64) -> BenchPlan {
-    let mut plan = BenchPlan::new(Method::ALL.to_vec(), budgets, seeds);
-    plan.solve_elements = Some(SOLVE_ELEMENTS);
-    plan
+/// The plan every scene is benched with: the R4 table at `budgets`.
+pub fn plan(budgets: Vec<usize>, seeds: u64) -> TimedPlan {
+    TimedPlan::r4(budgets, seeds)
 }
 
-/// `flatland bench` on one scene; `kept` sees the rows after each budget (to write them).
+/// `plan` on one scene; `kept` sees the rows after each row (to write them).
 pub fn bench(
     name: &str,
     kernel: &Arc<Kernel>,
     reference: &Arc<Reference>,
-    plan: &BenchPlan,
-    kept: impl FnMut(&[BenchRow]) -> Result<()>,
+    plan: &TimedPlan,
+    kept: impl FnMut(&[TimedRow]) -> Result<()>,
 ) -> Result<SceneBench> {
-    let rows = run_kept(kernel, reference, plan, kept)?;
+    let scorer = scorer(kernel, reference)?;
+    let rows = run_timed(kernel, &scorer, plan, &interrupt::requested, kept)?;
     let form_factor = HrParams {
         oracle: Oracle::FormFactor,
         ..HrParams::default()
@@ -242,7 +256,7 @@ pub fn bench(
         defined: Defined::of(reference),
         rows,
         hr_form_factor: Some((ff.basis_functions, reference.errors(&ff.approx))),
-        exact_blocks: exact_blocks(kernel, reference)?,
+        exact_blocks: exact_blocks(kernel, &scorer)?,
     })
 }
 
@@ -250,15 +264,16 @@ pub fn bench(
 pub fn room(seed: u64) -> Result<SceneBench> {
     let kernel = Arc::new(Kernel::new(crate::rooms::random_room(seed)?));
     let reference = Arc::new(reference_of(&kernel));
+    let scorer = scorer(&kernel, &reference)?;
     let plan = plan(vec![HEADLINE_BUDGET], 1);
-    let rows = run_bench(&kernel, &reference, &plan, |_, _| {})?;
+    let rows = run_timed(&kernel, &scorer, &plan, &interrupt::requested, |_| Ok(()))?;
     interrupt::check()?;
     Ok(SceneBench {
         scene: format!("room {seed}"),
         defined: Defined::of(&reference),
         rows,
         hr_form_factor: None,
-        exact_blocks: exact_blocks(&kernel, &reference)?,
+        exact_blocks: exact_blocks(&kernel, &scorer)?,
     })
 }
 

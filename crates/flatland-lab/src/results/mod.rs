@@ -16,7 +16,8 @@ use flatland_pictures::figure::PANELS;
 use flatland_solve::Reference;
 use kernel_fit::Preset;
 
-use crate::report::bench::{OUTPUTS, write_outputs};
+use crate::report::r4::{OUTPUTS, write_outputs};
+use crate::report::timed::{RESULTS, write_rows};
 use crate::{interrupt, output};
 use experiments::{Ablation, Density, SceneBench, Subdivision, ThetaRow, fit, preset_params};
 
@@ -260,14 +261,15 @@ fn benches(inputs: &Inputs, sizes: &Sizes, progress: &mut Progress) -> Result<Ve
     for (i, name) in SCENES.iter().enumerate() {
         progress.next(&format!("flatland bench on {name}"))?;
         let dir = inputs.plots.join(name);
-        let defined = crate::Defined::of(&inputs.references[i]);
-        benches.push(experiments::bench(
+        let bench = experiments::bench(
             name,
             &inputs.kernels[i],
             &inputs.references[i],
             &plan,
-            |rows| write_outputs(&dir, name, rows, defined),
-        )?);
+            |rows| write_rows(&dir, RESULTS, name, rows),
+        )?;
+        write_outputs(&dir, name, &bench.rows)?;
+        benches.push(bench);
     }
     Ok(benches)
 }

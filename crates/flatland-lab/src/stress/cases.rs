@@ -179,6 +179,12 @@ pub fn reflectance_cases(suite: &mut Suite) {
 /// Tiny edges beside big ones, slivers, touching/collinear/overlapping/T-junction edges, and a
 /// vertex shared by many edges.
 pub fn geometry_cases(suite: &mut Suite) {
+    small_feature_cases(suite);
+    junction_cases(suite);
+}
+
+/// Tiny edges beside big ones and a sliver.
+fn small_feature_cases(suite: &mut Suite) {
     let per_edge = if suite.quick { 1000 } else { 4000 };
     suite.case(
         "tiny edges 1e-9 | 1e3",
@@ -224,6 +230,11 @@ pub fn geometry_cases(suite: &mut Suite) {
             inspect_fit_keeping_error(row, &scene)
         },
     );
+}
+
+/// Touching, collinear, overlapping and T-junction edges, and a vertex shared by many edges.
+fn junction_cases(suite: &mut Suite) {
+    let per_edge = if suite.quick { 1000 } else { 4000 };
     suite.case(
         "junctions",
         "touch/collinear/overlap/T: k = k_naive, V sym",
@@ -582,44 +593,51 @@ pub fn soak_case(suite: &mut Suite, fig3: &Scene) {
                     format!("held-out error rose from {first:.4} to {last:.4} during the soak")
                 });
             }
-            let net = fit.network();
-            let critical = net
-                .critical_cells(params.omega)
-                .iter()
-                .filter(|&&c| c)
-                .count();
-            row.require(critical > 0 && critical < net.len(), || {
-                format!(
-                    "{critical} of {} cells critical: counters carry no information",
-                    net.len()
-                )
-            });
-            let never_hit = (0..net.len()).filter(|&c| net.mean_error(c) == 0.0).count();
-            row.require(never_hit * 10 < net.len(), || {
-                format!(
-                    "{never_hit} of {} cells have an empty error counter",
-                    net.len()
-                )
-            });
-            // Memory: from half way to the end.
-            let half = rss.iter().find(|(s, _)| *s >= steps / 2).map(|r| r.1);
-            if let (Some(mid), Some(&(_, end))) = (half, rss.last()) {
-                let growth = end.saturating_sub(mid);
-                row.require(growth <= 16 << 20, || {
-                    format!(
-                        "RSS grew by {:.1} MB over the second half ({:.1} → {:.1} MB)",
-                        growth as f64 / 1048576.0,
-                        mid as f64 / 1048576.0,
-                        end as f64 / 1048576.0
-                    )
-                });
-                row.checked = format!(
-                    "counters, weights bounded, error ≤ start, RSS {:.0}→{:.0} MB",
-                    mid as f64 / 1048576.0,
-                    end as f64 / 1048576.0
-                );
-            }
+            soak_counters(row, &fit, params.omega);
+            soak_memory(row, &rss, steps);
             Ok(())
         },
     );
+}
+
+/// The soak's counters after the fit: some cells critical but not all, few with an empty
+/// error counter.
+fn soak_counters(row: &mut Row, fit: &Fit, omega: f64) {
+    let net = fit.network();
+    let critical = net.critical_cells(omega).iter().filter(|&&c| c).count();
+    row.require(critical > 0 && critical < net.len(), || {
+        format!(
+            "{critical} of {} cells critical: counters carry no information",
+            net.len()
+        )
+    });
+    let never_hit = (0..net.len()).filter(|&c| net.mean_error(c) == 0.0).count();
+    row.require(never_hit * 10 < net.len(), || {
+        format!(
+            "{never_hit} of {} cells have an empty error counter",
+            net.len()
+        )
+    });
+}
+
+/// The soak's memory (`rss`: steps and resident bytes): flat from half way to the end.
+fn soak_memory(row: &mut Row, rss: &[(u64, u64)], steps: u64) {
+    // Memory: from half way to the end.
+    let half = rss.iter().find(|(s, _)| *s >= steps / 2).map(|r| r.1);
+    if let (Some(mid), Some(&(_, end))) = (half, rss.last()) {
+        let growth = end.saturating_sub(mid);
+        row.require(growth <= 16 << 20, || {
+            format!(
+                "RSS grew by {:.1} MB over the second half ({:.1} → {:.1} MB)",
+                growth as f64 / 1048576.0,
+                mid as f64 / 1048576.0,
+                end as f64 / 1048576.0
+            )
+        });
+        row.checked = format!(
+            "counters, weights bounded, error ≤ start, RSS {:.0}→{:.0} MB",
+            mid as f64 / 1048576.0,
+            end as f64 / 1048576.0
+        );
+    }
 }

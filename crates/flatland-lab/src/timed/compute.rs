@@ -1,22 +1,21 @@
-//! One row of each method: build, solve on the scorer's mesh, measure.
+//! One row of each method: built by [`Recipes::build`](flatland_methods::Recipes::build) (the
+//! one place a method is built), solved on the scorer's mesh, measured. The exact kernel's rows
+//! assemble its operator on a mesh of their own; the tracer is not a kernel and traces.
 
 use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context as _, Result};
-use flatland_baselines::{
-    BaselineRun, TraceBudget, TraceParams, budget_tolerance, run_clustered, run_hr_at_budget,
-    run_uniform, trace,
-};
+use flatland_baselines::{TraceBudget, TraceParams, budget_tolerance, trace};
 use flatland_geom::Kernel;
-use flatland_light::{LightFit, LightParams, LightStop};
+use flatland_light::LightStop;
+use flatland_methods::{Account, Ask, Built, NetworkAccount};
 use flatland_solve::{
-    DenseOperator, ExactMethod, Mesh, Representation, SolveParams, SparseOperator, Stop,
+    DenseOperator, Errors, ExactMethod, Mesh, Representation, SolveParams, SparseOperator, Stop,
     TransferOperator, exact_operator, solve_errors, solve_operator, sweep_operator,
 };
 
 use super::{Method, Scorer, Setting, TimedPlan, TimedRow};
-use crate::bench::{BenchRow, learner_row, paper_rows};
 
 /// What every row is computed with.
 pub(crate) struct Context<'a> {
@@ -24,84 +23,129 @@ pub(crate) struct Context<'a> {
     pub scorer: &'a Scorer,
     pub plan: &'a TimedPlan,
     pub stop: &'a Stop,
+    /// Seconds the light-driven learner may take before it stops short of its tolerance: the
+    /// plan's `max_seconds`, or less where its share of the time budget is shorter.
+    pub light_seconds: f64,
 }
 
-/// A row of a built representation: solved on the scorer's mesh and measured.
-struct Built<'r> {
+/// A representation to score: solved on the scorer's mesh, measured.
+struct Piece<'r> {
     method: Method,
     setting: Setting,
     seed: u64,
     rep: &'r dyn Representation,
     build_s: f64,
     rays: u64,
+    /// Its errors of ζ̃, where they are measured.
+    zeta: Option<Errors>,
+}
+
+impl<'a> Context<'a> {
+    /// Rows of `plan` on `scorer`'s mesh, the light-driven learner limited to `max_seconds`.
+    pub fn new(
+        kernel: &'a Arc<Kernel>,
+        scorer: &'a Scorer,
+        plan: &'a TimedPlan,
+        stop: &'a Stop,
+    ) -> Context<'a> {
+        Context {
+            kernel,
+            scorer,
+            plan,
+            stop,
+            light_seconds: plan.max_seconds,
+        }
+    }
 }
 
 impl Context<'_> {
-    fn scored(&self, built: Built<'_>) -> Result<TimedRow> {
-        let (errors, solve_s) = self.scorer.solve(built.rep, self.stop)?;
-        Ok(TimedRow {
-            method: built.method,
-            setting: built.setting,
-            seed: built.seed,
-            basis_functions: built.rep.basis_functions(),
-            build_s: built.build_s,
-            solve_s,
-            total_s: built.build_s + solve_s,
-            bytes: built.rep.memory_bytes(),
-            rays: built.rays,
-            zeta_error: self.scorer.zeta_error(built.rep),
-            solve: Some(errors),
-            estimated_error: None,
-            note: String::new(),
-            failed: false,
-        })
+    /// `ask` built by the plan's recipes: the light-driven learner on the scorer's mesh, the
+    /// networks trained against the scorer's ζ reference.
+    pub fn build(&self, ask: Ask) -> Result<Built> {
+        let mut recipes = self.plan.recipes.clone();
+        recipes.light.max_seconds = self.light_seconds;
+        let built = recipes.build(
+            ask,
+            self.kernel,
+            self.scorer.mesh(),
+            self.scorer.zeta(),
+            self.stop,
+            &mut |_| {},
+        )?;
+        Ok(built)
     }
 
-    /// The light-driven learner to `tolerance` on the scorer's mesh (stopped by the time
-    /// budget at the latest), its row, and the fit (relighting re-solves with it).
-    pub fn light(&self, tolerance: f64) -> Result<(TimedRow, LightFit)> {
-        let params = LightParams {
-            tolerance,
-            max_seconds: self.plan.max_seconds,
-            ..LightParams::default()
+    fn scored(&self, piece: Piece<'_>) -> Result<TimedRow> {
+        let (errors, solve_s) = self.scorer.solve(piece.rep, self.stop)?;
+        let mut row = TimedRow::new(piece.method, piece.setting, piece.seed);
+        row.basis_functions = piece.rep.basis_functions();
+        row.build_s = piece.build_s;
+        row.solve_s = solve_s;
+        row.total_s = piece.build_s + solve_s;
+        row.bytes = piece.rep.memory_bytes();
+        row.rays = piece.rays;
+        row.zeta = piece.zeta;
+        row.solve = Some(errors);
+        Ok(row)
+    }
+
+    /// The light-driven learner to `tolerance` on the scorer's mesh (stopped by its time limit
+    /// at the latest), its row, and what was built (relighting re-solves with it).
+    pub fn light(&self, tolerance: f64) -> Result<(TimedRow, Built)> {
+        let ask = Ask {
+            tolerance: Some(tolerance),
+            ..Ask::new(Method::Light)
         };
-        let started = Instant::now();
-        let mesh = self.scorer.mesh().clone();
-        let mut fit = LightFit::new(Arc::clone(self.kernel), mesh, params)?;
-        let stopped = fit.run(self.stop, |_| {})?;
-        let build_s = started.elapsed().as_secs_f64();
-        let mut row = self.scored(Built {
+        let built = self.build(ask)?;
+        let rep = built.rep.as_ref();
+        let mut row = self.scored(Piece {
             method: Method::Light,
             setting: Setting::Tolerance(tolerance),
             seed: 1,
-            rep: &fit,
-            build_s,
+            rep,
+            build_s: built.build_s,
             // Probes sweep a view each, as the exact operator's rows do: no ray is cast.
             rays: 0,
+            zeta: self.scorer.zeta_errors(rep),
         })?;
-        row.estimated_error = fit.estimated_error();
-        match stopped {
-            LightStop::Tolerance => {}
-            LightStop::Exact => row.add_note("no doubt left: the exact operator"),
-            LightStop::Cells => row.add_note("stopped by its cell budget before the tolerance"),
-            LightStop::Time => row.add_note("stopped by --max-seconds before the tolerance"),
+        if let Account::Light(account) = &built.account {
+            row.estimated_error = account.estimated_error;
+            match account.stopped {
+                LightStop::Tolerance => {}
+                LightStop::Exact => row.add_note("no doubt left: the exact operator"),
+                LightStop::Cells => row.add_note("stopped by its cell budget before the tolerance"),
+                LightStop::Time if self.light_seconds < self.plan.max_seconds => {
+                    row.add_note("stopped by its share of the time budget before the tolerance");
+                }
+                LightStop::Time => row.add_note("stopped by --max-seconds before the tolerance"),
+            }
         }
-        Ok((row, fit))
+        Ok((row, built))
     }
 
-    /// The first-shot learner at `budget` cells.
-    pub fn first_shot(&self, budget: usize, seed: u64) -> Result<TimedRow> {
-        let solver = self.scorer.solver();
-        let zeta = self.zeta()?;
-        let row = learner_row(
-            self.kernel,
-            zeta,
-            &self.plan.fit,
-            budget,
+    /// A network at `budget` cells and `seed`.
+    fn network(&self, method: Method, budget: usize, seed: u64) -> Result<Built> {
+        let ask = Ask {
+            basis: Some(budget),
             seed,
-            Some(&solver),
-        )?;
-        let mut row = self.of_bench(Method::Visibility, row);
+            ..Ask::new(method)
+        };
+        self.build(ask)
+    }
+
+    /// The visibility network at `budget` cells.
+    pub fn visibility(&self, budget: usize, seed: u64) -> Result<TimedRow> {
+        let built = self.network(Method::Visibility, budget, seed)?;
+        let account = account_of(&built)?;
+        let mut row = self.scored(Piece {
+            method: Method::Visibility,
+            setting: Setting::Budget(budget),
+            seed,
+            rep: built.rep.as_ref(),
+            build_s: built.build_s,
+            rays: built.rays,
+            zeta: self.scorer.defined_zeta(account.summary.errors),
+        })?;
         if let Some(n) = row
             .basis_functions
             .filter(|&n| n + budget_tolerance(budget) < budget)
@@ -111,94 +155,58 @@ impl Context<'_> {
         Ok(row)
     }
 
-    /// The paper's network at `budget` cells: the rows with and without its refit.
+    /// The paper's network at `budget` cells: the rows with and without its refit, from one
+    /// fit (the model read before the refit).
     pub fn paper(&self, budget: usize, seed: u64) -> Result<(TimedRow, TimedRow)> {
-        let solver = self.scorer.solver();
-        let zeta = self.zeta()?;
-        let (after, before) = paper_rows(
-            self.kernel,
-            zeta,
-            &self.plan.paper,
-            budget,
+        let built = self.network(Method::Paper, budget, seed)?;
+        let account = account_of(&built)?;
+        let summary = &account.summary;
+        let (before, before_errors) = account
+            .before_refit
+            .as_ref()
+            .context("the paper's network ends with its refit")?;
+        let after = self.scored(Piece {
+            method: Method::Paper,
+            setting: Setting::Budget(budget),
             seed,
-            Some(&solver),
-        )?;
-        Ok((
-            self.of_bench(Method::Paper, after),
-            self.of_bench(Method::PaperNorefit, before),
-        ))
+            rep: built.rep.as_ref(),
+            build_s: built.build_s,
+            rays: built.rays,
+            zeta: self.scorer.defined_zeta(summary.errors),
+        })?;
+        let before = self.scored(Piece {
+            method: Method::PaperNorefit,
+            setting: Setting::Budget(budget),
+            seed,
+            rep: before,
+            build_s: summary.wall_s - summary.refit_s,
+            rays: built.rays,
+            zeta: self.scorer.defined_zeta(*before_errors),
+        })?;
+        Ok((after, before))
     }
 
-    /// The ζ reference the network learners train against.
-    fn zeta(&self) -> Result<&Arc<flatland_solve::Reference>> {
-        self.scorer
-            .zeta()
-            .context("this run measures no ζ, which the network learners are trained against")
-    }
-
-    fn of_bench(&self, method: Method, r: BenchRow) -> TimedRow {
-        let solve_s = r.solve_s;
-        TimedRow {
-            method,
-            setting: Setting::Budget(r.budget),
-            seed: r.seed,
-            basis_functions: Some(r.basis_functions),
-            build_s: r.wall_s,
-            solve_s,
-            total_s: r.wall_s + solve_s,
-            bytes: r.memory_bytes,
-            rays: r.rays,
-            zeta_error: self.scorer.defined().heldout.then_some(r.errors.heldout),
-            solve: r.solve,
-            estimated_error: None,
-            note: String::new(),
-            failed: false,
-        }
-    }
-
-    /// HR, clustered HR or the uniform grid at `budget` (or the nearest count it can build,
+    /// HR, clustered HR or a uniform grid at `budget` (or the nearest count it can build,
     /// noted).
     pub fn baseline(&self, method: Method, budget: usize, seed: u64) -> Result<TimedRow> {
-        let kernel = self.kernel.as_ref();
-        match method {
-            Method::Hr => self.baseline_row(
-                method,
-                budget,
-                seed,
-                run_hr_at_budget(kernel, budget, seed, &self.plan.hr)?,
-            ),
-            Method::Clustered => self.baseline_row(
-                method,
-                budget,
-                seed,
-                run_clustered(kernel, budget, seed, &self.plan.clustered)?,
-            ),
-            _ => self.baseline_row(
-                method,
-                budget,
-                seed,
-                run_uniform(kernel, budget, seed, &self.plan.uniform)?,
-            ),
-        }
-    }
-
-    fn baseline_row<A: Representation>(
-        &self,
-        method: Method,
-        budget: usize,
-        seed: u64,
-        run: BaselineRun<A>,
-    ) -> Result<TimedRow> {
-        let mut row = self.scored(Built {
+        let ask = Ask {
+            basis: Some(budget),
+            seed,
+            ..Ask::new(method)
+        };
+        let built = self.build(ask)?;
+        let rep = built.rep.as_ref();
+        let mut row = self.scored(Piece {
             method,
             setting: Setting::Budget(budget),
             seed,
-            rep: &run.approx,
-            build_s: run.wall.as_secs_f64(),
-            rays: run.rays,
+            rep,
+            build_s: built.build_s,
+            rays: built.rays,
+            zeta: self.scorer.zeta_errors(rep),
         })?;
-        if let Some(note) = run.note {
-            row.add_note(&note.to_string());
+        if let Some(note) = &built.note {
+            row.add_note(note);
         }
         Ok(row)
     }
@@ -262,8 +270,17 @@ impl Context<'_> {
     }
 }
 
-/// The exact operator on `mesh` (dense from pairs on small scenes, by the sweep on large ones,
-/// as the exact kernel builds it) and its bytes.
+/// A network's account of its fit.
+fn account_of(built: &Built) -> Result<&NetworkAccount> {
+    match &built.account {
+        Account::Network(account) => Ok(account),
+        _ => anyhow::bail!("{} gave no account of its fit", built.method),
+    }
+}
+
+/// The exact kernel's operator on `mesh` (dense from pairs on small scenes, by the sweep on
+/// large ones, as its [`Representation::operator`] assembles it) and its bytes, which only the
+/// concrete operators know.
 pub(crate) fn exact_operator_of(
     kernel: &Kernel,
     mesh: &Mesh,

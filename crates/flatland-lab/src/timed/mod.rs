@@ -2,11 +2,18 @@
 //! elements, photons) until a row takes longer than the time budget; every row timed to its lit
 //! scene and scored against one independent exact reference. Relighting ([`relight`]) times
 //! ten lightings of the same geometry; [`walk`] a lamp carried through generated plans and
-//! halls, every method per move.
+//! halls, every method per move. Every representation is built by
+//! [`flatland_methods::Recipes::build`], the one place each method is built.
 //!
 //! A method that cannot meet a setting gives the nearest row it can with a note; one that
-//! fails there gives a failed row with the reason, and the sweep goes on.
+//! fails there gives a failed row with the reason, and the sweep goes on. With a whole-run
+//! [`Budget`], each method's sweep gets its share of what is left and is cut, with a note,
+//! where its next row would not fit.
+//!
+//! The R4 table of the results (every network and baseline at the same basis functions) is one
+//! plan of this engine: [`TimedPlan::r4`].
 
+mod budget;
 pub(crate) mod compute;
 pub mod relight;
 pub mod walk;
@@ -16,9 +23,9 @@ mod run;
 mod scorer;
 mod settings;
 
-use flatland_baselines::{ClusteredParams, HrParams, UniformParams};
-use kernel_fit::FitParams;
+use flatland_methods::Recipes;
 
+pub use budget::{Budget, RELIGHT_SHARE, RelightBudget, relight_within};
 pub use flatland_methods::Method;
 pub use row::{Setting, TimedRow};
 pub use run::run_timed;
@@ -45,6 +52,16 @@ pub const FIRST_PHOTONS: u64 = 10_000;
 /// a very fast method meets).
 pub const MAX_DOUBLINGS: usize = 12;
 
+/// The methods the R4 table compares: the two networks (the paper's with and without its
+/// refit) and the baselines at a budget.
+pub const R4_METHODS: [Method; 5] = [
+    Method::Visibility,
+    Method::Paper,
+    Method::PaperNorefit,
+    Method::Hr,
+    Method::Uniform,
+];
+
 /// What the timed bench runs.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TimedPlan {
@@ -64,21 +81,20 @@ pub struct TimedPlan {
     pub tracer_seconds: f64,
     /// Photons of the tracer's first row (doubling after).
     pub first_photons: u64,
-    /// The first-shot learner's parameters (cells and seed set per row).
-    pub fit: FitParams,
-    /// The paper network's parameters (cells and seed set per row).
-    pub paper: FitParams,
-    /// HR parameters.
-    pub hr: HrParams,
-    /// Clustered-HR parameters.
-    pub clustered: ClusteredParams,
-    /// Uniform-grid parameters.
-    pub uniform: UniformParams,
+    /// How each method is built (its knob and seed are set per row; the light-driven
+    /// learner's time limit is `max_seconds` or what is left of its share of the budget).
+    pub recipes: Recipes,
+    /// The whole run's time budget (`None`: every sweep runs to its end or to `max_seconds`).
+    pub budget: Option<Budget>,
 }
 
 impl TimedPlan {
     /// Every method with its default sweep.
     pub fn new(methods: Vec<Method>) -> TimedPlan {
+        let mut recipes = Recipes::default();
+        // No learning curve: its evaluations would be timed with the fit.
+        recipes.visibility.eval_every = 0;
+        recipes.paper.eval_every = 0;
         TimedPlan {
             methods,
             tolerances: DEFAULT_TOLERANCES.to_vec(),
@@ -88,11 +104,21 @@ impl TimedPlan {
             max_seconds: DEFAULT_MAX_SECONDS,
             tracer_seconds: DEFAULT_TRACER_SECONDS,
             first_photons: FIRST_PHOTONS,
-            fit: FitParams::default(),
-            paper: FitParams::paper(),
-            hr: HrParams::default(),
-            clustered: ClusteredParams::default(),
-            uniform: UniformParams::default(),
+            recipes,
+            budget: None,
+        }
+    }
+
+    /// The R4 table: the networks and the baselines it compares ([`R4_METHODS`]) at exactly
+    /// `budgets`, `seeds` seeds each, every row to its end (no time limit). Its scorer needs a
+    /// ζ reference, which the networks train against.
+    pub fn r4(budgets: Vec<usize>, seeds: u64) -> TimedPlan {
+        TimedPlan {
+            budgets,
+            extend_budgets: false,
+            seeds,
+            max_seconds: f64::INFINITY,
+            ..TimedPlan::new(R4_METHODS.to_vec())
         }
     }
 
@@ -110,6 +136,22 @@ impl TimedPlan {
         if let Some(b) = self.budgets.iter().find(|&&b| b < 3) {
             return bad("budgets", b.to_string(), "each ≥ 3");
         }
+        if let Some(m) = self.methods.iter().find(|m| m.budgeted())
+            && self.budgets.is_empty()
+        {
+            return bad(
+                "budgets",
+                format!("(none, with {m})"),
+                "at least one budget ≥ 3 for a method swept over basis functions",
+            );
+        }
+        if self.methods.contains(&Method::Light) && self.tolerances.is_empty() {
+            return bad(
+                "tolerances",
+                "(none, with light)".into(),
+                "at least one tolerance in (0, 1) for the light-driven learner",
+            );
+        }
         if self.seeds == 0 {
             return bad("seeds", "0".into(), "≥ 1");
         }
@@ -126,6 +168,15 @@ impl TimedPlan {
         if self.first_photons == 0 {
             return bad("first-photons", "0".into(), "at least 1");
         }
+        if let Some(budget) = self.budget {
+            budget.check()?;
+        }
+        let r = &self.recipes;
+        r.visibility.validate()?;
+        r.paper.validate()?;
+        r.hr.check()?;
+        r.clustered.check()?;
+        r.uniform.check()?;
         Ok(())
     }
 }

@@ -7,13 +7,11 @@ use std::collections::HashMap;
 use std::time::Instant;
 
 use anyhow::{Context as _, Result};
-use flatland_baselines::{
-    LightTracer, Lighting, TraceBudget, TraceParams, run_clustered, run_hr_at_budget,
-};
+use flatland_baselines::{LightTracer, Lighting, TraceBudget, TraceParams};
 use flatland_geom::{EdgeId, Kernel, Scene};
+use flatland_methods::Ask;
 use flatland_solve::{
-    ExactReference, Mesh, Representation, SolveErrors, SolveParams, TransferOperator, solve_errors,
-    solve_linear,
+    ExactReference, Mesh, SolveErrors, SolveParams, TransferOperator, solve_errors, solve_linear,
 };
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -224,8 +222,10 @@ fn default_relit(
     exact: &[Vec<f64>],
 ) -> Result<Vec<RelightRow>> {
     let started = Instant::now();
-    let (_, fit) = cx.light(tolerance)?;
-    let op = fit.operator(fit.mesh(), &SolveParams::default(), cx.stop)?;
+    let (_, built) = cx.light(tolerance)?;
+    let op = built
+        .rep
+        .operator(cx.scorer.mesh(), &SolveParams::default(), cx.stop)?;
     let build_s = started.elapsed().as_secs_f64();
     let note = format!("learned once at tolerance {tolerance}");
     resolved(
@@ -291,14 +291,14 @@ fn links_relit(
     exact: &[Vec<f64>],
 ) -> Result<Vec<RelightRow>> {
     let started = Instant::now();
-    let (mesh, params) = (cx.scorer.mesh(), SolveParams::default());
-    let op = if method == Method::Clustered {
-        let run = run_clustered(cx.kernel, budget, 1, &cx.plan.clustered)?;
-        run.approx.operator(mesh, &params, cx.stop)?
-    } else {
-        let run = run_hr_at_budget(cx.kernel, budget, 1, &cx.plan.hr)?;
-        run.approx.operator(mesh, &params, cx.stop)?
+    let ask = Ask {
+        basis: Some(budget),
+        ..Ask::new(method)
     };
+    let built = cx.build(ask)?;
+    let op = built
+        .rep
+        .operator(cx.scorer.mesh(), &SolveParams::default(), cx.stop)?;
     let build_s = started.elapsed().as_secs_f64();
     resolved(method, cx, op.as_ref(), build_s, relits, exact, note)
 }
@@ -443,12 +443,7 @@ pub fn relight(
     count: usize,
     stop: &flatland_solve::Stop,
 ) -> Result<(Vec<RelightRow>, Vec<Failure>)> {
-    let cx = Context {
-        kernel,
-        scorer,
-        plan,
-        stop,
-    };
+    let cx = Context::new(kernel, scorer, plan, stop);
     let relits = lightings(kernel.scene(), count, 1);
     let mut exact = vec![scorer.exact().to_vec()];
     let others = exact_lit(

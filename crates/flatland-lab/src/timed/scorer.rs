@@ -6,10 +6,11 @@ use std::time::Instant;
 
 use anyhow::Result;
 use flatland_geom::Kernel;
-use flatland_solve::{LitScene, Mesh, Reference, Representation, SolveErrors, SolveParams, Stop};
+use flatland_solve::{
+    Errors, LitScene, Mesh, Reference, Representation, SolveErrors, SolveParams, Stop,
+};
 
 use crate::Defined;
-use crate::bench::Solver;
 
 /// The lit scene rows are solved on and scored against, and the ζ reference.
 pub struct Scorer {
@@ -95,10 +96,17 @@ impl Scorer {
         self.defined
     }
 
-    /// The held-out relative L2 error of `rep`'s ζ̃, where it is defined.
-    pub fn zeta_error(&self, rep: &dyn Representation) -> Option<f64> {
+    /// The errors of `rep`'s ζ̃ against the ζ reference, where there is one and its held-out
+    /// error is defined.
+    pub fn zeta_errors(&self, rep: &dyn Representation) -> Option<Errors> {
         let zeta = self.zeta.as_ref().filter(|_| self.defined.heldout)?;
-        Some(zeta.errors(rep).heldout)
+        Some(zeta.errors(rep))
+    }
+
+    /// `errors` (a learner's own measure against [`Scorer::zeta`]) where the held-out error is
+    /// defined.
+    pub fn defined_zeta(&self, errors: Errors) -> Option<Errors> {
+        (self.zeta.is_some() && self.defined.heldout).then_some(errors)
     }
 
     /// The errors of B solved with `rep` on the mesh, and the seconds the solve took.
@@ -111,11 +119,6 @@ impl Scorer {
     /// The errors of `b`, a radiosity on `mesh` (any mesh of the scene), against the reference.
     pub fn errors_on(&self, mesh: &Mesh, b: &[f64], stop: &Stop) -> Result<SolveErrors> {
         Ok(self.lit.errors_on(mesh, b, stop)?)
-    }
-
-    /// The solver the visibility and paper rows of [`crate::bench`] score with.
-    pub(crate) fn solver(&self) -> Solver {
-        Solver::of(self.mesh().clone(), self.exact().to_vec())
     }
 }
 
