@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
-# Lists every function over 100 lines outside tests (the project's rule), longest first; exits 1
+# Lists every function over 80 lines outside tests (the project's rule), longest first; exits 1
 # if there is one. Tests are tests/ directories, `#[cfg(test)]` items and the module files they
 # declare, and `#[test]` functions; benches and examples count. A function's lines run from its
-# `fn` line to its closing brace. Usage: scripts/long-functions.sh [MAX_LINES=100]
+# `fn` line to its closing brace. Usage: scripts/long-functions.sh [MAX_LINES=80]
 set -euo pipefail
 cd "$(dirname "$0")/.."
-exec python3 - "${1:-100}" <<'PY'
+exec python3 - "${1:-80}" <<'PY'
 import re
 import sys
 

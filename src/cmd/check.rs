@@ -46,6 +46,25 @@ pub fn summary(name: &str, scene: &Scene) -> String {
         edges.iter().filter(|e| e.two_sided).count()
     );
     lighting(w, scene, &emitters);
+    overlaps(w, scene);
+    let _ = writeln!(w, "total length L: {}", scene.total_length());
+    let _ = writeln!(w, "bounds: ({}, {}) .. ({}, {})", lo.x, lo.y, hi.x, hi.y);
+    let _ = writeln!(w, "fingerprint: {:016x}", scene.fingerprint());
+    if surfaces.len() > MAX_CLASSIFIED {
+        let _ = writeln!(
+            w,
+            "visibility: {} surfaces, pair classification skipped",
+            surfaces.len()
+        );
+        return out;
+    }
+    visibility(w, scene, surfaces);
+    out
+}
+
+/// A warning per pair of overlapping surface edges (the first [`MAX_LISTED`]).
+fn overlaps(w: &mut String, scene: &Scene) {
+    use std::fmt::Write as _;
     let overlaps = scene.overlapping_surface_edges();
     for (a, b) in overlaps.iter().take(MAX_LISTED) {
         let _ = writeln!(
@@ -61,17 +80,12 @@ pub fn summary(name: &str, scene: &Scene) -> String {
             overlaps.len() - MAX_LISTED
         );
     }
-    let _ = writeln!(w, "total length L: {}", scene.total_length());
-    let _ = writeln!(w, "bounds: ({}, {}) .. ({}, {})", lo.x, lo.y, hi.x, hi.y);
-    let _ = writeln!(w, "fingerprint: {:016x}", scene.fingerprint());
-    if surfaces.len() > MAX_CLASSIFIED {
-        let _ = writeln!(
-            w,
-            "visibility: {} surfaces, pair classification skipped",
-            surfaces.len()
-        );
-        return out;
-    }
+}
+
+/// The surface edge pairs by how their visibility is known, and the pairs that need rays with
+/// the edges that may block them (the first [`MAX_LISTED`]).
+fn visibility(w: &mut String, scene: &Scene, surfaces: &[flatland_geom::EdgeId]) {
+    use std::fmt::Write as _;
     let kernel = Kernel::new(scene.clone());
     let (mut same, mut never, mut clear, mut blocked) = (0, 0, 0, 0);
     let mut rays = Vec::new();
@@ -105,7 +119,6 @@ pub fn summary(name: &str, scene: &Scene) -> String {
     if rays.len() > MAX_LISTED {
         let _ = writeln!(w, "    ... and {} more", rays.len() - MAX_LISTED);
     }
-    out
 }
 
 /// The first [`MAX_NAMED`] of `items`, comma-separated, and how many more there are.

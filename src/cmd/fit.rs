@@ -163,14 +163,9 @@ fn list_varying_pairs(kernel: &Kernel, label: &str) {
     );
 }
 
-/// Runs `flatland fit`.
-pub fn run(args: &Args) -> Result<()> {
-    // Everything that can be refused is refused before any work: ranges, then outputs.
-    super::check_res(args.res)?;
-    super::check_cells("--cells", args.cells)?;
-    anyhow::ensure!(args.every >= 1, "--every must be at least 1, but is 0");
-    check_outputs(args)?;
-    let (mut fit, label) = match &args.resume {
+/// The fit `args` ask for, resumed from its checkpoint or new, and its label.
+fn started(args: &Args) -> Result<(Fit, String)> {
+    let started = match &args.resume {
         Some(path) => {
             let fit = Fit::resume(path, KernelParams::default())?;
             interrupt::keep(format!(
@@ -194,16 +189,13 @@ pub fn run(args: &Args) -> Result<()> {
             (Fit::new(Arc::new(kernel), reference, params)?, label)
         }
     };
+    Ok(started)
+}
+
+/// Trains `fit` to its cells with a progress bar, saving the checkpoint every `--every` steps;
+/// why it stopped (Ctrl-C included).
+fn train(fit: &mut Fit, args: &Args) -> Result<StopReason> {
     let params = *fit.params();
-    eprintln!(
-        "fit of {label}: training to {} cells (Ctrl-C stops{})",
-        params.target_cells,
-        if args.checkpoint.is_some() {
-            " and saves the checkpoint"
-        } else {
-            ""
-        }
-    );
     let bar = super::progress_bar(params.target_cells as u64, "cells");
     let mut save_error = None;
     let reason = fit.train(PROGRESS_EVERY, |f| {
@@ -230,6 +222,28 @@ pub fn run(args: &Args) -> Result<()> {
     if let Some(e) = save_error {
         return Err(e).context("saving the checkpoint");
     }
+    Ok(reason)
+}
+
+/// Runs `flatland fit`.
+pub fn run(args: &Args) -> Result<()> {
+    // Everything that can be refused is refused before any work: ranges, then outputs.
+    super::check_res(args.res)?;
+    super::check_cells("--cells", args.cells)?;
+    anyhow::ensure!(args.every >= 1, "--every must be at least 1, but is 0");
+    check_outputs(args)?;
+    let (mut fit, label) = started(args)?;
+    let params = *fit.params();
+    eprintln!(
+        "fit of {label}: training to {} cells (Ctrl-C stops{})",
+        params.target_cells,
+        if args.checkpoint.is_some() {
+            " and saves the checkpoint"
+        } else {
+            ""
+        }
+    );
+    let reason = train(&mut fit, args)?;
     if let Some(path) = &args.checkpoint {
         save_checkpoint(&fit, path).context("saving the checkpoint")?;
     }

@@ -288,18 +288,12 @@ fn block_means_with(
     let mesh = Mesh::coarsest_unlit(kernel);
     let table = PairTable::new(kernel, &mesh)?;
     let (nodes, weights) = crate::gauss_legendre(BLOCK_POINTS);
-    let l = mesh.total_length();
-    let edges = mesh.edges();
-    let overlap = |range: [f64; 2], edge: &crate::MeshEdge| {
-        let part = [range[0].max(edge.s[0]), range[1].min(edge.s[1])];
-        (part[1] > part[0]).then_some(part)
-    };
-    // Where on mesh edge k (frame coordinates) the parameter s lies.
-    let at = |k: usize, s: f64| {
-        let e = &edges[k];
-        let u = ((s - e.s[0]) / (e.s[1] - e.s[0])).clamp(0.0, 1.0);
-        let (a, b) = (mesh.to_local(e.a), mesh.to_local(e.b));
-        a + (b - a) * u
+    let blocks = Blocks {
+        mesh: &mesh,
+        table: &table,
+        nodes,
+        weights,
+        panels,
     };
     (0..g * g)
         .into_par_iter()
@@ -310,59 +304,114 @@ fn block_means_with(
             let (i, j) = (block / g, block % g);
             let s_range = [i as f64 / g as f64, (i + 1) as f64 / g as f64];
             let t_range = [j as f64 / g as f64, (j + 1) as f64 / g as f64];
-            let senders: Vec<(usize, Sender, f64)> = (0..edges.len())
-                .filter_map(|k| {
-                    let part = overlap(s_range, &edges[k])?;
-                    let weight = if weighted {
-                        edges[k].source_weight
-                    } else {
-                        1.0
-                    };
-                    let s = Sender {
-                        a: at(k, part[0]),
-                        b: at(k, part[1]),
-                        normal: edges[k].normal,
-                    };
-                    Some((k, s, weight))
-                })
-                .collect();
-            let mut integral = 0.0;
-            for (r, edge) in edges.iter().enumerate() {
-                let Some([ta, tb]) = overlap(t_range, edge) else {
-                    continue;
-                };
-                if edge.reflectance == 0.0 {
-                    continue;
-                }
-                let width = (tb - ta) / panels as f64;
-                let mut along = 0.0;
-                for p in 0..panels {
-                    let (p0, p1) = (ta + width * p as f64, ta + width * (p + 1) as f64);
-                    let (half, mid) = (0.5 * (p1 - p0), 0.5 * (p0 + p1));
-                    for (x, w) in nodes.iter().zip(&weights) {
-                        let y = receiver(&mesh, r, at(r, mid + half * x));
-                        let gathered: f64 = senders
-                            .iter()
-                            .map(|(k, s, weight)| {
-                                let t = match table.get(*k, r) {
-                                    PairTransfer::Zero => 0.0,
-                                    PairTransfer::Clear => point_to_segment(&y, s),
-                                    PairTransfer::Occluded(occ) => {
-                                        point_to_segment_visible(&y, s, occ, scratch)
-                                    }
-                                };
-                                weight * t
-                            })
-                            .sum();
-                        along += w * half * gathered;
-                    }
-                }
-                // ∫ k ds = ρ ∫ G V dl / L.
-                integral += edge.reflectance * along / l;
-            }
-            Ok(integral * (g * g) as f64)
+            let senders = blocks.senders(s_range, weighted);
+            Ok(blocks.received(&senders, t_range, scratch) * (g * g) as f64)
         })
         .collect()
+}
+
+/// What every block mean of k is integrated with: the coarsest mesh, its pair table, and the
+/// Gauss–Legendre rule on each of `panels` panels of a receiving edge.
+struct Blocks<'a> {
+    mesh: &'a Mesh,
+    table: &'a PairTable,
+    nodes: Vec<f64>,
+    weights: Vec<f64>,
+    panels: usize,
+}
+
+/// A mesh edge sending to a block: its index, its part in the block's s range, its weight.
+type BlockSender = (usize, Sender, f64);
+
+impl Blocks<'_> {
+    /// The part of `range` (arc length parameters) on `edge`, if any.
+    fn overlap(range: [f64; 2], edge: &crate::MeshEdge) -> Option<[f64; 2]> {
+        let part = [range[0].max(edge.s[0]), range[1].min(edge.s[1])];
+        (part[1] > part[0]).then_some(part)
+    }
+
+    /// Where on mesh edge `k` (frame coordinates) the parameter `s` lies.
+    fn at(&self, k: usize, s: f64) -> DVec2 {
+        let e = &self.mesh.edges()[k];
+        let u = ((s - e.s[0]) / (e.s[1] - e.s[0])).clamp(0.0, 1.0);
+        let (a, b) = (self.mesh.to_local(e.a), self.mesh.to_local(e.b));
+        a + (b - a) * u
+    }
+
+    /// The parts of the mesh edges in `s_range`, weighted by their source weights if
+    /// `weighted`.
+    fn senders(&self, s_range: [f64; 2], weighted: bool) -> Vec<BlockSender> {
+        let edges = self.mesh.edges();
+        (0..edges.len())
+            .filter_map(|k| {
+                let part = Self::overlap(s_range, &edges[k])?;
+                let weight = if weighted {
+                    edges[k].source_weight
+                } else {
+                    1.0
+                };
+                let s = Sender {
+                    a: self.at(k, part[0]),
+                    b: self.at(k, part[1]),
+                    normal: edges[k].normal,
+                };
+                Some((k, s, weight))
+            })
+            .collect()
+    }
+
+    /// ∫∫ k over `senders` × `t_range`: what every receiving edge in `t_range` gathers.
+    fn received(
+        &self,
+        senders: &[BlockSender],
+        t_range: [f64; 2],
+        scratch: &mut Vec<[f64; 2]>,
+    ) -> f64 {
+        let l = self.mesh.total_length();
+        let mut integral = 0.0;
+        for (r, edge) in self.mesh.edges().iter().enumerate() {
+            let Some([ta, tb]) = Self::overlap(t_range, edge) else {
+                continue;
+            };
+            if edge.reflectance == 0.0 {
+                continue;
+            }
+            let width = (tb - ta) / self.panels as f64;
+            let mut along = 0.0;
+            for p in 0..self.panels {
+                let (p0, p1) = (ta + width * p as f64, ta + width * (p + 1) as f64);
+                let (half, mid) = (0.5 * (p1 - p0), 0.5 * (p0 + p1));
+                for (x, w) in self.nodes.iter().zip(&self.weights) {
+                    let y = receiver(self.mesh, r, self.at(r, mid + half * x));
+                    along += w * half * self.gathered(senders, r, &y, scratch);
+                }
+            }
+            // ∫ k ds = ρ ∫ G V dl / L.
+            integral += edge.reflectance * along / l;
+        }
+        integral
+    }
+
+    /// What receiver `y` on mesh edge `r` gathers from `senders`.
+    fn gathered(
+        &self,
+        senders: &[BlockSender],
+        r: usize,
+        y: &Receiver,
+        scratch: &mut Vec<[f64; 2]>,
+    ) -> f64 {
+        senders
+            .iter()
+            .map(|(k, s, weight)| {
+                let t = match self.table.get(*k, r) {
+                    PairTransfer::Zero => 0.0,
+                    PairTransfer::Clear => point_to_segment(y, s),
+                    PairTransfer::Occluded(occ) => point_to_segment_visible(y, s, occ, scratch),
+                };
+                weight * t
+            })
+            .sum()
+    }
 }
 
 #[cfg(test)]

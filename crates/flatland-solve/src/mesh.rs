@@ -159,30 +159,12 @@ impl Mesh {
         let mut local = Vec::with_capacity(elements);
         for (&(k, u_start, u_end), &count) in sections.iter().zip(&counts) {
             let run = &runs[k];
-            let first = scene.edges()[run.start];
-            let (a, b) = (first.a, scene.edges()[run.end - 1].b);
-            let s0 = scene
-                .edge_param_range(EdgeId::new(run.start))
-                .expect("a surface edge has a parameter range")
-                .0;
-            let s1 = scene
-                .edge_param_range(EdgeId::new(run.end - 1))
-                .expect("a surface edge has a parameter range")
-                .1;
             if edges.len() == k {
-                edges.push(MeshEdge {
-                    pieces: run.clone(),
-                    s: [s0, s1],
-                    a,
-                    b,
-                    normal: first.normal(),
-                    reflectance: first.reflectance,
-                    emission: first.emission,
-                    source_weight: kernel.source_weight(EdgeId::new(run.start)),
-                    elements: out.len()..out.len(),
-                    junctions: cuts[k][1..cuts[k].len() - 1].to_vec(),
-                });
+                edges.push(MeshEdge::of_run(kernel, run, &cuts[k], out.len()));
             }
+            let MeshEdge {
+                a, b, s: [s0, s1], ..
+            } = edges[k];
             // Positions as Scene::point computes them (a + (b − a) u), so a midpoint's `s`
             // names that very point.
             let at = |u: f64| if u >= 1.0 { b } else { a + (b - a) * u };
@@ -493,6 +475,32 @@ fn apportion(lengths: &[f64], total: usize) -> Vec<usize> {
         }
     }
     counts
+}
+
+impl MeshEdge {
+    /// The mesh edge of the scene edges `run` (the pieces of one edge) cut at `cuts` (its ends
+    /// and junctions), its elements to start at `first_element`.
+    fn of_run(kernel: &Kernel, run: &Range<usize>, cuts: &[f64], first_element: usize) -> Self {
+        let scene = kernel.scene();
+        let first = scene.edges()[run.start];
+        let param_range = |i: usize| {
+            scene
+                .edge_param_range(EdgeId::new(i))
+                .expect("a surface edge has a parameter range")
+        };
+        MeshEdge {
+            pieces: run.clone(),
+            s: [param_range(run.start).0, param_range(run.end - 1).1],
+            a: first.a,
+            b: scene.edges()[run.end - 1].b,
+            normal: first.normal(),
+            reflectance: first.reflectance,
+            emission: first.emission,
+            source_weight: kernel.source_weight(EdgeId::new(run.start)),
+            elements: first_element..first_element,
+            junctions: cuts[1..cuts.len() - 1].to_vec(),
+        }
+    }
 }
 
 #[cfg(test)]

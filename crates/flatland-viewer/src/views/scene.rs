@@ -104,31 +104,7 @@ pub fn scene_view(
     } else {
         draw_edges_once(texture, &painter, rect, &view, shown, lit, weak);
     }
-    if let Some(lit) = lit {
-        colour_bar(&painter, rect, lit.top, weak);
-    }
-    let x = legend(
-        &painter,
-        rect,
-        if lit.is_some() { &LIT_LEGEND } else { &LEGEND },
-    );
-    painter.text(
-        pos2(x, rect.bottom() - 3.0),
-        Align2::LEFT_BOTTOM,
-        format!(
-            "· {} edges, L = {:.3}{}",
-            scene.edges().len(),
-            scene.total_length(),
-            // Lit, the colour bar's labels take the bottom right.
-            match (frame.editable, lit.is_some()) {
-                (false, _) => " · a past moment",
-                (true, true) => "",
-                (true, false) => " · drag an end point to edit",
-            }
-        ),
-        FontId::proportional(10.0),
-        weak,
-    );
+    captions(&painter, frame, scene, lit, weak);
     let pointer = response.hover_pos();
     let hovered_end = pointer
         .filter(|_| frame.editable)
@@ -149,6 +125,42 @@ pub fn scene_view(
         out.hovered_s = mark_hovered_surface(&painter, &view, scene, q);
     }
     out
+}
+
+/// The colour bar (lit), the legend and the line that counts the edges, below the scene.
+fn captions(
+    painter: &Painter,
+    frame: &SceneFrame<'_>,
+    scene: &Scene,
+    lit: Option<&LitPaint<'_>>,
+    weak: Color32,
+) {
+    let rect = frame.rect;
+    if let Some(lit) = lit {
+        colour_bar(painter, rect, lit.top, weak);
+    }
+    let x = legend(
+        painter,
+        rect,
+        if lit.is_some() { &LIT_LEGEND } else { &LEGEND },
+    );
+    painter.text(
+        pos2(x, rect.bottom() - 3.0),
+        Align2::LEFT_BOTTOM,
+        format!(
+            "· {} edges, L = {:.3}{}",
+            scene.edges().len(),
+            scene.total_length(),
+            // Lit, the colour bar's labels take the bottom right.
+            match (frame.editable, lit.is_some()) {
+                (false, _) => " · a past moment",
+                (true, true) => "",
+                (true, false) => " · drag an end point to edit",
+            }
+        ),
+        FontId::proportional(10.0),
+        weak,
+    );
 }
 
 /// The end points of a scene's edges, which the user can drag.

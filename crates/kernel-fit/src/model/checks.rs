@@ -66,38 +66,7 @@ pub(crate) fn learned_kernel(m: &LearnedKernel, target: Target) -> Result<(), Ba
             ),
         ));
     }
-    let frame = m.frame;
-    if !(frame.origin.iter().all(|v| v.is_finite())
-        && frame.inv_scale.is_finite()
-        && frame.inv_scale > 0.0)
-    {
-        return Err(bad(
-            "model.frame",
-            format!(
-                "is origin {:?}, inv_scale {}; the origin must be finite and inv_scale finite and > 0",
-                frame.origin, frame.inv_scale
-            ),
-        ));
-    }
-    // The frame maps the scene into the unit box (a dragged end point may leave it a little):
-    // anything far from that would make every input the same point, or no point at all.
-    let (lo, hi) = m.scene.bounds();
-    let (a, b) = (frame.map(lo), frame.map(hi));
-    let side = (b[0] - a[0]).max(b[1] - a[1]);
-    let far = a
-        .iter()
-        .chain(&b)
-        .any(|v| !v.is_finite() || v.abs() > 100.0);
-    if far || !(1e-3..=100.0).contains(&side) {
-        return Err(bad(
-            "model.frame",
-            format!(
-                "maps the scene to [{:.3e}, {:.3e}] × [{:.3e}, {:.3e}]; a valid frame maps it \
-                 into [-100, 100]² with a side in [0.001, 100] (the file was edited)",
-                a[0], b[0], a[1], b[1]
-            ),
-        ));
-    }
+    frame(m)?;
     let scale = m.output_scale;
     if !(scale.is_finite() && scale > 0.0) {
         return Err(bad(
@@ -129,6 +98,43 @@ pub(crate) fn learned_kernel(m: &LearnedKernel, target: Target) -> Result<(), Ba
             format!(
                 "sum to {weights:e} in magnitude (× output_scale {scale:e}); predictions could \
                  overflow (valid: a sum at most 1e100 whose product with the scale is finite)"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// A learned kernel's input frame: finite, and mapping the scene into about the unit box.
+fn frame(m: &LearnedKernel) -> Result<(), Bad> {
+    let frame = m.frame;
+    if !(frame.origin.iter().all(|v| v.is_finite())
+        && frame.inv_scale.is_finite()
+        && frame.inv_scale > 0.0)
+    {
+        return Err(bad(
+            "model.frame",
+            format!(
+                "is origin {:?}, inv_scale {}; the origin must be finite and inv_scale finite and > 0",
+                frame.origin, frame.inv_scale
+            ),
+        ));
+    }
+    // The frame maps the scene into the unit box (a dragged end point may leave it a little):
+    // anything far from that would make every input the same point, or no point at all.
+    let (lo, hi) = m.scene.bounds();
+    let (a, b) = (frame.map(lo), frame.map(hi));
+    let side = (b[0] - a[0]).max(b[1] - a[1]);
+    let far = a
+        .iter()
+        .chain(&b)
+        .any(|v| !v.is_finite() || v.abs() > 100.0);
+    if far || !(1e-3..=100.0).contains(&side) {
+        return Err(bad(
+            "model.frame",
+            format!(
+                "maps the scene to [{:.3e}, {:.3e}] × [{:.3e}, {:.3e}]; a valid frame maps it \
+                 into [-100, 100]² with a side in [0.001, 100] (the file was edited)",
+                a[0], b[0], a[1], b[1]
             ),
         ));
     }

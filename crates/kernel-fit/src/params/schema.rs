@@ -7,15 +7,26 @@ use crate::{FitParams, limits};
 
 /// The fit's own numeric parameters (the network's follow them in [`FitParams::specs`]).
 fn own_specs() -> Vec<Spec> {
-    use Bound::{Closed, None as Unbounded, Open};
-    let real = Range::real;
-    let whole = |lo: f64, hi: Option<u64>| Range::integer(lo, hi.map(|h| h as f64));
-    let spec = |name, symbol, range, help| Spec {
+    let mut specs = growth_specs();
+    specs.extend(stop_specs());
+    specs
+}
+
+/// A spec of the table.
+fn spec(name: &'static str, symbol: &'static str, range: Range, help: &'static str) -> Spec {
+    Spec {
         name,
         symbol,
         range,
         help,
-    };
+    }
+}
+
+/// How the network grows and its samples are drawn.
+fn growth_specs() -> Vec<Spec> {
+    use Bound::{Closed, None as Unbounded, Open};
+    let real = Range::real;
+    let whole = |lo: f64, hi: Option<u64>| Range::integer(lo, hi.map(|h| h as f64));
     vec![
         spec(
             "omega",
@@ -53,6 +64,15 @@ fn own_specs() -> Vec<Spec> {
             whole(1.0, None),
             "the θ scan looks at most this × set size candidates",
         ),
+    ]
+}
+
+/// When the fit stops, its refit, and what it measures on the way.
+fn stop_specs() -> Vec<Spec> {
+    use Bound::{Closed, None as Unbounded, Open};
+    let real = Range::real;
+    let whole = |lo: f64, hi: Option<u64>| Range::integer(lo, hi.map(|h| h as f64));
+    vec![
         spec(
             "target_cells",
             "N",
