@@ -86,7 +86,7 @@ impl Runner<'_> {
                 && !self.made(method, setting)
                 && let Some(seconds) = predicted(method, &walls).filter(|&p| p > share.left())
             {
-                if share.seconds() > 0.0 {
+                if method != Method::PaperNorefit {
                     self.note_last(&cut_note(setting, seconds, share.left()));
                 } else {
                     // The second of the paper's pair: its rows came from the first's fit.
