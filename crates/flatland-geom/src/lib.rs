@@ -49,6 +49,7 @@ mod io;
 mod kernel;
 mod overlap;
 mod scene;
+pub mod versioned;
 mod visibility;
 mod walk;
 

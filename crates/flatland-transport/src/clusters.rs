@@ -3,10 +3,9 @@
 //! cluster sends on (a block of columns of M₂) reaches only the rooms around it.
 
 use flatland_solve::Mesh;
-use serde::{Deserialize, Serialize};
 
 /// The elements split into clusters.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Clusters {
     /// Each cluster's elements, ascending.
     pub members: Vec<Vec<u32>>,
@@ -42,11 +41,6 @@ impl Clusters {
         }
         debug_assert!(place.iter().all(|p| p.0 != u32::MAX));
         Clusters { members, place }
-    }
-
-    /// Number of clusters.
-    pub fn len(&self) -> usize {
-        self.members.len()
     }
 }
 
@@ -99,7 +93,7 @@ mod tests {
             }
         }
         assert!(count.iter().all(|&c| c == 1));
-        assert!(clusters.len() >= mesh.len() / 40);
+        assert!(clusters.members.len() >= mesh.len() / 40);
         assert_eq!(clusters, Clusters::spatial(&mesh, 40));
     }
 }

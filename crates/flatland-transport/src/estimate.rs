@@ -7,14 +7,15 @@ use flatland_solve::{DirectLight, LightBuffers, Mesh};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::Columns;
 use crate::free::free_points;
-use crate::local::{Block, Direction, Paths, Workspace};
-use crate::{TransportError, lit_source};
+use crate::local::{Block, Workspace};
+use crate::{Move, QueryBuffers, TransportError, lit_source};
 
 /// Relative L2 errors (element lengths as weights) of a transport's answers on lights it was
 /// not built from: of the later bounces `M₂ B₀`, of the indirect part `K B₀ + M₂ B₀` and of
 /// `B = B₀ + K B₀ + M₂ B₀` (the first bounce and B₀ being exact, only `M₂ B₀` errs).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct ErrorEstimate {
     /// Validation lights measured.
     pub lights: usize,
@@ -36,7 +37,7 @@ const MARGIN: f64 = 0.05;
 
 /// Threshold of the exact local solves the estimate compares with: far below any tolerance a
 /// transport is built to.
-const EXACT_SOLVE: f64 = 1e-8;
+pub(crate) const EXACT_SOLVE: f64 = 1e-8;
 
 /// Validation lights: `count` free points drawn with `seed`'s own stream, unit power.
 pub(crate) fn validation_lights(
@@ -55,25 +56,32 @@ pub(crate) fn validation_lights(
 /// The stream of a seed the validation lights are drawn from.
 const VALIDATION_STREAM: u64 = 0x7a11_d47e;
 
-/// `later(lit, out)` adds a transport's `M₂ B₀` to `out`; measured on `lights`.
+/// `later(move, buffers)` accumulates a form's `M₂ B₀` (unclamped) in `buffers`; measured on
+/// `lights`, one at a time.
 pub(crate) fn estimate(
     kernel: &Kernel,
     mesh: &Mesh,
-    paths: Paths<'_>,
+    columns: &Columns,
     lights: &[PointLight],
-    later: &(dyn Fn(&[(u32, f64)], &mut [f64]) + Sync),
+    later: &(dyn Fn(Move<'_>, &mut QueryBuffers) + Sync),
 ) -> Result<ErrorEstimate, TransportError> {
     let direct = DirectLight::new(kernel, mesh)?;
     let weights: Vec<f64> = mesh.elements().iter().map(|e| e.length).collect();
     let errors = lights
         .par_iter()
         .map_init(
-            || (Workspace::new(mesh.len()), LightBuffers::default()),
-            |(work, buffers), light| {
-                let lit = lit_source(&direct, mesh, std::slice::from_ref(light), buffers);
-                let parts = Parts::exact(work, paths, &lit, mesh.len())?;
+            || {
+                let buffers = (LightBuffers::default(), QueryBuffers::default());
+                (Workspace::new(mesh.len()), buffers)
+            },
+            |(work, (view, query)), light| {
+                let lights = std::slice::from_ref(light);
+                let lit = lit_source(&direct, mesh, lights, view);
+                let parts = Parts::solved(work, columns, &lit, mesh.len(), EXACT_SOLVE)?;
                 let mut approximate = vec![0.0; mesh.len()];
-                later(&lit, &mut approximate);
+                query.start(mesh.len());
+                later(Move { lights, lit: &lit }, query);
+                query.finish(&mut approximate, true);
                 Ok(parts.errors(&approximate, &weights))
             },
         )
@@ -104,21 +112,22 @@ pub(crate) struct Parts {
 }
 
 impl Parts {
-    /// The exact parts of `lit` by local solves.
-    pub fn exact(
+    /// The parts of `lit` by local solves to `tolerance` (exact to rounding at [`EXACT_SOLVE`]).
+    pub fn solved(
         work: &mut Workspace,
-        paths: Paths<'_>,
+        columns: &Columns,
         lit: &[(u32, f64)],
         n: usize,
+        tolerance: f64,
     ) -> Result<Parts, TransportError> {
         let source = Block {
             width: 1,
             elements: lit.iter().map(|&(j, _)| j).collect(),
             values: lit.iter().map(|&(_, b)| b).collect(),
         };
-        let once = work.apply(paths, Direction::Forward, &source);
-        let twice = work.apply(paths, Direction::Forward, &once);
-        let later = work.solve(paths, Direction::Forward, &twice, EXACT_SOLVE)?;
+        let once = work.apply(columns, &source);
+        let twice = work.apply(columns, &once);
+        let later = work.solve(columns, &twice, tolerance)?;
         let dense = |b: &Block| {
             let mut out = vec![0.0; n];
             for (&e, &v) in b.elements.iter().zip(&b.values) {

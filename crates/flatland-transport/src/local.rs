@@ -2,49 +2,15 @@
 //! elements, by shooting (progressive radiosity, Southwell's method): an element whose
 //! unshot light is above a threshold adds it to its solution and sends it on through A. Light
 //! decays at every bounce and through every door, so a solve touches only the elements its
-//! light reaches above the threshold — the rooms around its sources — never all N. A is K
-//! (forward: what a lit element lights, read from K's columns) or Kᵀ (the adjoint: where an
-//! element's light comes from, read from K's rows).
+//! light reaches above the threshold — the rooms around its sources — never all N. A is K,
+//! read by columns: what a lit element lights.
 //!
 //! Memory is proportional to what a solve touches: the workspace maps an element to its slot
 //! through one array of N indices, reset after every solve.
 
 use std::collections::VecDeque;
 
-use flatland_solve::SparseOperator;
-
 use crate::{Columns, TransportError};
-
-/// Which operator light is shot through.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Direction {
-    /// Through K: element `j` sends `K_ij` of its light to element `i` (K's columns).
-    Forward,
-    /// Through Kᵀ: element `i` sends `K_ij` to element `j` (K's rows).
-    Adjoint,
-}
-
-/// The exact operator both ways.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Paths<'a> {
-    pub rows: &'a SparseOperator,
-    pub columns: &'a Columns,
-}
-
-impl<'a> Paths<'a> {
-    /// Number of elements N.
-    pub fn rows_len(&self) -> usize {
-        self.columns.len()
-    }
-
-    /// Where element `i`'s light goes in `direction`, and the fractions.
-    fn from(&self, direction: Direction, i: usize) -> (&'a [u32], &'a [f64]) {
-        match direction {
-            Direction::Forward => self.columns.column(i),
-            Direction::Adjoint => self.rows.row(i),
-        }
-    }
-}
 
 /// A block of `width` vectors that are zero outside `elements`: row `r` of `values`
 /// (`values[r * width..(r + 1) * width]`) belongs to element `elements[r]`.
@@ -153,12 +119,12 @@ impl Workspace {
         s
     }
 
-    /// `A b` in `direction`, exactly: every row of `b` sent once.
-    pub fn apply(&mut self, paths: Paths<'_>, direction: Direction, b: &Block) -> Block {
+    /// `K b`, exactly: every row of `b` sent once.
+    pub fn apply(&mut self, columns: &Columns, b: &Block) -> Block {
         self.reset(b.width);
         let width = b.width;
         for (r, &e) in b.elements.iter().enumerate() {
-            let (to, fractions) = paths.from(direction, e as usize);
+            let (to, fractions) = columns.column(e as usize);
             let light = b.row(r);
             for (&k, &f) in to.iter().zip(fractions) {
                 let s = self.slot_of(k);
@@ -171,14 +137,13 @@ impl Workspace {
         self.take(false)
     }
 
-    /// `(I − A)⁻¹ r` in `direction`, to `tolerance`: light is shot until no element holds
+    /// `(I − K)⁻¹ r`, to `tolerance`: light is shot until no element holds
     /// unshot light above `tolerance` times the largest of its column in `r` (columns
     /// separately, so vectors of any scale are solved alike). Errors: light that keeps
     /// bouncing (a reflectance of 1 where light is trapped).
     pub fn solve(
         &mut self,
-        paths: Paths<'_>,
-        direction: Direction,
+        columns: &Columns,
         r: &Block,
         tolerance: f64,
     ) -> Result<Block, TransportError> {
@@ -209,7 +174,7 @@ impl Workspace {
             {
                 *x += l;
             }
-            let (to, fractions) = paths.from(direction, self.touched[s] as usize);
+            let (to, fractions) = columns.column(self.touched[s] as usize);
             for (&k, &f) in to.iter().zip(fractions) {
                 let t = self.slot_of(k);
                 for (u, l) in self.unshot[t * width..(t + 1) * width]
@@ -287,69 +252,38 @@ mod tests {
         let mesh = Mesh::new(&kernel, 2 * Mesh::min_elements(kernel.scene())).unwrap();
         let k = sweep_operator(&kernel, &mesh, &never).unwrap();
         let columns = Columns::of(&k);
-        let paths = Paths {
-            rows: &k,
-            columns: &columns,
-        };
         let n = mesh.len();
         let sources: Vec<u32> = vec![5, 6, 7, 400];
         let mut work = Workspace::new(n);
-        for direction in [Direction::Forward, Direction::Adjoint] {
-            let x = work
-                .solve(paths, direction, &Block::unit(&sources), 1e-9)
-                .unwrap();
-            for (c, &e) in sources.iter().enumerate() {
-                let mut rhs = vec![0.0; n];
-                rhs[e as usize] = 1.0;
-                let exact = match direction {
-                    Direction::Forward => {
-                        solve_linear(&k, &rhs, rhs.clone(), &SolveParams::default(), &never)
-                            .unwrap()
-                            .radiosity
-                    }
-                    Direction::Adjoint => {
-                        let transposed = Transposed(&k, &columns);
-                        solve_linear(
-                            &transposed,
-                            &rhs,
-                            rhs.clone(),
-                            &SolveParams::default(),
-                            &never,
-                        )
-                        .unwrap()
-                        .radiosity
-                    }
-                };
-                let local = dense(&x, n, c);
-                for i in 0..n {
-                    assert_close!(
-                        local[i],
-                        exact[i],
-                        1e-7,
-                        "{direction:?}, source {e}, element {i}"
-                    );
-                }
+        let x = work.solve(&columns, &Block::unit(&sources), 1e-9).unwrap();
+        for (c, &e) in sources.iter().enumerate() {
+            let mut rhs = vec![0.0; n];
+            rhs[e as usize] = 1.0;
+            let exact = solve_linear(&k, &rhs, rhs.clone(), &SolveParams::default(), &never)
+                .unwrap()
+                .radiosity;
+            let local = dense(&x, n, c);
+            for i in 0..n {
+                assert_close!(local[i], exact[i], 1e-7, "source {e}, element {i}");
             }
         }
     }
 
-    /// Kᵀ as an operator, through the columns.
-    struct Transposed<'a>(&'a SparseOperator, &'a Columns);
-
-    impl TransferOperator for Transposed<'_> {
-        fn len(&self) -> usize {
-            self.0.len()
-        }
-        fn apply(&self, b: &[f64], out: &mut [f64]) {
-            for (j, o) in out.iter_mut().enumerate() {
-                let (rows, values) = self.1.column(j);
-                *o = rows
-                    .iter()
-                    .zip(values)
-                    .map(|(&i, v)| v * b[i as usize])
-                    .sum();
-            }
-        }
+    #[test]
+    fn a_local_solve_touches_only_the_rooms_its_light_reaches() {
+        let kernel = Kernel::new(flatland_geom::generate::floor_plan(2000, 5).unwrap());
+        let mesh = Mesh::new(&kernel, Mesh::min_elements(kernel.scene())).unwrap();
+        let columns = Columns::of(&sweep_operator(&kernel, &mesh, &never).unwrap());
+        let mut work = Workspace::new(mesh.len());
+        let x = work.solve(&columns, &Block::unit(&[100]), 1e-3).unwrap();
+        assert!(
+            x.elements.len() < mesh.len() / 10,
+            "{} of {} elements touched",
+            x.elements.len(),
+            mesh.len()
+        );
+        // And the workspace is clean for the next solve: the same answer again.
+        assert_eq!(x, work.solve(&columns, &Block::unit(&[100]), 1e-3).unwrap());
     }
 
     #[test]
@@ -358,13 +292,9 @@ mod tests {
         let mesh = Mesh::new(&kernel, 200).unwrap();
         let k = sweep_operator(&kernel, &mesh, &never).unwrap();
         let columns = Columns::of(&k);
-        let paths = Paths {
-            rows: &k,
-            columns: &columns,
-        };
         let mut work = Workspace::new(mesh.len());
         let b = Block::unit(&[3, 90]);
-        let out = work.apply(paths, Direction::Forward, &b);
+        let out = work.apply(&columns, &b);
         for c in 0..2 {
             let mut unit = vec![0.0; mesh.len()];
             unit[b.elements[c] as usize] = 1.0;

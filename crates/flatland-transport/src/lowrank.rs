@@ -8,14 +8,14 @@
 
 use faer::Mat;
 use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
 
+use crate::Columns;
 use crate::clusters::Clusters;
-use crate::local::{Block, Direction, Paths, Workspace};
-use crate::{Stop, TransportError};
+use crate::local::{Block, Workspace};
+use crate::{QueryBuffers, Stop, TransportError};
 
 /// One cluster's block `M₂[rows, elements] ≈ U Vᵀ`.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq)]
 pub(crate) struct ClusterBlock {
     /// The receivers kept, ascending.
     pub rows: Vec<u32>,
@@ -71,12 +71,12 @@ pub(crate) struct BlockTolerance {
 /// `M₂[:, c]` for every cluster, in parallel (one workspace per thread; each block depends
 /// only on its cluster, so the result does not depend on the thread count).
 pub(crate) fn build_blocks(
-    paths: Paths<'_>,
+    columns: &Columns,
     clusters: &Clusters,
     tolerance: BlockTolerance,
     stop: &Stop,
 ) -> Result<Vec<ClusterBlock>, TransportError> {
-    let n = paths.rows_len();
+    let n = columns.len();
     clusters
         .members
         .par_iter()
@@ -86,7 +86,7 @@ pub(crate) fn build_blocks(
                 if stop() {
                     return Err(TransportError::Interrupted);
                 }
-                block_of(work, paths, elements, tolerance)
+                block_of(work, columns, elements, tolerance)
             },
         )
         .collect()
@@ -95,13 +95,13 @@ pub(crate) fn build_blocks(
 /// One cluster's block.
 fn block_of(
     work: &mut Workspace,
-    paths: Paths<'_>,
+    columns: &Columns,
     elements: &[u32],
     tolerance: BlockTolerance,
 ) -> Result<ClusterBlock, TransportError> {
-    let once = work.apply(paths, Direction::Forward, &Block::unit(elements));
-    let twice = work.apply(paths, Direction::Forward, &once);
-    let y = work.solve(paths, Direction::Forward, &twice, tolerance.solve)?;
+    let once = work.apply(columns, &Block::unit(elements));
+    let twice = work.apply(columns, &once);
+    let y = work.solve(columns, &twice, tolerance.solve)?;
     Ok(compress(&y, tolerance.block))
 }
 
@@ -155,25 +155,25 @@ fn compress(y: &Block, tolerance: f64) -> ClusterBlock {
 
 /// The blocks of all clusters: `M₂ ≈ Σ_c U_c V_cᵀ` (each on its rows and its cluster's
 /// columns).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq)]
 pub(crate) struct LowRank {
     pub clusters: Clusters,
     pub blocks: Vec<ClusterBlock>,
 }
 
 impl LowRank {
-    /// Adds `M₂ b` to `out` for `b` given by its non-zero entries `(element, value)`.
-    pub fn apply_sparse(&self, lit: &[(u32, f64)], out: &mut [f64]) {
-        let mut by_cluster: Vec<(u32, u32, f64)> = lit
-            .iter()
-            .map(|&(e, b)| {
-                let (c, k) = self.clusters.place[e as usize];
-                (c, k, b)
-            })
-            .collect();
-        by_cluster.sort_unstable_by_key(|&(c, k, _)| (c, k));
-        let mut coefficients = Vec::new();
-        for group in by_cluster.chunk_by(|a, b| a.0 == b.0) {
+    /// Adds `M₂ b` to the answer in `buffers` for `b` given by its non-zero entries
+    /// `(element, value)`: per cluster `c` it lights, `U_c (V_cᵀ b_c)`, clusters ascending.
+    pub fn accumulate(&self, lit: &[(u32, f64)], buffers: &mut QueryBuffers) {
+        let mut pairs = std::mem::take(&mut buffers.pairs);
+        let mut coefficients = std::mem::take(&mut buffers.scratch);
+        pairs.clear();
+        pairs.extend(lit.iter().map(|&(e, b)| {
+            let (c, k) = self.clusters.place[e as usize];
+            (c, k, b)
+        }));
+        pairs.sort_unstable_by_key(|&(c, k, _)| (c, k));
+        for group in pairs.chunk_by(|a, b| a.0 == b.0) {
             let block = &self.blocks[group[0].0 as usize];
             let rank = block.rank();
             if rank == 0 {
@@ -193,9 +193,11 @@ impl LowRank {
                     .zip(&coefficients)
                     .map(|(&uk, c)| f64::from(uk) * c)
                     .sum();
-                out[row as usize] += sum;
+                buffers.add(row, sum);
             }
         }
+        buffers.pairs = pairs;
+        buffers.scratch = coefficients;
     }
 
     /// Bytes held: the blocks and the clusters' tables.

@@ -33,7 +33,7 @@ impl Default for TransportParams {
             tolerance: 0.05,
             budget: None,
             cluster_elements: 64,
-            solve_tolerance: 1e-4,
+            solve_tolerance: 1e-3,
             validation_lights: 32,
             seed: 0,
         }

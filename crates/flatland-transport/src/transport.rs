@@ -4,17 +4,15 @@ use std::time::Instant;
 
 use flatland_geom::Kernel;
 use flatland_solve::{Mesh, SparseOperator, TransferOperator};
-use serde::{Deserialize, Serialize};
 
 use crate::clusters::Clusters;
 use crate::estimate::{ErrorEstimate, estimate, validation_lights};
-use crate::local::Paths;
 use crate::lowrank::{BlockTolerance, LowRank, build_blocks};
-use crate::{Columns, Stop, TransportError, TransportParams};
+use crate::{Columns, LaterBounces, Move, QueryBuffers, Stop, TransportError, TransportParams};
 
 /// The later bounces `M₂ = K² (I − K)⁻¹` of one scene on one mesh, in a form that answers
 /// `M₂ B₀` for a light's direct light B₀ in a fraction of a millisecond.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Transport {
     pub(crate) params: TransportParams,
     pub(crate) identity: MeshIdentity,
@@ -25,7 +23,7 @@ pub struct Transport {
 
 /// What a model belongs to: the scene (its fingerprint), the element count and a hash of the
 /// elements' parameter intervals.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct MeshIdentity {
     pub scene: u64,
     pub elements: usize,
@@ -80,23 +78,19 @@ impl Transport {
         }
         let started = Instant::now();
         let columns = Columns::of(operator);
-        let paths = Paths {
-            rows: operator,
-            columns: &columns,
-        };
         let clusters = Clusters::spatial(mesh, params.cluster_elements);
         let tolerance = BlockTolerance {
             block: params.tolerance,
             solve: params.solve_tolerance,
         };
-        let blocks = build_blocks(paths, &clusters, tolerance, stop)?;
+        let blocks = build_blocks(&columns, &clusters, tolerance, stop)?;
         let mut form = LowRank { clusters, blocks };
         if let Some(budget) = params.budget {
             form.fit_budget(budget);
         }
         let lights = validation_lights(kernel, mesh, params.validation_lights, params.seed);
-        let estimate = estimate(kernel, mesh, paths, &lights, &|lit, out| {
-            form.apply_sparse(lit, out);
+        let estimate = estimate(kernel, mesh, &columns, &lights, &|m, buffers| {
+            form.accumulate(m.lit, buffers);
         })?;
         Ok(Transport {
             params: *params,
@@ -108,12 +102,14 @@ impl Transport {
     }
 
     /// Adds `M₂ B₀` to `out` (length N) for B₀ given by its non-zero entries `(element,
-    /// value)` — what a point light lights: one room and what it sees through doors.
-    /// Elements past N are an error.
-    pub fn add_later_bounces(
+    /// value)` — what a point light lights: one room and what it sees through doors. Where
+    /// B₀ is nowhere negative the answer is raised to 0 where the truncation took it below
+    /// (never further from the exact one). Elements past N are an error.
+    pub fn add_later_bounces_of(
         &self,
         lit: &[(u32, f64)],
         out: &mut [f64],
+        buffers: &mut QueryBuffers,
     ) -> Result<(), TransportError> {
         let n = self.identity.elements;
         if out.len() != n {
@@ -130,7 +126,9 @@ impl Transport {
                 valid: "entries for elements of the mesh the model was built on",
             });
         }
-        self.form.apply_sparse(lit, out);
+        buffers.start(n);
+        self.form.accumulate(lit, buffers);
+        buffers.finish(out, lit.iter().all(|&(_, b)| b >= 0.0));
         Ok(())
     }
 
@@ -151,7 +149,7 @@ impl Transport {
             .map(|(j, &b)| (j as u32, b))
             .collect();
         let mut out = vec![0.0; n];
-        self.form.apply_sparse(&lit, &mut out);
+        self.add_later_bounces_of(&lit, &mut out, &mut QueryBuffers::default())?;
         Ok(out)
     }
 
@@ -187,5 +185,231 @@ impl Transport {
         let rows: usize = blocks.iter().map(|b| b.rows.len()).sum();
         let count = blocks.len().max(1) as f64;
         (blocks.len(), ranks as f64 / count, rows as f64 / count)
+    }
+}
+
+impl LaterBounces for Transport {
+    fn add_later_bounces(
+        &self,
+        lights: Move<'_>,
+        out: &mut [f64],
+        buffers: &mut QueryBuffers,
+    ) -> Result<(), TransportError> {
+        self.add_later_bounces_of(lights.lit, out, buffers)
+    }
+
+    fn bytes(&self) -> usize {
+        self.form.bytes()
+    }
+
+    fn estimated_error(&self) -> ErrorEstimate {
+        self.estimate
+    }
+
+    fn setup_s(&self) -> f64 {
+        self.setup_s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::free::free_points;
+    use crate::lit_source;
+    use flatland_geom::{DVec2, Edge, PointLight, Scene};
+    use flatland_solve::{
+        DirectLight, LightBuffers, SolveParams, never, solve_linear, sweep_operator,
+    };
+    use flatland_testkit::assert_close;
+
+    /// A generated plan of about `edges` edges, lamps removed, on 3 elements per section.
+    fn plan(edges: usize, seed: u64) -> (Kernel, Mesh, SparseOperator) {
+        let scene = flatland_geom::generate::floor_plan_lit(edges, seed)
+            .unwrap()
+            .with_lights(Vec::new())
+            .unwrap();
+        let kernel = Kernel::new(scene);
+        let mesh = Mesh::new(&kernel, 3 * Mesh::min_elements(kernel.scene())).unwrap();
+        let k = sweep_operator(&kernel, &mesh, &never).unwrap();
+        (kernel, mesh, k)
+    }
+
+    /// The exact `M₂ B₀ = (I − K)⁻¹ K² B₀` by GMRES.
+    fn exact_later(k: &SparseOperator, b0: &[f64]) -> Vec<f64> {
+        let (mut once, mut twice) = (vec![0.0; b0.len()], vec![0.0; b0.len()]);
+        k.apply(b0, &mut once);
+        k.apply(&once, &mut twice);
+        solve_linear(k, &twice, twice.clone(), &SolveParams::default(), &never)
+            .unwrap()
+            .radiosity
+    }
+
+    fn relative(mesh: &Mesh, a: &[f64], b: &[f64]) -> f64 {
+        let (mut num, mut den) = (0.0, 0.0);
+        for (i, e) in mesh.elements().iter().enumerate() {
+            num += e.length * (a[i] - b[i]).powi(2);
+            den += e.length * b[i] * b[i];
+        }
+        (num / den).sqrt()
+    }
+
+    #[test]
+    fn a_closed_uniform_room_gives_rho_squared_over_one_minus_rho() {
+        // Rows of K sum to ρ in a closed room, so for B₀ = 1 everywhere K B₀ = ρ and
+        // M₂ B₀ = ρ² / (1 − ρ), whatever the room hides from itself.
+        let rho = 0.6;
+        let corners = [
+            (0.0, 0.0),
+            (4.0, 0.0),
+            (4.0, 1.5),
+            (2.5, 1.5),
+            (2.5, 3.0),
+            (0.0, 3.0),
+        ];
+        let points: Vec<DVec2> = corners.iter().map(|&(x, y)| DVec2::new(x, y)).collect();
+        let kernel = Kernel::new(Scene::new(Edge::polygon(&points, rho)).unwrap());
+        let mesh = Mesh::new(&kernel, 240).unwrap();
+        let k = sweep_operator(&kernel, &mesh, &never).unwrap();
+        let params = TransportParams {
+            tolerance: 0.01,
+            cluster_elements: 24,
+            solve_tolerance: 1e-6,
+            ..TransportParams::default()
+        };
+        let transport = Transport::build(&kernel, &mesh, &k, &params, &never).unwrap();
+        let later = transport.later_bounces(&vec![1.0; mesh.len()]).unwrap();
+        let expected = rho * rho / (1.0 - rho);
+        let error = relative(&mesh, &later, &vec![expected; mesh.len()]);
+        assert!(
+            error <= 0.01,
+            "relative error {error} against ρ²/(1 − ρ) = {expected}"
+        );
+    }
+
+    #[test]
+    fn later_bounces_are_the_exact_ones_within_the_models_own_estimate() {
+        let (kernel, mesh, k) = plan(300, 21);
+        let transport =
+            Transport::build(&kernel, &mesh, &k, &TransportParams::default(), &never).unwrap();
+        let estimate = transport.estimated_error();
+        assert_eq!(estimate.lights, 32);
+        let direct = DirectLight::new(&kernel, &mesh).unwrap();
+        // Lights the set-up never saw: another seed's free points.
+        let mut rng = flatland_testkit::rng(77);
+        let lights = free_points(&kernel, &mesh, 24, 0.05, &mut rng);
+        assert_eq!(lights.len(), 24);
+        let mut errors = Vec::new();
+        for at in lights {
+            let light = PointLight { at, power: 5.0 };
+            let lit = lit_source(&direct, &mesh, &[light], &mut LightBuffers::default());
+            let mut b0 = vec![0.0; mesh.len()];
+            for &(j, b) in &lit {
+                b0[j as usize] = b;
+            }
+            let exact = exact_later(&k, &b0);
+            let later = transport.later_bounces(&b0).unwrap();
+            assert!(later.iter().all(|&v| v >= 0.0), "a negative later bounce");
+            let error = relative(&mesh, &later, &exact);
+            // Stated factor: each light within twice the largest estimated error.
+            assert!(error <= 2.0 * estimate.later_max, "{error} vs {estimate:?}");
+            errors.push(error);
+        }
+        let mean = errors.iter().sum::<f64>() / errors.len() as f64;
+        // The estimate is neither far below the measured mean nor far above it.
+        assert!(
+            mean <= 2.0 * estimate.later_mean,
+            "mean {mean} vs {estimate:?}"
+        );
+        assert!(
+            mean >= 0.25 * estimate.later_mean,
+            "mean {mean} vs {estimate:?}"
+        );
+        assert!(estimate.later_mean <= 2.0 * transport.params().tolerance);
+    }
+
+    #[test]
+    fn the_sparse_and_dense_queries_agree_and_bad_input_is_refused() {
+        let (kernel, mesh, k) = plan(150, 3);
+        let transport =
+            Transport::build(&kernel, &mesh, &k, &TransportParams::default(), &never).unwrap();
+        let lit = [(3u32, 0.5), (4, 0.25), (mesh.len() as u32 - 1, 1.0)];
+        let mut b0 = vec![0.0; mesh.len()];
+        for &(j, b) in &lit {
+            b0[j as usize] = b;
+        }
+        let mut sparse = vec![0.0; mesh.len()];
+        transport
+            .add_later_bounces_of(&lit, &mut sparse, &mut QueryBuffers::default())
+            .unwrap();
+        assert_eq!(sparse, transport.later_bounces(&b0).unwrap());
+        assert!(sparse.iter().any(|&v| v > 0.0));
+        let past = [(mesh.len() as u32, 1.0)];
+        let message = transport
+            .add_later_bounces_of(&past, &mut sparse, &mut QueryBuffers::default())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            message.contains(&format!("element {}", mesh.len())),
+            "{message}"
+        );
+        assert!(transport.later_bounces(&b0[1..]).is_err());
+        let short = sweep_operator(
+            &kernel,
+            &Mesh::new(&kernel, mesh.len() + 7).unwrap(),
+            &never,
+        )
+        .unwrap();
+        let message = Transport::build(&kernel, &mesh, &short, &TransportParams::default(), &never)
+            .unwrap_err()
+            .to_string();
+        assert!(message.contains("the operator has"), "{message}");
+        assert!(matches!(
+            Transport::build(&kernel, &mesh, &k, &TransportParams::default(), &|| true),
+            Err(TransportError::Interrupted)
+        ));
+    }
+
+    #[test]
+    fn a_seed_gives_the_same_model_on_any_number_of_threads() {
+        let (kernel, mesh, k) = plan(200, 8);
+        let params = TransportParams {
+            seed: 5,
+            ..TransportParams::default()
+        };
+        let on = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| Transport::build(&kernel, &mesh, &k, &params, &never).unwrap())
+        };
+        let (one, two) = (on(1), on(2));
+        assert_eq!(one.form, two.form);
+        assert_eq!(one.estimate, two.estimate);
+        assert_eq!(one.identity, two.identity);
+    }
+
+    #[test]
+    fn a_budget_is_kept_by_dropping_the_least_light_per_byte() {
+        let (kernel, mesh, k) = plan(300, 4);
+        let free =
+            Transport::build(&kernel, &mesh, &k, &TransportParams::default(), &never).unwrap();
+        let budget = free.bytes() / 3;
+        let params = TransportParams {
+            budget: Some(budget),
+            ..TransportParams::default()
+        };
+        let tight = Transport::build(&kernel, &mesh, &k, &params, &never).unwrap();
+        assert!(tight.bytes() <= budget, "{} > {budget}", tight.bytes());
+        let (e_free, e_tight) = (free.estimated_error(), tight.estimated_error());
+        assert!(
+            e_tight.later_mean > e_free.later_mean,
+            "{e_tight:?} vs {e_free:?}"
+        );
+        assert_close!(
+            tight.form.blocks.len() as f64,
+            free.form.blocks.len() as f64,
+            0.0
+        );
     }
 }

@@ -72,7 +72,6 @@ mod model;
 mod params;
 pub mod seeds;
 mod summary;
-mod versioned;
 mod visibility;
 
 pub use error::FitError;

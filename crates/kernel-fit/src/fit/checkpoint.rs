@@ -46,9 +46,9 @@ impl Fit {
             path: path.to_owned(),
             source,
         })?;
-        let c: Checkpoint<LoadedState> = crate::versioned::read(
+        let c: Checkpoint<LoadedState> = flatland_geom::versioned::read(
             &text,
-            &crate::versioned::Kind {
+            &flatland_geom::versioned::Kind {
                 format: CHECKPOINT_FORMAT,
                 version: CHECKPOINT_VERSION,
                 noun: "checkpoint",

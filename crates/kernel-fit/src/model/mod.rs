@@ -73,9 +73,9 @@ impl ModelFile {
             path: path.to_owned(),
             reason,
         };
-        let file: ModelFile = crate::versioned::read(
+        let file: ModelFile = flatland_geom::versioned::read(
             text.as_bytes(),
-            &crate::versioned::Kind {
+            &flatland_geom::versioned::Kind {
                 format: MODEL_FORMAT,
                 version: MODEL_VERSION,
                 noun: "model",

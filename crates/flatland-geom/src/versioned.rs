@@ -1,6 +1,8 @@
-//! The project's versioned JSON files (models and checkpoints): a `format` name and a `version`
-//! first, read before anything else, so a file of another kind or version is refused with a
-//! clear message instead of a confusing field error. One reader for both.
+//! The project's versioned JSON files (the network's models and checkpoints, the transport's
+//! models): a `format` name and a `version` first, read before anything else, so a file of
+//! another kind or version is refused with a clear message instead of a confusing field error.
+//! One reader for all of them, here at the bottom so every crate that writes such a file
+//! reads it the same way.
 
 use serde::Deserialize;
 use serde::de::DeserializeOwned;
@@ -14,16 +16,19 @@ struct Header {
 
 /// What a versioned file is: its `format` name, the version this build reads, and how its
 /// messages name it ("model", "checkpoint").
-pub(crate) struct Kind {
+pub struct Kind {
+    /// The `format` name the file must carry.
     pub format: &'static str,
+    /// The version this build reads.
     pub version: u32,
+    /// How messages name the file ("model", "checkpoint").
     pub noun: &'static str,
     /// What to do about a file of another version.
     pub remedy: &'static str,
 }
 
 /// Reads `text` as a file of `kind`; the error is one line saying what is wrong and where.
-pub(crate) fn read<T: DeserializeOwned>(text: &[u8], kind: &Kind) -> Result<T, String> {
+pub fn read<T: DeserializeOwned>(text: &[u8], kind: &Kind) -> Result<T, String> {
     let noun = kind.noun;
     let header: Header = serde_json::from_slice(text).map_err(|e| {
         format!(
