@@ -6,7 +6,9 @@
 //! SCENE: `plan:EDGES:SEED` (a generated floor plan lit by lamps, lamps removed),
 //! `bundled:NAME` (emitters off), or a scene file. Keys: `tolerance`, `per` (elements per
 //! section), `positions`, `walk` (its seed), `candidates` (comma list of `lowrank`, `grid`,
-//! `adaptive`), `resolve` (comma list of GMRES tolerances, or `none`).
+//! `adaptive`, `network`), `resolve` (comma list of GMRES tolerances, or `none`), `budget` (the
+//! low rank's bytes; the probes get what it holds), `tracer` (positions checked against the
+//! point-light tracer), and for the network `cells`, `steps`, `senders`, `gated`.
 
 use std::time::Instant;
 
@@ -16,8 +18,8 @@ use flatland_solve::{
     sweep_operator,
 };
 use flatland_transport::{
-    Columns, LaterBounces, LightProbes, Move, Placement, ProbeParams, QueryBuffers, Transport,
-    TransportParams, lit_source,
+    CellNetwork, Columns, LaterBounces, LightProbes, Move, NetworkParams, Placement, ProbeParams,
+    QueryBuffers, Transport, TransportParams, lit_source,
 };
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -185,9 +187,10 @@ fn relight(
     light: PointLight,
     view: &mut LightBuffers,
     query: &mut QueryBuffers,
-) -> Vec<f64> {
+    b: &mut [f64],
+) {
     let lit = lit_source(&s.direct, &s.mesh, &[light], view);
-    let mut b = vec![0.0; s.mesh.len()];
+    b.fill(0.0);
     for &(j, v) in &lit {
         b[j as usize] += v;
         let (rows, values) = s.columns.column(j as usize);
@@ -201,11 +204,54 @@ fn relight(
             lights: &lights,
             lit: &lit,
         },
-        &mut b,
+        b,
         query,
     )
     .unwrap();
-    b
+}
+
+/// B of `form` and of the exact solve against the independent point-light tracer (element
+/// means, 4 million photons) at `count` positions spread over the walk.
+fn against_tracer(
+    s: &Setup,
+    form: &dyn LaterBounces,
+    lights: &[PointLight],
+    exact: &[Exact],
+    count: usize,
+) {
+    use flatland_baselines::{TraceBudget, TraceParams, trace};
+    let step = (lights.len() / count).max(1);
+    let (mut view, mut query) = (LightBuffers::default(), QueryBuffers::default());
+    let mut b = vec![0.0; s.mesh.len()];
+    let norm = |f: &dyn Fn(usize) -> f64| {
+        s.mesh
+            .elements()
+            .iter()
+            .enumerate()
+            .map(|(i, e)| e.length * f(i).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    };
+    for k in (0..lights.len()).step_by(step).take(count) {
+        let light = lights[k];
+        relight(s, form, light, &mut view, &mut query, &mut b);
+        let lit = Kernel::new(s.kernel.scene().clone().with_lights(vec![light]).unwrap());
+        let params = TraceParams {
+            budget: TraceBudget::Photons(4_000_000),
+            seed: k as u64,
+        };
+        let traced = trace(&lit, &s.mesh, &params, &never).unwrap();
+        let t = &traced.radiosity;
+        let size = norm(&|i| t[i]);
+        println!(
+            "  tracer at ({:.2}, {:.2}): |B - traced| / |traced| = {:.4} (exact solve: {:.4}), noise {:.4}",
+            light.at.x,
+            light.at.y,
+            norm(&|i| b[i] - t[i]) / size,
+            norm(&|i| exact[k].b[i] - t[i]) / size,
+            norm(&|i| traced.std_error[i]) / size,
+        );
+    }
 }
 
 fn main() {
@@ -221,6 +267,7 @@ fn main() {
     let walk_seed: u64 = get("walk", "99").parse().unwrap();
     let candidates = get("candidates", "lowrank,grid,adaptive");
     let resolve = get("resolve", "1e-2,1e-3,1e-4");
+    let traced: usize = get("tracer", "0").parse().unwrap();
     let kernel = std::sync::Arc::new(Kernel::new(scene_of(&args[1])));
     let mesh = Mesh::new(&kernel, per * Mesh::min_elements(kernel.scene())).unwrap();
     let started = Instant::now();
@@ -243,14 +290,146 @@ fn main() {
         k_s,
         s.k.memory_bytes() as f64 / 1e6
     );
+    print_rooms(&args[1]);
     let walk = walk(&s.kernel, mesh, positions, walk_seed);
     let lights: Vec<PointLight> = walk
         .iter()
         .map(|&at| PointLight { at, power: 8.0 })
         .collect();
-    // The exact answer at every position: a cold GMRES solve to 1e-10.
+    let exact = exact_answers(&s, &lights);
     let mut view = LightBuffers::default();
-    let exact: Vec<Exact> = lights
+    println!(
+        "| method | set-up s | MB | ms/move median | p95 | rel_l2_b mean | max | indirect mean | negative | note |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    let mut budget = None;
+    for candidate in candidates.split(',') {
+        let form = build_candidate(candidate, &s, tolerance, &mut budget, &get);
+        let mut row = Row::default();
+        let mut query = QueryBuffers::default();
+        let mut b = vec![0.0; mesh.len()];
+        for (light, exact) in lights.iter().zip(&exact) {
+            let started = Instant::now();
+            relight(&s, form.as_ref(), *light, &mut view, &mut query, &mut b);
+            row.push(mesh, started.elapsed().as_secs_f64() * 1e3, &b, exact);
+        }
+        if traced > 0 {
+            against_tracer(&s, form.as_ref(), &lights, &exact, traced);
+        }
+        let e = form.estimated_error();
+        let note = format!(
+            "estimate: b {:.4}, indirect {:.4}, later {:.4}",
+            e.b_mean, e.indirect_mean, e.later_mean
+        );
+        row.print(candidate, form.setup_s(), form.bytes(), &note);
+    }
+    if resolve != "none" {
+        for tol in resolve.split(',') {
+            resolves(&s, &lights, &exact, tol.parse().unwrap());
+        }
+    }
+}
+
+/// The exact re-solve along the walk: per move B₀ by one view, then GMRES to `tolerance`
+/// warm-started from the last position's B.
+fn resolves(s: &Setup, lights: &[PointLight], exact: &[Exact], tolerance: f64) {
+    let mesh = &s.mesh;
+    let mut view = LightBuffers::default();
+    let params = SolveParams {
+        tolerance,
+        ..SolveParams::default()
+    };
+    let mut row = Row::default();
+    let mut previous = vec![0.0; mesh.len()];
+    let mut iterations = Vec::new();
+    for (light, exact) in lights.iter().zip(exact) {
+        let started = Instant::now();
+        let lit = lit_source(&s.direct, mesh, &[*light], &mut view);
+        let mut direct = vec![0.0; mesh.len()];
+        for &(j, v) in &lit {
+            direct[j as usize] = v;
+        }
+        let solved = solve_linear(&s.k, &direct, previous, &params, &never).unwrap();
+        row.push(
+            mesh,
+            started.elapsed().as_secs_f64() * 1e3,
+            &solved.radiosity,
+            exact,
+        );
+        iterations.push(solved.iterations as f64);
+        previous = solved.radiosity;
+    }
+    let note = format!("warm GMRES, {:.1} iterations a move", mean(&iterations));
+    row.print(
+        &format!("exact re-solve {tolerance}"),
+        0.0,
+        s.k.memory_bytes(),
+        &note,
+    );
+}
+
+/// One candidate form of the later bounces, built with its default parameters (the probes
+/// and the network given `budget`, the low rank's bytes, where they take one).
+fn build_candidate(
+    candidate: &str,
+    s: &Setup,
+    tolerance: f64,
+    budget: &mut Option<usize>,
+    get: &dyn Fn(&str, &str) -> String,
+) -> Box<dyn LaterBounces> {
+    let (kernel, mesh) = (&s.kernel, &s.mesh);
+    match candidate {
+        "lowrank" => {
+            let params = TransportParams {
+                tolerance,
+                budget: get("budget", "").parse().ok(),
+                ..TransportParams::default()
+            };
+            let t = Transport::build(kernel, mesh, &s.k, &params, &never).unwrap();
+            *budget = Some(LaterBounces::bytes(&t));
+            let (clusters, rank, rows) = t.shape();
+            eprintln!("lowrank: {clusters} clusters, mean rank {rank:.1}, mean rows {rows:.0}");
+            Box::new(t)
+        }
+        "grid" | "adaptive" => {
+            let params = ProbeParams {
+                placement: if candidate == "grid" {
+                    Placement::Grid
+                } else {
+                    Placement::Adaptive
+                },
+                ..ProbeParams::grid(budget.expect("lowrank first: the probes get its bytes"))
+            };
+            let p = LightProbes::build(kernel, mesh, &s.k, &params, &never).unwrap();
+            eprintln!(
+                "{candidate}: {} probes, spacing {:.2}",
+                p.len(),
+                p.spacing()
+            );
+            Box::new(p)
+        }
+        "network" => {
+            let params = NetworkParams {
+                max_cells: get("cells", "4000").parse().unwrap(),
+                steps: get("steps", "2000000").parse().unwrap(),
+                senders: get("senders", "0.25").parse().unwrap(),
+                gated: get("gated", "true").parse().unwrap(),
+                ..NetworkParams::default()
+            };
+            let net = CellNetwork::build(kernel, mesh, &s.k, &params, &never).unwrap();
+            let (cells, samples) = net.shape();
+            eprintln!("network: {cells} cells from {samples} samples");
+            Box::new(net)
+        }
+        other => panic!("unknown candidate {other}"),
+    }
+}
+
+/// The exact answer at every position: a cold GMRES solve to 1e-10.
+fn exact_answers(s: &Setup, lights: &[PointLight]) -> Vec<Exact> {
+    let mesh = &s.mesh;
+    let mut view = LightBuffers::default();
+    lights
         .iter()
         .map(|&light| {
             let mut direct = vec![0.0; mesh.len()];
@@ -268,92 +447,18 @@ fn main() {
             .radiosity;
             Exact { direct, b }
         })
-        .collect();
-    println!(
-        "| method | set-up s | MB | ms/move median | p95 | rel_l2_b mean | max | indirect mean | negative | note |"
-    );
-    println!("|---|---|---|---|---|---|---|---|---|---|");
-    let mut budget = None;
-    for candidate in candidates.split(',') {
-        let form: Box<dyn LaterBounces> = match candidate {
-            "lowrank" => {
-                let params = TransportParams {
-                    tolerance,
-                    ..TransportParams::default()
-                };
-                let t = Transport::build(&kernel, mesh, &s.k, &params, &never).unwrap();
-                budget = Some(LaterBounces::bytes(&t));
-                let (clusters, rank, rows) = t.shape();
-                eprintln!("lowrank: {clusters} clusters, mean rank {rank:.1}, mean rows {rows:.0}");
-                Box::new(t)
-            }
-            "grid" | "adaptive" => {
-                let params = ProbeParams {
-                    placement: if candidate == "grid" {
-                        Placement::Grid
-                    } else {
-                        Placement::Adaptive
-                    },
-                    ..ProbeParams::grid(budget.expect("lowrank first: the probes get its bytes"))
-                };
-                let p = LightProbes::build(&kernel, mesh, &s.k, &params, &never).unwrap();
-                eprintln!(
-                    "{candidate}: {} probes, spacing {:.2}",
-                    p.len(),
-                    p.spacing()
-                );
-                Box::new(p)
-            }
-            other => panic!("unknown candidate {other}"),
-        };
-        let mut row = Row::default();
-        let mut query = QueryBuffers::default();
-        for (light, exact) in lights.iter().zip(&exact) {
-            let started = Instant::now();
-            let b = relight(&s, form.as_ref(), *light, &mut view, &mut query);
-            row.push(mesh, started.elapsed().as_secs_f64() * 1e3, &b, exact);
-        }
-        let e = form.estimated_error();
-        let note = format!(
-            "estimate: b {:.4}, indirect {:.4}, later {:.4}",
-            e.b_mean, e.indirect_mean, e.later_mean
+        .collect()
+}
+
+/// The number of rooms of a generated plan (its lamps: one a room).
+fn print_rooms(spec: &str) {
+    if spec.starts_with("plan:") {
+        let parts: Vec<&str> = spec.split(':').collect();
+        let plan =
+            generate::floor_plan_lit(parts[1].parse().unwrap(), parts[2].parse().unwrap()).unwrap();
+        println!(
+            "{} rooms (a lamp per room in the generated plan)",
+            plan.lights().len()
         );
-        row.print(candidate, form.setup_s(), form.bytes(), &note);
-    }
-    if resolve != "none" {
-        for tol in resolve.split(',') {
-            let tolerance: f64 = tol.parse().unwrap();
-            let params = SolveParams {
-                tolerance,
-                ..SolveParams::default()
-            };
-            let mut row = Row::default();
-            let mut previous = vec![0.0; mesh.len()];
-            let mut iterations = Vec::new();
-            for (light, exact) in lights.iter().zip(&exact) {
-                let started = Instant::now();
-                let lit = lit_source(&s.direct, mesh, &[*light], &mut view);
-                let mut direct = vec![0.0; mesh.len()];
-                for &(j, v) in &lit {
-                    direct[j as usize] = v;
-                }
-                let solved = solve_linear(&s.k, &direct, previous, &params, &never).unwrap();
-                row.push(
-                    mesh,
-                    started.elapsed().as_secs_f64() * 1e3,
-                    &solved.radiosity,
-                    exact,
-                );
-                iterations.push(solved.iterations as f64);
-                previous = solved.radiosity;
-            }
-            let note = format!("warm GMRES, {:.1} iterations a move", mean(&iterations));
-            row.print(
-                &format!("exact re-solve {tol}"),
-                0.0,
-                s.k.memory_bytes(),
-                &note,
-            );
-        }
     }
 }

@@ -30,6 +30,30 @@ impl Clusters {
         Clusters::from_members(members, mesh.len())
     }
 
+    /// Like [`Clusters::spatial`], but first by the way elements face (four quadrants of the
+    /// normal's direction), so a cluster never holds both faces of a wall.
+    pub fn facing(mesh: &Mesh, largest: usize) -> Clusters {
+        let points: Vec<[f64; 2]> = (0..mesh.len())
+            .map(|i| {
+                let m = mesh.local(i)[2];
+                [m.x, m.y]
+            })
+            .collect();
+        let quadrant = |i: usize| {
+            let n = mesh.edge_of(i).normal;
+            let angle = n.y.atan2(n.x) + std::f64::consts::FRAC_PI_4;
+            (angle.rem_euclid(std::f64::consts::TAU) / std::f64::consts::FRAC_PI_2) as usize % 4
+        };
+        let mut members = Vec::new();
+        for side in 0..4 {
+            let mut order: Vec<u32> = (0..mesh.len() as u32)
+                .filter(|&i| quadrant(i as usize) == side)
+                .collect();
+            split(&points, &mut order, largest.max(1), &mut members);
+        }
+        Clusters::from_members(members, mesh.len())
+    }
+
     /// Clusters with the given members (each element in exactly one).
     pub fn from_members(mut members: Vec<Vec<u32>>, n: usize) -> Clusters {
         let mut place = vec![(u32::MAX, u32::MAX); n];
@@ -95,5 +119,14 @@ mod tests {
         assert!(count.iter().all(|&c| c == 1));
         assert!(clusters.members.len() >= mesh.len() / 40);
         assert_eq!(clusters, Clusters::spatial(&mesh, 40));
+        // Facing clusters never mix opposite faces.
+        let facing = Clusters::facing(&mesh, 40);
+        for list in &facing.members {
+            let first = mesh.edge_of(list[0] as usize).normal;
+            assert!(
+                list.iter()
+                    .all(|&e| mesh.edge_of(e as usize).normal.dot(first) > 0.0)
+            );
+        }
     }
 }

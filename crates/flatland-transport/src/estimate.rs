@@ -5,31 +5,11 @@
 use flatland_geom::{Kernel, PointLight};
 use flatland_solve::{DirectLight, LightBuffers, Mesh};
 use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
 
 use crate::Columns;
 use crate::free::free_points;
 use crate::local::{Block, Workspace};
-use crate::{Move, QueryBuffers, TransportError, lit_source};
-
-/// Relative L2 errors (element lengths as weights) of a transport's answers on lights it was
-/// not built from: of the later bounces `M₂ B₀`, of the indirect part `K B₀ + M₂ B₀` and of
-/// `B = B₀ + K B₀ + M₂ B₀` (the first bounce and B₀ being exact, only `M₂ B₀` errs).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct ErrorEstimate {
-    /// Validation lights measured.
-    pub lights: usize,
-    /// Of `M₂ B₀`: mean and largest over the lights.
-    pub later_mean: f64,
-    /// Largest.
-    pub later_max: f64,
-    /// Of the indirect part: mean.
-    pub indirect_mean: f64,
-    /// Of B: mean.
-    pub b_mean: f64,
-    /// Of B: largest.
-    pub b_max: f64,
-}
+use crate::{ErrorEstimate, Move, QueryBuffers, TransportError, lit_source};
 
 /// Clearance a validation light keeps from every edge, as a fraction of the free way it was
 /// drawn on (see `free_points`).

@@ -2,7 +2,9 @@
 
 use flatland_geom::PointLight;
 
-use crate::{ErrorEstimate, TransportError};
+use serde::{Deserialize, Serialize};
+
+use crate::TransportError;
 
 /// One position of the moving lights: the lights and the direct light B₀ they give, as its
 /// non-zero entries `(element, value)` ascending ([`lit_source`](crate::lit_source)). A form
@@ -82,4 +84,23 @@ impl QueryBuffers {
             out[r as usize] += if clamp { v.max(0.0) } else { v };
         }
     }
+}
+
+/// Relative L2 errors (element lengths as weights) of a transport's answers on lights it was
+/// not built from: of the later bounces `M₂ B₀`, of the indirect part `K B₀ + M₂ B₀` and of
+/// `B = B₀ + K B₀ + M₂ B₀` (the first bounce and B₀ being exact, only `M₂ B₀` errs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ErrorEstimate {
+    /// Validation lights measured.
+    pub lights: usize,
+    /// Of `M₂ B₀`: mean and largest over the lights.
+    pub later_mean: f64,
+    /// Largest.
+    pub later_max: f64,
+    /// Of the indirect part: mean.
+    pub indirect_mean: f64,
+    /// Of B: mean.
+    pub b_mean: f64,
+    /// Of B: largest.
+    pub b_max: f64,
 }

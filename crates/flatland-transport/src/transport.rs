@@ -6,9 +6,11 @@ use flatland_geom::Kernel;
 use flatland_solve::{Mesh, SparseOperator, TransferOperator};
 
 use crate::clusters::Clusters;
-use crate::estimate::{ErrorEstimate, estimate, validation_lights};
+use crate::estimate::{estimate, validation_lights};
 use crate::lowrank::{BlockTolerance, LowRank, build_blocks};
-use crate::{Columns, LaterBounces, Move, QueryBuffers, Stop, TransportError, TransportParams};
+use crate::{
+    Columns, ErrorEstimate, LaterBounces, Move, QueryBuffers, Stop, TransportError, TransportParams,
+};
 
 /// The later bounces `M₂ = K² (I − K)⁻¹` of one scene on one mesh, in a form that answers
 /// `M₂ B₀` for a light's direct light B₀ in a fraction of a millisecond.
