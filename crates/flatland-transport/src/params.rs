@@ -18,7 +18,7 @@ pub struct TransportParams {
     /// Most elements of a cluster (the sources of one block). In [1, 4096]; default 64.
     pub cluster_elements: usize,
     /// A local solve shoots light until none above this fraction of a column's largest value
-    /// is left unshot. In (0, 0.1]; default 1e-4.
+    /// is left unshot. In (0, 0.1]; default 1e-3.
     pub solve_tolerance: f64,
     /// Lights the set-up draws to estimate its own error (never a query's position).
     /// In [1, 4096]; default 32.
