@@ -158,22 +158,9 @@ impl Transport {
         )
         .map_err(fail)?;
         let transport = file.into_transport().map_err(fail)?;
-        let identity = MeshIdentity::of(mesh);
-        if transport.identity != identity {
-            return Err(TransportError::ModelMismatch {
-                model: describe(&transport.identity),
-                mesh: describe(&identity),
-            });
-        }
+        transport.check_mesh(mesh)?;
         Ok(transport)
     }
-}
-
-fn describe(identity: &MeshIdentity) -> String {
-    format!(
-        "scene {:016x} on {} elements (mesh {:016x})",
-        identity.scene, identity.elements, identity.mesh
-    )
 }
 
 impl TransportFile {
@@ -356,7 +343,9 @@ mod tests {
         built.save(&path).unwrap();
         let (_, other_scene, _) = plan(7, 2);
         let finer = Mesh::new(&kernel, mesh.len() + 1).unwrap();
+        assert!(built.check_mesh(&mesh).is_ok());
         for other in [&other_scene, &finer] {
+            assert!(built.check_mesh(other).is_err());
             let message = Transport::load(&path, other).unwrap_err().to_string();
             assert!(
                 message.contains("was built for scene") && !message.contains('\n'),

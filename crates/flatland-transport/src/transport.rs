@@ -33,6 +33,14 @@ pub(crate) struct MeshIdentity {
 }
 
 impl MeshIdentity {
+    /// In words, for an error.
+    pub fn describe(&self) -> String {
+        format!(
+            "scene {:016x} on {} elements (mesh {:016x})",
+            self.scene, self.elements, self.mesh
+        )
+    }
+
     pub fn of(mesh: &Mesh) -> MeshIdentity {
         // FNV-1a over the bits of every element's interval and reflectance.
         let mut h: u64 = 0xcbf2_9ce4_8422_2325;
@@ -177,6 +185,28 @@ impl Transport {
     #[must_use]
     pub fn params(&self) -> &TransportParams {
         &self.params
+    }
+
+    /// How many times [`Transport::build`] polls its stop while it builds the blocks (once per
+    /// cluster): a caller may count the polls as progress.
+    #[must_use]
+    pub fn set_up_steps(mesh: &Mesh, params: &TransportParams) -> usize {
+        Clusters::spatial(mesh, params.cluster_elements)
+            .members
+            .len()
+    }
+
+    /// Refuses `mesh` unless the model was built on it (its scene, its element count, its
+    /// elements), with the one-line error [`Transport::load`] gives.
+    pub fn check_mesh(&self, mesh: &Mesh) -> Result<(), TransportError> {
+        let identity = MeshIdentity::of(mesh);
+        if self.identity == identity {
+            return Ok(());
+        }
+        Err(TransportError::ModelMismatch {
+            model: self.identity.describe(),
+            mesh: identity.describe(),
+        })
     }
 
     /// Clusters and the mean rank of their blocks.
@@ -369,6 +399,16 @@ mod tests {
             Transport::build(&kernel, &mesh, &k, &TransportParams::default(), &|| true),
             Err(TransportError::Interrupted)
         ));
+        // The polls a progress bar counts.
+        let polls = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
+        let counted = std::sync::Arc::clone(&polls);
+        let counting = move || {
+            counted.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            false
+        };
+        Transport::build(&kernel, &mesh, &k, &TransportParams::default(), &counting).unwrap();
+        let steps = Transport::set_up_steps(&mesh, &TransportParams::default());
+        assert_eq!(polls.load(std::sync::atomic::Ordering::Relaxed), steps);
     }
 
     #[test]
