@@ -77,6 +77,7 @@ mod network;
 mod params;
 mod probes;
 mod query;
+mod relit;
 mod source;
 #[cfg(test)]
 mod test_support;
@@ -90,5 +91,6 @@ pub use network::{CellNetwork, NetworkParams};
 pub use params::TransportParams;
 pub use probes::{LightProbes, Placement, ProbeParams};
 pub use query::{ErrorEstimate, LaterBounces, Move, QueryBuffers};
+pub use relit::TransportRelighter;
 pub use source::lit_source;
 pub use transport::Transport;
