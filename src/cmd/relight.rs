@@ -1,8 +1,12 @@
 //! `flatland relight`: one scene lit again and again — a light at many positions (`--light`,
 //! `--path` or `--walk`), each relit by the exact re-solve ([`Relighter`]: the operator built
 //! once, per move the direct light, the first bounce from the lit columns and the later bounces
-//! warm-started), timed per move, optionally checked against a cold exact solve at each
-//! position, written as CSV or one PNG per position.
+//! warm-started) or by the learned transport of the later bounces (`--kernel transport|MODEL`:
+//! the same direct light and first bounce, the later bounces from a model built once), timed
+//! per move, optionally checked against a cold exact solve at each position, written as CSV or
+//! one PNG per position.
+
+mod transport;
 
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
@@ -13,10 +17,9 @@ use flatland_geom::{
     AtomicFile, DVec2, GeomError, Kernel, LightCheck, PointLight, in_a_room, write_atomic,
 };
 use flatland_lab::timed::walk::{
-    MoveRecord, WalkFigures, lamp_moves, relight_elements, relight_moves,
+    ExactMover, MoveRecord, Mover, WalkFigures, lamp_moves, relight_elements, relight_moves,
 };
 use flatland_lab::{interrupt, output};
-use flatland_methods::Method;
 use flatland_pictures::lit::{Panel, panel_png};
 use flatland_solve::{
     RADIOSITY_HEADER, RelightParams, Relighter, SolveError, Stop, check_elements, radiosity_rows,
@@ -48,11 +51,13 @@ pub struct Args {
     /// The walk's seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// The re-solve: exact, or transport (the learned transport of the later bounces) or a
-    /// model file of it — neither built yet.
+    /// The re-solve: exact, or transport (the learned transport of the later bounces, built
+    /// here: worth its set-up after about a thousand moves) or a model file of it saved by
+    /// --save-model (refused for another scene or mesh).
     #[arg(long, value_name = "KERNEL", default_value = "exact")]
     pub kernel: String,
-    /// Save the learned transport's model to M, to query later (not built yet).
+    /// Save the learned transport built by --kernel transport to M, to query later with
+    /// --kernel M.
     #[arg(long, value_name = "M")]
     pub save_model: Option<PathBuf>,
     /// Elements of the mesh (default: four per section of a surface edge, at least 512: what
@@ -86,13 +91,16 @@ enum Output {
 
 /// Runs `flatland relight`.
 pub fn run(args: &Args) -> Result<()> {
-    check_kernel(&args.kernel)?;
+    let choice = transport::choice(&args.kernel)?;
     if let Some(model) = &args.save_model {
-        bail!(
-            "--save-model {}: saves the learned transport's model, which is not built yet (the \
-             exact re-solve has no model to save)",
-            model.display()
-        );
+        if !matches!(choice, transport::Choice::Transport) {
+            bail!(
+                "--save-model {}: saves the learned transport this run builds; it goes with \
+                 --kernel transport",
+                model.display()
+            );
+        }
+        output::file(model, &args.scene.path().into_iter().collect::<Vec<_>>())?;
     }
     let output = output_of(args)?;
     let (scene, label) = args.scene.load()?;
@@ -107,43 +115,39 @@ pub fn run(args: &Args) -> Result<()> {
     };
     params.check().context("--tolerance")?;
     let moves = positions(args, &kernel)?;
-    let mut relighter = set_up(&kernel, elements, params)?;
+    let exact = set_up(&kernel, elements, params)?;
+    let save = args.save_model.as_deref();
+    let mut mover: Box<dyn Mover> = match &choice {
+        transport::Choice::Exact => Box::new(ExactMover::of(exact.with_params(params)?)),
+        transport::Choice::Transport => {
+            Box::new(transport::mover(&kernel, &exact, params, None, save)?)
+        }
+        transport::Choice::Model(path) => {
+            Box::new(transport::mover(&kernel, &exact, params, Some(path), None)?)
+        }
+    };
     let done = relight(
         args,
         &kernel,
         &label,
-        &mut relighter,
+        (mover.as_mut(), &exact),
         &moves,
         output.as_ref(),
     )?;
     let figures = WalkFigures::of(&done.records);
-    report(args, &label, &relighter, moves.len(), &figures);
+    report(
+        args,
+        &label,
+        (mover.as_ref(), &exact),
+        moves.len(),
+        &figures,
+    );
     if done.stopped {
         let kept = kept_note(output.as_ref(), done.records.len(), moves.len());
         interrupt::keep(kept);
         return Err(interrupt::stopped().into());
     }
     Ok(())
-}
-
-/// Refuses every `--kernel` but exact, each with why.
-fn check_kernel(text: &str) -> Result<()> {
-    let not_built = Method::Transport.not_built();
-    let model = Path::new(text).extension().is_some() || text.contains(['/', '\\']);
-    if model {
-        bail!(
-            "--kernel {text}: a model of the learned transport, but {not_built}; use --kernel exact"
-        );
-    }
-    match Method::parse(text) {
-        Ok(Method::Exact) => Ok(()),
-        Ok(Method::Transport) => bail!("--kernel transport: {not_built}; use --kernel exact"),
-        Ok(other) => bail!(
-            "--kernel {other}: relight re-solves with exact or transport (or a model file of the \
-             transport), not {other}"
-        ),
-        Err(e) => bail!("--kernel: {e}"),
-    }
 }
 
 /// The output `--out` names, checked before any work.
@@ -291,11 +295,11 @@ fn relight(
     args: &Args,
     kernel: &Kernel,
     label: &str,
-    relighter: &mut Relighter,
+    (mover, exact): (&mut dyn Mover, &Relighter),
     moves: &[Vec<PointLight>],
     output: Option<&Output>,
 ) -> Result<Done> {
-    let mesh = relighter.mesh().clone();
+    let mesh = exact.mesh().clone();
     let mut csv = match output {
         Some(Output::Csv(path)) => {
             let mut file = AtomicFile::create(path)?;
@@ -305,36 +309,37 @@ fn relight(
         _ => None,
     };
     eprintln!(
-        "relight: the operator built in {:.2} s; relighting {} positions (Ctrl-C keeps those done)",
-        relighter.setup_s(),
+        "relight: set up in {:.2} s; relighting {} positions (Ctrl-C keeps those done)",
+        mover.setup_s(),
         moves.len()
     );
     let bar = super::progress_bar(moves.len() as u64, "positions");
     let digits = moves.len().to_string().len();
     let mut top = None;
     let stop: &Stop = &interrupt::requested;
-    let (records, stopped) = relight_moves(relighter, kernel, moves, args.check, stop, |k, b| {
-        bar.set_position(k as u64 + 1);
-        if let Some(file) = csv.as_mut() {
-            radiosity_rows(file, &format!("{k},"), &mesh, b)?;
-        }
-        if let Some(Output::Pictures(dir)) = output {
-            let top =
-                *top.get_or_insert_with(|| flatland_pictures::colormap::radiosity_top(&mesh, b));
-            let panel = Panel {
-                scene: kernel.scene(),
-                caption: format!("{label}: position {k} of {}", moves.len()),
-                mesh: &mesh,
-                b,
-                lights: &moves[k],
-                top,
-            };
-            let png = panel_png(&panel)?;
-            let path = dir.join(format!("position-{k:0digits$}.png"));
-            interrupt::writing(|| write_atomic(&path, &png))?;
-        }
-        Ok(())
-    })?;
+    let (records, stopped) =
+        relight_moves(mover, exact, kernel, moves, args.check, stop, |k, b| {
+            bar.set_position(k as u64 + 1);
+            if let Some(file) = csv.as_mut() {
+                radiosity_rows(file, &format!("{k},"), &mesh, b)?;
+            }
+            if let Some(Output::Pictures(dir)) = output {
+                let top = *top
+                    .get_or_insert_with(|| flatland_pictures::colormap::radiosity_top(&mesh, b));
+                let panel = Panel {
+                    scene: kernel.scene(),
+                    caption: format!("{label}: position {k} of {}", moves.len()),
+                    mesh: &mesh,
+                    b,
+                    lights: &moves[k],
+                    top,
+                };
+                let png = panel_png(&panel)?;
+                let path = dir.join(format!("position-{k:0digits$}.png"));
+                interrupt::writing(|| write_atomic(&path, &png))?;
+            }
+            Ok(())
+        })?;
     bar.finish_and_clear();
     if let Some(file) = csv {
         interrupt::writing(|| file.commit())?;
@@ -343,11 +348,12 @@ fn relight(
 }
 
 /// The figures: one JSON object, or lines for a reader.
-fn report(args: &Args, label: &str, r: &Relighter, asked: usize, f: &WalkFigures) {
+fn report(args: &Args, label: &str, run: (&dyn Mover, &Relighter), asked: usize, f: &WalkFigures) {
+    let (mover, r) = run;
     if args.json {
         let mut json = serde_json::json!({
-            "setup_s": r.setup_s(),
-            "bytes": r.memory_bytes(),
+            "setup_s": mover.setup_s(),
+            "bytes": mover.bytes(),
             "positions": f.positions,
             "ms_per_move_median": f.ms_median,
             "ms_per_move_p95": f.ms_p95,
@@ -360,22 +366,38 @@ fn report(args: &Args, label: &str, r: &Relighter, asked: usize, f: &WalkFigures
         println!("{json}");
         return;
     }
+    let exact = mover.method() == flatland_methods::Method::Exact;
+    let method = if exact {
+        format!(
+            "the exact re-solve to a relative residual of {:e}",
+            r.params().tolerance
+        )
+    } else {
+        format!(
+            "the learned transport of the later bounces ({})",
+            mover.setting()
+        )
+    };
     println!(
-        "relight of {label}: {} elements, {} of {asked} positions, the exact re-solve to a \
-         relative residual of {:e}",
+        "relight of {label}: {} elements, {} of {asked} positions, {method}",
         r.mesh().len(),
         f.positions,
-        r.params().tolerance
     );
     println!(
-        "set-up {:.2} s, {:.1} MB (the operator by rows and by columns, {} numbers each)",
-        r.setup_s(),
-        r.memory_bytes() as f64 / 1e6,
-        r.rows().nonzeros()
+        "set-up {:.2} s, {:.1} MB (the operator by rows and by columns, {} numbers each{})",
+        mover.setup_s(),
+        mover.bytes() as f64 / 1e6,
+        r.rows().nonzeros(),
+        if exact { "" } else { ", and the transport" }
     );
+    let work = if exact {
+        format!("; products with K per move {:.1}", f.work_mean)
+    } else {
+        String::new()
+    };
     println!(
-        "ms per move: median {:.2}, p95 {:.2}; products with K per move {:.1}",
-        f.ms_median, f.ms_p95, f.work_mean
+        "ms per move: median {:.2}, p95 {:.2}{work}",
+        f.ms_median, f.ms_p95
     );
     if let (Some(mean), Some(max), Some(indirect)) =
         (f.rel_l2_b_mean, f.rel_l2_b_max, f.rel_l2_indirect_mean)
@@ -416,21 +438,15 @@ mod tests {
     }
 
     #[test]
-    fn only_the_exact_kernel_is_built_and_the_others_say_why() {
-        assert!(check_kernel("exact").is_ok());
-        let err = check_kernel("transport").unwrap_err().to_string();
-        assert!(
-            err.contains("not built yet") && err.contains("--kernel exact"),
-            "{err}"
-        );
-        let err = check_kernel("runs/t.json").unwrap_err().to_string();
-        assert!(
-            err.contains("model") && err.contains("not built yet"),
-            "{err}"
-        );
-        let err = check_kernel("hr").unwrap_err().to_string();
+    fn kernels_are_exact_transport_or_a_model_and_the_others_say_why() {
+        use transport::{Choice, choice};
+        assert!(matches!(choice("exact").unwrap(), Choice::Exact));
+        assert!(matches!(choice("transport").unwrap(), Choice::Transport));
+        let model = choice("runs/t.json").unwrap();
+        assert!(matches!(model, Choice::Model(p) if p == Path::new("runs/t.json")));
+        let err = choice("hr").err().unwrap().to_string();
         assert!(err.contains("exact or transport"), "{err}");
-        let err = check_kernel("exactly").unwrap_err().to_string();
+        let err = choice("exactly").err().unwrap().to_string();
         assert!(err.contains("`exactly` is not a method"), "{err}");
     }
 }

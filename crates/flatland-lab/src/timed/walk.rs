@@ -2,8 +2,8 @@
 //! by one lamp carried along a walk through their rooms and doors (their own lamps off, no
 //! emitting edge), every method relighting the scene at each position ([`Mover`]): the exact
 //! re-solve at several tolerances, clustered HR (its links built once, re-solved per move with
-//! the new source), the tracer given the exact re-solve's time at each move, and the slot of the
-//! learned transport. Each position is scored against a full, cold, independent exact solve
+//! the new source), the tracer given the exact re-solve's time at each move, and the learned
+//! transport of the later bounces (built on the exact re-solve's operator). Each position is scored against a full, cold, independent exact solve
 //! there ([`cold_solve`]), whose own time is the row the re-solves are measured against.
 //!
 //! The methods run in lockstep, position by position, so that one cold solve at a time is held
@@ -21,8 +21,9 @@ use flatland_solve::{
     DEFAULT_ELEMENTS, Mesh, RelightParams, Relighter, SolveError, SolveErrors, SolveParams, Stop,
     WarmStart, cold_solve,
 };
+use flatland_transport::TransportParams;
 
-pub use movers::{ClusteredMover, ExactMover, Moved, Mover, TracerMover};
+pub use movers::{ClusteredMover, ExactMover, Moved, Mover, TracerMover, TransportMover};
 
 use super::Method;
 
@@ -207,12 +208,14 @@ fn nearest_rank(sorted: &[f64], q: f64) -> f64 {
     sorted[rank.clamp(1, sorted.len()) - 1]
 }
 
-/// Relights `moves` one after another with `relighter` (of `kernel`'s scene), timing each
-/// [`Relighter::relight`] alone; with `check`, each move against a cold exact solve there
-/// ([`cold_solve`], not timed). `each(k, B)` sees every move's B (to write it, not timed).
-/// Ends early when `stop` says so, with the moves done: their records, and `true`.
+/// Relights `moves` one after another with `mover` (any method of `kernel`'s scene), timing
+/// each [`Mover::relight`] alone; with `check`, each move against a cold exact solve there
+/// ([`cold_solve`] with `exact`'s operator, not timed). `each(k, B)` sees every move's B (to
+/// write it, not timed). Ends early when `stop` says so, with the moves done: their records,
+/// and `true`.
 pub fn relight_moves(
-    relighter: &mut Relighter,
+    mover: &mut dyn Mover,
+    exact: &Relighter,
     kernel: &Kernel,
     moves: &[Vec<PointLight>],
     check: bool,
@@ -223,8 +226,14 @@ pub fn relight_moves(
     for (k, lights) in moves.iter().enumerate() {
         let errors = if check && !stop() {
             let solve = SolveParams::default();
-            let rows = relighter.rows();
-            match cold_solve(kernel, rows, relighter.mesh().len(), lights, &solve, stop) {
+            match cold_solve(
+                kernel,
+                exact.rows(),
+                exact.mesh().len(),
+                lights,
+                &solve,
+                stop,
+            ) {
                 Ok(cold) => Some(cold),
                 Err(SolveError::Interrupted) => return Ok((records, true)),
                 Err(e) => return Err(e).with_context(|| format!("the cold solve of move {k}")),
@@ -236,20 +245,29 @@ pub fn relight_moves(
             return Ok((records, true));
         }
         let started = Instant::now();
-        let relit = match relighter.relight(lights, stop) {
-            Ok(relit) => relit,
-            Err(SolveError::Interrupted) => return Ok((records, true)),
-            Err(e) => return Err(e).with_context(|| format!("move {k}")),
+        let moved = match mover.relight(lights, 0.0, stop) {
+            Ok(moved) => moved,
+            Err(e) if interrupted(&e) => return Ok((records, true)),
+            Err(e) => return Err(e.context(format!("move {k}"))),
         };
         let seconds = started.elapsed().as_secs_f64();
         records.push(MoveRecord {
             seconds,
-            work: relit.cost.products as u64,
-            errors: errors.map(|cold| cold.errors(relit.radiosity)),
+            work: moved.work,
+            errors: errors.map(|cold| cold.errors(moved.radiosity)),
         });
-        each(k, relit.radiosity)?;
+        each(k, moved.radiosity)?;
     }
     Ok((records, false))
+}
+
+/// Whether a mover's error is its stop flag's.
+fn interrupted(e: &anyhow::Error) -> bool {
+    matches!(e.downcast_ref(), Some(SolveError::Interrupted))
+        || matches!(
+            e.downcast_ref(),
+            Some(flatland_transport::TransportError::Interrupted)
+        )
 }
 
 /// One method on one scene.
@@ -369,7 +387,7 @@ fn scene_rows(
         exact.push(first.with_params(params(tolerance))?);
     }
     exact.insert(0, first);
-    let (mut others, mut rows) = baselines(plan, &cx, stop);
+    let (mut others, mut rows) = baselines(plan, &cx, &exact[0], stop);
     let records = walk_all(&moves, &mut exact, &mut others, &cx, stop, progress)?;
     let mut movers: Vec<&dyn Mover> = exact.iter().map(|m| m as &dyn Mover).collect();
     movers.extend(others.iter().map(|m| m.as_ref() as &dyn Mover));
@@ -401,6 +419,7 @@ fn scene_rows(
 fn baselines<'k>(
     plan: &WalkPlan,
     cx: &Walking<'k>,
+    exact: &ExactMover,
     stop: &Stop,
 ) -> (Vec<Box<dyn Mover + 'k>>, Vec<WalkRow>) {
     let mut movers: Vec<Box<dyn Mover + 'k>> = Vec::new();
@@ -415,7 +434,15 @@ fn baselines<'k>(
             Method::Tracer => {
                 TracerMover::new(cx.kernel, cx.mesh, 1).map(|m| Box::new(m) as Box<dyn Mover + 'k>)
             }
-            Method::Transport => Err(method.not_built().into()),
+            // On the exact movers' operator (shared, not built again), its default settings.
+            Method::Transport => exact
+                .relighter()
+                .with_params(RelightParams::default())
+                .map_err(anyhow::Error::from)
+                .and_then(|r| {
+                    TransportMover::build(cx.kernel, r, &TransportParams::default(), stop)
+                })
+                .map(|m| Box::new(m) as Box<dyn Mover + 'k>),
             _ => continue,
         };
         match built {
@@ -511,13 +538,18 @@ mod tests {
         // No edge of a lamp-lit plan emits, so clustered HR has nothing to refine towards.
         let clustered = rows.iter().find(|r| r.method == Method::Clustered).unwrap();
         assert!(clustered.note.contains("built no link"), "{clustered:?}");
+        // The learned transport: within the bounds (2 % of B, 5 % of the indirect part).
         let transport = rows.iter().find(|r| r.method == Method::Transport).unwrap();
+        assert!(transport.note.is_empty(), "{}", transport.note);
         assert!(
-            transport.note.contains("not built yet"),
-            "{}",
-            transport.note
+            transport.figures.rel_l2_b_mean.unwrap() < 0.02,
+            "{transport:?}"
         );
-        let measured = |r: &&WalkRow| !matches!(r.method, Method::Transport | Method::Clustered);
+        assert!(
+            transport.figures.rel_l2_indirect_mean.unwrap() < 0.05,
+            "{transport:?}"
+        );
+        let measured = |r: &&WalkRow| r.method != Method::Clustered;
         for row in rows.iter().filter(measured) {
             assert_eq!(row.figures.positions, 6, "{row:?}");
             assert!(row.figures.ms_p95 >= row.figures.ms_median);

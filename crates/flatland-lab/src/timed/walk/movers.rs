@@ -1,6 +1,6 @@
 //! The methods that relight a scene per move of its lights, behind one trait ([`Mover`]): the
 //! exact re-solve, clustered HR re-solved with each move's source, the tracer at a time per
-//! move. The learned transport is the next to implement it.
+//! move, and the learned transport of the later bounces.
 
 use std::time::Instant;
 
@@ -13,6 +13,8 @@ use flatland_solve::{
     DirectLight, Mesh, RelightParams, Relighter, Representation, SolveParams, Stop,
     TransferOperator, solve_linear,
 };
+
+use flatland_transport::{Transport, TransportParams, TransportRelighter};
 
 use super::Method;
 
@@ -27,7 +29,7 @@ pub struct Moved<'a> {
 
 /// A method that relights one scene and mesh per move of its point lights: built once, then
 /// [`Mover::relight`] per move. What `bench --relight` times; the learned transport is the
-/// next method to implement it.
+/// learned transport implements it too.
 pub trait Mover {
     /// The method.
     fn method(&self) -> Method;
@@ -52,6 +54,11 @@ impl ExactMover {
     pub fn new(kernel: &Kernel, mesh: &Mesh, params: RelightParams, stop: &Stop) -> Result<Self> {
         let relighter = Relighter::new(kernel, mesh, params, stop)?;
         Ok(ExactMover { relighter })
+    }
+
+    /// The exact re-solve by `relighter`.
+    pub fn of(relighter: Relighter) -> Self {
+        ExactMover { relighter }
     }
 
     /// The same method on the same operator (shared) at `params`.
@@ -234,5 +241,73 @@ impl Mover for TracerMover<'_> {
             radiosity: &self.last,
             work: traced.photons,
         })
+    }
+}
+
+/// The learned transport of the later bounces ([`TransportRelighter`]): per move the exact
+/// relighter's direct light and first bounce, the transport's `M₂ B₀`, no linear solve.
+pub struct TransportMover {
+    relit: TransportRelighter,
+}
+
+impl TransportMover {
+    /// Builds the transport of `kernel`'s scene on `relighter`'s mesh and operator with
+    /// `params` (the relighter is taken: a copy made by `Relighter::with_params` shares the
+    /// operator).
+    pub fn build(
+        kernel: &Kernel,
+        relighter: Relighter,
+        params: &TransportParams,
+        stop: &Stop,
+    ) -> Result<Self> {
+        let transport = Transport::build(kernel, relighter.mesh(), relighter.rows(), params, stop)
+            .context("building the learned transport")?;
+        TransportMover::new(kernel, relighter, transport, stop)
+    }
+
+    /// `transport` (built or loaded for `relighter`'s mesh: refused otherwise) on
+    /// `relighter`.
+    pub fn new(
+        kernel: &Kernel,
+        relighter: Relighter,
+        transport: Transport,
+        stop: &Stop,
+    ) -> Result<Self> {
+        let relit = TransportRelighter::new(kernel, relighter, transport, stop)?;
+        Ok(TransportMover { relit })
+    }
+
+    /// The transport and the relighter it reads.
+    pub fn relit(&self) -> &TransportRelighter {
+        &self.relit
+    }
+}
+
+impl Mover for TransportMover {
+    fn method(&self) -> Method {
+        Method::Transport
+    }
+
+    fn setting(&self) -> String {
+        let t = self.relit.transport();
+        let (clusters, rank, _) = t.shape();
+        format!(
+            "tolerance {}, {clusters} clusters of mean rank {rank:.1}",
+            t.params().tolerance
+        )
+    }
+
+    fn setup_s(&self) -> f64 {
+        self.relit.setup_s()
+    }
+
+    fn bytes(&self) -> usize {
+        self.relit.bytes()
+    }
+
+    fn relight(&mut self, lights: &[PointLight], _: f64, _: &Stop) -> Result<Moved<'_>> {
+        let radiosity = self.relit.relight(lights)?;
+        // No product with K: the work is the query's.
+        Ok(Moved { radiosity, work: 0 })
     }
 }
