@@ -20,7 +20,10 @@ pub struct Transport {
     pub(crate) identity: MeshIdentity,
     pub(crate) form: LowRank,
     pub(crate) estimate: ErrorEstimate,
+    /// Seconds the build took (kept in the model file).
     pub(crate) setup_s: f64,
+    /// Seconds the load took, for a model read from a file.
+    pub(crate) loaded_s: Option<f64>,
 }
 
 /// What a model belongs to: the scene (its fingerprint), the element count and a hash of the
@@ -108,6 +111,7 @@ impl Transport {
             form,
             estimate,
             setup_s: started.elapsed().as_secs_f64(),
+            loaded_s: None,
         })
     }
 
@@ -175,9 +179,15 @@ impl Transport {
         self.form.bytes()
     }
 
-    /// Seconds the set-up took.
+    /// Seconds the set-up took in this process: the build, or the load of a saved model.
     #[must_use]
     pub fn setup_s(&self) -> f64 {
+        self.loaded_s.unwrap_or(self.setup_s)
+    }
+
+    /// Seconds the build took, also for a model read from a file (which records it).
+    #[must_use]
+    pub fn build_s(&self) -> f64 {
         self.setup_s
     }
 
@@ -239,7 +249,7 @@ impl LaterBounces for Transport {
     }
 
     fn setup_s(&self) -> f64 {
-        self.setup_s
+        Transport::setup_s(self)
     }
 }
 
