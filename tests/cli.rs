@@ -359,6 +359,110 @@ fn solve_writes_the_csv_one_row_per_element_in_order_of_s() {
     }
 }
 
+/// A lamp-lit plan generated for the test (`flatland scene floorplan --lamps`).
+fn lamp_plan(dir: &Path, size: &str, seed: &str) -> PathBuf {
+    let plan = dir.join(format!("plan-{size}-{seed}.json"));
+    let out = flatland(&[
+        "scene",
+        "floorplan",
+        "--lamps",
+        "--size",
+        size,
+        "--seed",
+        seed,
+        "--out",
+        as_str(&plan),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    plan
+}
+
+#[test]
+fn solve_by_default_meets_its_tolerance_as_a_function_and_says_what_it_covers() {
+    let dir = temp_dir("solve-function");
+    let plan = lamp_plan(&dir, "200", "7");
+    let json = solve_json(&["--scene", as_str(&plan)]);
+    let estimate = json["error_estimate"].as_f64().unwrap();
+    assert!(estimate > 0.0 && estimate <= 0.01, "{json}");
+    assert_eq!(
+        json["discretization_error_estimate"],
+        json["error_estimate"]
+    );
+    let covers = json["error_estimate_covers"].as_str().unwrap();
+    assert!(covers.contains("as a function"), "{covers}");
+    assert!(json["refinement_rounds"].as_u64().unwrap() >= 1, "{json}");
+    // The table says it too.
+    let out = flatland(&["solve", "--scene", as_str(&plan)]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = stdout(&out);
+    assert!(text.contains("as a function along the surfaces"), "{text}");
+    assert!(text.contains("mesh refined"), "{text}");
+}
+
+#[test]
+fn solve_samples_write_b_as_a_function_n_rows_per_element() {
+    let dir = temp_dir("solve-samples");
+    let plan = lamp_plan(&dir, "120", "3");
+    let (means, samples) = (dir.join("means.csv"), dir.join("samples.csv"));
+    let run = |extra: &[&str]| {
+        let mut args = vec!["solve", "--scene", as_str(&plan), "--elements", "400"];
+        args.extend(extra);
+        let out = flatland(&args);
+        assert!(out.status.success(), "{}", stderr(&out));
+    };
+    run(&["--out", as_str(&means)]);
+    run(&["--samples", "5", "--out", as_str(&samples)]);
+    let read = |path: &Path| {
+        let text = std::fs::read_to_string(path).unwrap();
+        assert_eq!(text.lines().next(), Some("edge,s,x,y,b"));
+        parse_csv(&text.lines().skip(1).collect::<Vec<_>>().join("\n"))
+    };
+    let (means, samples) = (read(&means), read(&samples));
+    assert_eq!(means.len(), 400);
+    assert_eq!(samples.len(), 5 * 400);
+    let scene = Scene::load(&plan).unwrap();
+    for (i, row) in samples.iter().enumerate() {
+        let [edge, s, x, y, b] = row[..] else {
+            panic!("five columns expected: {row:?}")
+        };
+        let p = scene.point(s);
+        assert_eq!(p.edge.index() as f64, edge, "row {i}");
+        assert!(p.position.distance(flatland_geom::DVec2::new(x, y)) < 1e-9);
+        assert!(
+            b >= scene.edge(p.edge).emission && b.is_finite(),
+            "row {i}: {b}"
+        );
+    }
+    // Each element's mean is the mean of its function: five samples (the midpoint rule)
+    // agree with it closely wherever B is smooth, and on the whole to a few per cent.
+    let (mut num, mut den) = (0.0, 0.0);
+    for (mean, points) in means.iter().zip(samples.chunks(5)) {
+        let sampled = points.iter().map(|r| r[4]).sum::<f64>() / 5.0;
+        num += (sampled - mean[4]).powi(2);
+        den += mean[4].powi(2);
+    }
+    assert!((num / den).sqrt() < 0.05, "{}", (num / den).sqrt());
+}
+
+#[test]
+fn solve_refuses_samples_it_cannot_write() {
+    let fig3 = scene("fig3");
+    let csv = temp_dir("solve-samples-bad").join("b.csv");
+    let out = flatland(&[
+        "solve",
+        "--scene",
+        as_str(&fig3),
+        "--samples",
+        "0",
+        "--out",
+        as_str(&csv),
+    ]);
+    assert_one_line_error(&out, &["--samples", "at least 1"]);
+    let out = flatland(&["solve", "--scene", as_str(&fig3), "--samples", "4"]);
+    assert_one_line_error(&out, &["--samples", "--out FILE.csv"]);
+    assert!(!csv.exists());
+}
+
 #[test]
 fn solve_gives_e_over_one_minus_rho_in_a_uniformly_glowing_room() {
     let dir = temp_dir("solve-glow");

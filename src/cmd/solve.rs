@@ -12,7 +12,9 @@ use flatland_geom::{Kernel, write_atomic};
 use flatland_lab::interrupt;
 use flatland_light::LightParams;
 use flatland_methods::{Ask, KernelArg, Lit, Method, MethodError, Recipes};
-use flatland_solve::{Elements, LitParams, LitScene, ReferenceMesh, Stop, radiosity_csv};
+use flatland_solve::{
+    Elements, FinalGather, LitParams, LitScene, ReferenceMesh, Stop, radiosity_csv, samples_csv,
+};
 
 use super::SceneArgs;
 
@@ -36,23 +38,29 @@ pub struct Args {
     /// solved B − E is at most this, in (0, 1).
     #[arg(long, value_name = "X", default_value_t = LightParams::default().tolerance)]
     pub tolerance: f64,
-    /// Elements of the solve (default: the fewest, doubling from the scene's minimum and at
-    /// least 512, whose estimated discretization error of B − E is below 1 %; 512 for the
-    /// bundled scenes).
+    /// Elements of the solve, spread evenly (default: a mesh refined where the error of B as
+    /// a function is, until its estimated relative L2 error of B − E along the surfaces is
+    /// within 1 %).
     #[arg(long, value_name = "N")]
     pub elements: Option<usize>,
-    /// Elements of the exact reference solve the errors are measured against (default:
-    /// 2 × elements, the finer solve the discretization error is estimated from, so it costs
-    /// nothing more; at most 8192 on small scenes, whose exact operator is dense).
+    /// Elements of the exact reference solve the errors are measured against (default: the
+    /// finer solve the discretization error is estimated from, every element cut in three at
+    /// its Gauss points, so it costs nothing more).
     #[arg(long, value_name = "N")]
     pub reference_elements: Option<usize>,
+    /// With `--out B.csv`: B as a function, N rows per element at evenly spaced points inside
+    /// it (the final gather E + ρ(H + ∫ G V B) of the solved B at each point; H the point
+    /// lights' direct light there). Without it, one row per element, b the mean of the
+    /// function over the element (for the exact kernel; another kernel's element value).
+    #[arg(long, value_name = "N")]
+    pub samples: Option<usize>,
     /// Seed of the fit, baseline or trace built.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Write the solution: `.csv` (header `edge,s,x,y,b`, one row per element midpoint in
-    /// order of s), `.png` (the lit scene beside B(s) against the exact solution) or `.svg`
-    /// (the lit plan: each element a segment in its B colour, `data-b` its value, lights
-    /// marked, a colour bar; it opens in any browser).
+    /// order of s, or `--samples` rows), `.png` (the lit scene beside B(s) against the exact
+    /// solution) or `.svg` (the lit plan: each element a segment in its B colour, `data-b` its
+    /// value, lights marked, a colour bar; it opens in any browser).
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,
     /// Print one JSON object with the figures instead of the table.
@@ -74,6 +82,11 @@ pub fn run(args: &Args) -> Result<()> {
     }
     if args.kernel != KernelArg::Method(Method::Exact) && args.basis == Some(0) {
         bail!("--basis must be at least 1, got 0");
+    }
+    match (args.samples, format) {
+        (Some(0), _) => bail!("--samples must be at least 1 point per element, got 0"),
+        (Some(_), Some("csv")) | (None, _) => {}
+        (Some(_), _) => bail!("--samples needs --out FILE.csv (the rows it writes)"),
     }
     let (scene, label) = match &args.kernel {
         KernelArg::Model(model) => args.scene.load_for_model(model)?,
@@ -101,7 +114,7 @@ pub fn run(args: &Args) -> Result<()> {
     let kernel_label = args.kernel.label();
     match (&args.out, format) {
         (Some(path), Some("csv")) => {
-            let csv = radiosity_csv(lit.mesh(), &lighting.comparison.solution.radiosity);
+            let csv = table(args, &lit, &lighting, stop)?;
             interrupt::writing(|| write_atomic(path, csv.as_bytes()))?;
         }
         (Some(path), Some("svg")) => {
@@ -123,6 +136,28 @@ pub fn run(args: &Args) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The CSV of `--out`: `--samples` rows per element of B as a function, or one row per
+/// element (the exact kernel's the mean of its function over the element).
+fn table(args: &Args, lit: &LitScene, lighting: &Lit, stop: &Stop) -> Result<String> {
+    let b = &lighting.comparison.solution.radiosity;
+    let exact = args.kernel == KernelArg::Method(Method::Exact);
+    let gather = match lit.function() {
+        Some(function) => std::borrow::Cow::Borrowed(&function.gather),
+        None => std::borrow::Cow::Owned(FinalGather::new(lit.kernel(), lit.mesh())?),
+    };
+    Ok(match args.samples {
+        Some(n) => {
+            let samples = (gather.samples(b, n, stop))
+                .map_err(|e| super::interrupted(MethodError::from(e)))?;
+            samples_csv(&samples)
+        }
+        None => match lit.function() {
+            Some(function) if exact => radiosity_csv(lit.mesh(), &function.element_means),
+            _ => radiosity_csv(lit.mesh(), b),
+        },
+    })
 }
 
 /// Lights `lit` with `--kernel`, a bar showing a learner's cells.

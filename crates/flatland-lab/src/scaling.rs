@@ -1,11 +1,11 @@
 //! Cost against scene size: every method with its default arguments on generated floor plans
 //! and halls of growing size — time to the lit scene, the peak memory it added, rays, and the
-//! error of its solved `B − E` against the exact solve on twice the elements — and the log–log
+//! error of its solved `B − E` against the exact reference `flatland solve` uses — and the log–log
 //! slopes of time and memory against edges (`flatland bench --scaling`).
 //!
-//! Every scene is measured as `flatland solve` measures it: the exact solve whose estimated
-//! discretization error is below 1 % chooses the mesh, and its solve on twice the elements is
-//! the reference. A method whose time at the next size, extrapolated from its smaller sizes, is
+//! Every scene is measured as `flatland solve` measures it: the mesh refined until the exact
+//! B as a function is estimated within 1 %, and the finer solve of that estimate is the
+//! reference. A method whose time at the next size, extrapolated from its smaller sizes, is
 //! over the time budget is skipped there with a row that says so, rather than run for hours.
 
 mod slopes;

@@ -12,11 +12,12 @@
 //! emission included; `B − E` is the reflected part, the only part a kernel decides.
 //!
 //! **Discretisation.** A [`Mesh`] splits every surface edge into elements (never straddling
-//! two edges, default count from the scene: [`Mesh::default_elements`]); B is constant per
-//! element and the equation is collocated at element midpoints `y_i`:
-//! `B_i = E_i + Σ_j K_ij B_j`, `K_ij = ρ_i ∫_{element j} G(x, y_i) V(x, y_i) dl_x`.
-//! Midpoint collocation is second-order accurate away from corners.
-//!
+//! two edges, default count from the scene: [`Mesh::default_elements`]; nested refinements by
+//! [`Mesh::split`] and [`Mesh::cut`]); the unknown B is one value per element and the equation
+//! is collocated at element midpoints `y_i`: `B_i = E_i + Σ_j K_ij B_j`,
+//! `K_ij = ρ_i ∫_{element j} G(x, y_i) V(x, y_i) dl_x`. Midpoint collocation is second-order
+//! accurate at the midpoints away from corners; between them B is read through the equation
+//! (below).
 //! **Operators.** Each representation supplies its `K` through one trait,
 //! [`Representation`]:
 //! - the exact kernel ([`flatland_geom::Kernel`]): the closed-form point-to-segment transfer
@@ -50,14 +51,42 @@
 //! bounces by GMRES warm-started from the last move's ([`Relighter::relight`]); [`cold_solve`]
 //! is the one-off solve a move is checked against.
 //!
-//! **Errors of B.** [`ExactReference`] solves the exact kernel on a fine mesh once and gives the
-//! exact B at any mesh's collocation points (by the equation itself: `E + ρ ∫ G V B` with the
-//! fine B, the Nyström interpolation). [`solve_errors`] then measures a solution's relative L2
-//! error (element lengths as weights), of B and of the reflected part `B − E`.
-//! [`solve_against`] does both for one representation: what a view or a benchmark row needs.
-//! How good the exact solve itself is: [`Discretization::of`] compares it with a solve on twice
-//! the elements, and [`elements_for_error`] doubles the elements until that
-//! estimate is within a bound ([`DEFAULT_ERROR_BOUND`], 1 % of `B − E`).
+//! **B as a function.** A solved scene answers B at any surface point by the equation itself,
+//! the final gather `B(y) = E(y) + ρ(y) (H(y) + Σ_j B_j ∫_{element j} G V)` ([`FinalGather`],
+//! H the point lights' exact direct irradiance at y,
+//! [`ExactReference::radiosity_at`]): one view of the sweep per point, the solve's own value
+//! at each midpoint, and far closer to the exact B between them than the elements' values read
+//! as steps (0.3–0.6 % against 4–8 % on generated scenes at the same elements;
+//! docs/FUNCTION-ERROR.md). [`FunctionSolve`] solves a mesh and its Gauss refinement (each
+//! element cut in three so the new midpoints are its Gauss points) from one view per Gauss
+//! point and estimates the relative L2 error of `B − E` as a function from them
+//! ([`FunctionEstimate`], 1.3–1.5 times the error measured against solves 16 times finer);
+//! [`solve_to_tolerance`] refines the mesh where that estimate puts the error until it meets a
+//! tolerance (1 % by default, [`ToleranceParams`]), and [`SamplePoints`] measures two functions
+//! against each other.
+//!
+//! **Errors of B at the collocation points.** [`ExactReference`] solves the exact kernel on a
+//! fine mesh once and gives the exact B at any mesh's collocation points (by the equation
+//! itself: `E + ρ ∫ G V B` with the fine B, the Nyström interpolation). [`solve_errors`] then
+//! measures a solution's relative L2 error (element lengths as weights), of B and of the
+//! reflected part `B − E`. [`solve_against`] does both for one representation: what a view or
+//! a benchmark row needs. [`Discretization::of`] and [`elements_for_error`] are
+//! the older estimate, at the collocation points only ([`DEFAULT_ERROR_BOUND`], 1 % of
+//! `B − E` there), blind to B between them.
+//!
+//! ```
+//! use flatland_geom::{Kernel, bundled};
+//! use flatland_solve::{SolveParams, ToleranceParams, never, solve_to_tolerance};
+//!
+//! // The maze lit to 1 % as a function, and B at 8 evenly spaced points in every element.
+//! let kernel = Kernel::new(bundled::scene("maze")?);
+//! let params = ToleranceParams::default();
+//! let done = solve_to_tolerance(&kernel, &params, &SolveParams::default(), &never)?;
+//! assert!(done.solve.estimate.estimate <= params.tolerance);
+//! let samples = done.solve.samples(8, &never)?;
+//! assert_eq!(samples.len(), 8 * done.solve.coarse.mesh().len());
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 //!
 //! **Errors of ζ.** A [`Reference`] holds the exact ζ on a midpoint grid and at held-out random
 //! points; [`Reference::errors`] gives a representation's relative L2 and L1 on both
@@ -79,10 +108,12 @@
 
 #![deny(missing_docs)]
 
+mod adapt;
 mod bvh;
 mod discretization;
 mod error;
 mod exact;
+mod field;
 mod frame;
 mod gmres;
 mod lights;
@@ -108,16 +139,24 @@ mod independent;
 #[cfg(test)]
 mod test_support;
 
+pub use adapt::{
+    RefinementRound, ToleranceParams, ToleranceSolve, initial_elements, predicted_nonzeros,
+    refine_for, solve_to_tolerance,
+};
 pub use discretization::{
-    DEFAULT_ERROR_BOUND, Discretization, ErrorEstimate, SAFETY_FACTOR, elements_for_error,
+    DEFAULT_ERROR_BOUND, Discretization, ErrorEstimate, FUNCTION_SAFETY, FunctionEstimate,
+    FunctionSolve, SAFETY_FACTOR, elements_for_error, gauss_refinement,
 };
 pub use error::SolveError;
 pub use exact::{
     ExactMethod, SWEEP_FROM_EDGES, check_scene, exact_block_means, exact_operator, receiver, sender,
 };
+pub use field::{FieldSample, FinalGather, SamplePoints};
 pub use frame::InputFrame;
 pub use lights::{DirectLight, LightBuffers, LitSurfaces};
-pub use lit::{Elements, LitParams, LitScene, ReferenceMesh, check_elements};
+pub use lit::{
+    Elements, Estimate, LitFunction, LitParams, LitScene, ReferenceMesh, check_elements,
+};
 pub use mesh::{
     DEFAULT_ELEMENTS, Element, MAX_ELEMENTS, MAX_MESH_ELEMENTS, MIN_PER_EDGE, Mesh, MeshEdge,
 };
@@ -139,5 +178,5 @@ pub use solve::{
 };
 pub use sparse::{MAX_NONZEROS, SparseOperator};
 pub use sweep::{ProbeBuffers, SeenSpan, Sweep, sweep_operator};
-pub use table::{RADIOSITY_HEADER, radiosity_csv, radiosity_rows};
+pub use table::{RADIOSITY_HEADER, radiosity_csv, radiosity_rows, samples_csv};
 pub use transfer::{Receiver, Sender, point_to_segment, point_to_segment_visible};

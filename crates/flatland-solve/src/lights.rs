@@ -112,34 +112,43 @@ impl DirectLight {
     /// ([`LitSurfaces::irradiance_at`]): one view per light, in parallel.
     #[must_use]
     pub fn lit(&self, mesh: &Mesh, lights: &[PointLight]) -> LitSurfaces {
-        let views: Vec<Vec<LitPiece>> = lights
-            .par_iter()
-            .map_init(SweepBuffers::default, |buffers, light| {
-                let mut pieces = Vec::new();
-                self.scene
-                    .light_view(mesh, mesh.to_local(light.at), buffers, &mut pieces);
-                pieces
-            })
-            .collect();
-        let mut pieces: Vec<(u32, LitPiece)> = views
-            .into_iter()
-            .enumerate()
-            .flat_map(|(l, v)| v.into_iter().map(move |p| (l as u32, p)))
-            .collect();
-        pieces.sort_by_key(|&(l, p)| (p.edge, l));
-        let mut starts = vec![0; mesh.edges().len() + 1];
-        for &(_, p) in &pieces {
-            starts[p.edge as usize + 1] += 1;
-        }
-        for k in 0..mesh.edges().len() {
-            starts[k + 1] += starts[k];
-        }
-        LitSurfaces {
-            lights: lights.iter().map(|l| (mesh.to_local(l.at), *l)).collect(),
-            pieces,
-            starts,
-        }
+        lit_surfaces(&self.scene, mesh, lights)
     }
+}
+
+/// [`DirectLight::lit`] through a hierarchy already made for `mesh`'s scene.
+pub(crate) fn lit_surfaces(scene: &SweepScene, mesh: &Mesh, lights: &[PointLight]) -> LitSurfaces {
+    let views: Vec<Vec<LitPiece>> = lights
+        .par_iter()
+        .map_init(SweepBuffers::default, |buffers, light| {
+            let mut pieces = Vec::new();
+            scene.light_view(mesh, mesh.to_local(light.at), buffers, &mut pieces);
+            pieces
+        })
+        .collect();
+    let mut pieces: Vec<(u32, LitPiece)> = views
+        .into_iter()
+        .enumerate()
+        .flat_map(|(l, v)| v.into_iter().map(move |p| (l as u32, p)))
+        .collect();
+    pieces.sort_by_key(|&(l, p)| (p.edge, l));
+    let mut starts = vec![0; mesh.edges().len() + 1];
+    for &(_, p) in &pieces {
+        starts[p.edge as usize + 1] += 1;
+    }
+    for k in 0..mesh.edges().len() {
+        starts[k + 1] += starts[k];
+    }
+    LitSurfaces {
+        lights: lights.iter().map(|l| (mesh.to_local(l.at), *l)).collect(),
+        pieces,
+        starts,
+    }
+}
+
+/// What the scene's lights see of `mesh`'s surfaces, `None` without lights.
+pub(crate) fn lit_mesh(scene: &SweepScene, mesh: &Mesh) -> Option<LitSurfaces> {
+    (!mesh.lights().is_empty()).then(|| lit_surfaces(scene, mesh, mesh.lights()))
 }
 
 /// The stretches of surfaces that a set of lights sees, by mesh edge: the irradiance at any
@@ -199,6 +208,36 @@ impl Mesh {
     /// lit as [`Mesh::new`]'s.
     pub fn coarsest(kernel: &Kernel) -> Result<Mesh, SolveError> {
         Mesh::coarsest_unlit(kernel).lit(kernel)
+    }
+
+    /// This mesh with element `i` split into `parts[i]` equal elements (1 keeps it), lit as
+    /// [`Mesh::new`]'s (`kernel` the scene it was made for). Errors: `parts` not one count
+    /// ≥ 1 per element, or more than [`MAX_MESH_ELEMENTS`](crate::MAX_MESH_ELEMENTS) in all.
+    pub fn split(&self, kernel: &Kernel, parts: &[usize]) -> Result<Mesh, SolveError> {
+        check_scene(kernel, self)?;
+        self.split_unlit(parts)?.lit(kernel)
+    }
+
+    /// This mesh with every element cut at the fractions `cuts` of it (ascending, inside
+    /// `(0, 1)`), each new element's midpoint at `mids` (one per new element, inside it), lit
+    /// as [`Mesh::new`]'s: a nested mesh whose collocation points lie where its parent wants
+    /// them. Errors: cuts or midpoints out of order or range, or more than
+    /// [`MAX_MESH_ELEMENTS`](crate::MAX_MESH_ELEMENTS) elements.
+    pub fn cut(&self, kernel: &Kernel, cuts: &[f64], mids: &[f64]) -> Result<Mesh, SolveError> {
+        check_scene(kernel, self)?;
+        self.cut_unlit(cuts, mids)?.lit(kernel)
+    }
+
+    /// This mesh lit through a hierarchy already made for its scene.
+    pub(crate) fn lit_by(mut self, scene: &SweepScene, lights: &[PointLight]) -> Mesh {
+        if !lights.is_empty() {
+            let direct = DirectLight {
+                scene: scene.clone(),
+            }
+            .mean_irradiance(&self, lights);
+            self.set_lights(lights.to_vec(), direct);
+        }
+        self
     }
 
     /// The mesh with the direct light of the scene's lights, if it has any.

@@ -1,7 +1,10 @@
 //! The lit scene: one type that owns a scene's mesh, its exact solve, the finer solve that
 //! estimates that solve's error, and the reference every other solution is scored against —
 //! each solved once and reused. `flatland solve`, the bench, the experiments and the viewer
-//! all light a scene through it.
+//! all light a scene through it. By default the mesh is chosen for a tolerance on B as a
+//! function ([`solve_to_tolerance`]): the exact solve answers B at any surface point by its
+//! final gather, its estimate covers B between the collocation points, and the reference is
+//! the finer solve of that estimate (or, for the bench, one four times finer still).
 
 use std::sync::Arc;
 
@@ -9,18 +12,78 @@ use flatland_geom::Kernel;
 
 use crate::{
     Comparison, DEFAULT_ERROR_BOUND, Discretization, ErrorEstimate, ExactMethod, ExactReference,
-    Mesh, Representation, Solution, SolveError, SolveErrors, SolveParams, Stop, elements_for_error,
-    solve_against, solve_errors,
+    FinalGather, FunctionEstimate, FunctionSolve, Mesh, RefinementRound, Representation, Solution,
+    SolveError, SolveErrors, SolveParams, Stop, ToleranceParams, ToleranceSolve,
+    elements_for_error, solve_against, solve_errors, solve_to_tolerance,
 };
 
 /// How many elements the lit scene's mesh has.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Elements {
-    /// The fewest of the doubling from the scene's minimum whose estimated error of `B − E` is
-    /// at most this ([`elements_for_error`]).
+    /// A mesh refined where the error of B as a function is until its estimate is at most
+    /// this ([`solve_to_tolerance`]; the default, at 1 %).
+    ToTolerance(f64),
+    /// The fewest of the doubling from the scene's minimum whose estimated error of `B − E`
+    /// at the collocation points is at most this ([`elements_for_error`]).
     ForError(f64),
-    /// Exactly this many.
+    /// Exactly this many, spread evenly, with the estimate of B as a function.
     Exactly(usize),
+}
+
+/// A lit scene's estimated discretization error, and what it covers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Estimate {
+    /// Of B as a function along the surfaces (the final gather at any point), from the solve
+    /// on the Gauss refinement ([`FunctionSolve`]).
+    Function(FunctionEstimate),
+    /// Of B at the collocation points only, from a solve on twice the elements
+    /// ([`elements_for_error`]).
+    Collocation(ErrorEstimate),
+}
+
+impl Estimate {
+    /// The estimated relative L2 error of `B − E`.
+    #[must_use]
+    pub fn estimate(&self) -> f64 {
+        match self {
+            Estimate::Function(e) => e.estimate,
+            Estimate::Collocation(e) => e.estimate,
+        }
+    }
+
+    /// Elements of the finer solve it was made from.
+    #[must_use]
+    pub fn finer_elements(&self) -> usize {
+        match self {
+            Estimate::Function(e) => e.finer_elements,
+            Estimate::Collocation(e) => e.finer_elements,
+        }
+    }
+
+    /// What it covers, in words.
+    #[must_use]
+    pub fn covers(&self) -> String {
+        match self {
+            Estimate::Function(e) => e.covers(),
+            Estimate::Collocation(e) => format!(
+                "the relative L2 error of B − E at the {} collocation points only (element \
+                 midpoints), estimated from a solve on {} elements; blind to B between them",
+                e.elements, e.finer_elements
+            ),
+        }
+    }
+}
+
+/// B as a function on the lit scene's mesh: the final gather of its exact solve, and the
+/// rounds that chose the mesh.
+#[derive(Clone, Debug)]
+pub struct LitFunction {
+    /// The final gather of solutions on the mesh.
+    pub gather: FinalGather,
+    /// The exact solve's mean of B over each element (its function integrated).
+    pub element_means: Vec<f64>,
+    /// The rounds of refinement (one for a mesh of a given count).
+    pub rounds: Vec<RefinementRound>,
 }
 
 /// What solutions are scored against.
@@ -47,11 +110,11 @@ pub struct LitParams {
 }
 
 impl Default for LitParams {
-    /// What `flatland solve` does by default: the elements for a 1 % error of `B − E`, scored
-    /// against the finer solve.
+    /// What `flatland solve` does by default: a mesh for a 1 % error of `B − E` as a
+    /// function, scored against the finer solve of its estimate.
     fn default() -> Self {
         LitParams {
-            elements: Elements::ForError(DEFAULT_ERROR_BOUND),
+            elements: Elements::ToTolerance(DEFAULT_ERROR_BOUND),
             reference: ReferenceMesh::Finer,
             solve: SolveParams::default(),
         }
@@ -64,14 +127,16 @@ impl LitParams {
     pub fn check(&self, kernel: &Kernel) -> Result<(), SolveError> {
         self.solve.validate()?;
         match self.elements {
-            Elements::ForError(bound) if !(bound > 0.0 && bound < 1.0) => {
+            Elements::ForError(bound) | Elements::ToTolerance(bound)
+                if !(bound > 0.0 && bound < 1.0) =>
+            {
                 return Err(SolveError::InvalidParameter {
                     name: "error bound",
                     value: bound.to_string(),
                     valid: "in (0, 1)",
                 });
             }
-            Elements::ForError(_) => {}
+            Elements::ForError(_) | Elements::ToTolerance(_) => {}
             Elements::Exactly(n) => check_elements(kernel, n)?,
         }
         if let ReferenceMesh::Elements(n) = self.reference {
@@ -94,32 +159,113 @@ pub struct LitScene {
     mesh: Mesh,
     /// The exact solve on `mesh` and its estimated error, when they were made
     /// ([`LitScene::new`]; [`LitScene::scoring`] makes neither).
-    exact: Option<(ExactReference, ErrorEstimate)>,
+    exact: Option<(ExactReference, Estimate)>,
+    /// B as a function, when the estimate was of it.
+    function: Option<LitFunction>,
     reference: ExactReference,
-    /// The reference's B at `mesh`'s collocation points.
+    /// The reference's B at `mesh`'s collocation points, the lights' direct light as each
+    /// element's mean ([`ExactReference::collocated_on`]).
     reference_on_mesh: Vec<f64>,
     solved: Vec<usize>,
 }
 
 impl LitScene {
-    /// Lights `kernel`'s scene exactly as `params` say: the mesh, its exact solve, the solve
-    /// on twice the elements that estimates its error, and the reference (that finer solve,
-    /// or one more solve when another count is asked). Each mesh is solved once.
+    /// Lights `kernel`'s scene exactly as `params` say: the mesh, its exact solve, the finer
+    /// solve that estimates its error, and the reference (that finer solve, or one more solve
+    /// when another count is asked). Each mesh is solved once.
     pub fn new(
         kernel: Arc<Kernel>,
         params: &LitParams,
         stop: &Stop,
     ) -> Result<LitScene, SolveError> {
         params.check(&kernel)?;
-        let found = match params.elements {
-            Elements::ForError(bound) => elements_for_error(&kernel, bound, &params.solve, stop)?,
+        match params.elements {
+            Elements::ForError(bound) => {
+                let found = elements_for_error(&kernel, bound, &params.solve, stop)?;
+                LitScene::of_doubling(kernel, params, found, stop)
+            }
+            Elements::ToTolerance(tolerance) => {
+                let asked = ToleranceParams {
+                    tolerance,
+                    ..ToleranceParams::default()
+                };
+                let done = solve_to_tolerance(&kernel, &asked, &params.solve, stop)?;
+                LitScene::of_function(kernel, params, done, stop)
+            }
             Elements::Exactly(n) => {
-                let coarse = ExactReference::new(&kernel, n, &params.solve, stop)?;
-                let mut found = Discretization::of(coarse, &kernel, &params.solve, stop)?;
-                found.solved.insert(0, n);
-                found
+                let started = std::time::Instant::now();
+                let mesh = Mesh::new(&kernel, n)?;
+                let solve = FunctionSolve::new(&kernel, mesh, &params.solve, stop)?;
+                let rounds = vec![RefinementRound {
+                    elements: n,
+                    estimate: solve.estimate.estimate,
+                    seconds: started.elapsed().as_secs_f64(),
+                }];
+                LitScene::of_function(kernel, params, ToleranceSolve { solve, rounds }, stop)
+            }
+        }
+    }
+
+    /// The lit scene of a function solve: its mesh, solve, estimate and gather; the reference
+    /// its finer solve, or the one `params` ask for.
+    fn of_function(
+        kernel: Arc<Kernel>,
+        params: &LitParams,
+        done: ToleranceSolve,
+        stop: &Stop,
+    ) -> Result<LitScene, SolveError> {
+        let ToleranceSolve { solve, rounds } = done;
+        let element_means = solve.element_means();
+        let FunctionSolve {
+            coarse,
+            finer,
+            gather,
+            estimate,
+            ..
+        } = solve;
+        let mesh = coarse.mesh().clone();
+        let mut solved: Vec<usize> = rounds
+            .iter()
+            .flat_map(|r| [r.elements, 3 * r.elements])
+            .collect();
+        let reference = match params.reference {
+            ReferenceMesh::Finer => finer,
+            ReferenceMesh::Elements(n) if n == mesh.len() => coarse.clone(),
+            ReferenceMesh::Elements(n) if n == finer.mesh().len() => finer,
+            ReferenceMesh::Elements(n) => {
+                solved.push(n);
+                ExactReference::new(&kernel, n, &params.solve, stop)?
+            }
+            ReferenceMesh::FourTimes => {
+                // The function solve's own mesh, every element cut in four.
+                let fine = mesh.split(&kernel, &vec![4; mesh.len()])?;
+                solved.push(fine.len());
+                ExactReference::on_mesh(&kernel, fine, &params.solve, stop)?
             }
         };
+        let reference_on_mesh = reference.collocated_on(&mesh, stop)?;
+        Ok(LitScene {
+            kernel,
+            mesh,
+            exact: Some((coarse, Estimate::Function(estimate))),
+            function: Some(LitFunction {
+                gather,
+                element_means,
+                rounds,
+            }),
+            reference,
+            reference_on_mesh,
+            solved,
+        })
+    }
+
+    /// The lit scene of the doubling to a bound at the collocation points.
+    fn of_doubling(
+        kernel: Arc<Kernel>,
+        params: &LitParams,
+        found: Discretization,
+        stop: &Stop,
+    ) -> Result<LitScene, SolveError> {
         let Discretization {
             coarse,
             finer,
@@ -142,7 +288,7 @@ impl LitScene {
                     solved.push(n);
                     ExactReference::new(&kernel, n, &params.solve, stop)?
                 };
-                let on_mesh = reference.radiosity_on(&mesh, stop)?;
+                let on_mesh = reference.collocated_on(&mesh, stop)?;
                 (reference, on_mesh)
             }
             _ => (finer, finer_on_coarse),
@@ -150,7 +296,8 @@ impl LitScene {
         Ok(LitScene {
             kernel,
             mesh,
-            exact: Some((coarse, estimate)),
+            exact: Some((coarse, Estimate::Collocation(estimate))),
+            function: None,
             reference,
             reference_on_mesh,
             solved,
@@ -170,11 +317,12 @@ impl LitScene {
         check_elements(&kernel, reference_elements)?;
         let mesh = Mesh::new(&kernel, elements)?;
         let reference = ExactReference::new(&kernel, reference_elements, params, stop)?;
-        let reference_on_mesh = reference.radiosity_on(&mesh, stop)?;
+        let reference_on_mesh = reference.collocated_on(&mesh, stop)?;
         Ok(LitScene {
             kernel,
             mesh,
             exact: None,
+            function: None,
             reference,
             reference_on_mesh,
             solved: vec![reference_elements],
@@ -201,8 +349,15 @@ impl LitScene {
 
     /// The exact solve's estimated discretization error, when it was made.
     #[must_use]
-    pub fn estimate(&self) -> Option<&ErrorEstimate> {
+    pub fn estimate(&self) -> Option<&Estimate> {
         self.exact.as_ref().map(|(_, e)| e)
+    }
+
+    /// B as a function on the mesh (the exact solve's final gather), when the estimate was
+    /// of it.
+    #[must_use]
+    pub fn function(&self) -> Option<&LitFunction> {
+        self.function.as_ref()
     }
 
     /// The exact solve scores are measured against.
@@ -258,7 +413,7 @@ impl LitScene {
         if mesh.len() == self.mesh.len() {
             return Ok(solve_errors(mesh, b, &self.reference_on_mesh));
         }
-        let exact = self.reference.radiosity_on(mesh, stop)?;
+        let exact = self.reference.collocated_on(mesh, stop)?;
         Ok(solve_errors(mesh, b, &exact))
     }
 }
@@ -296,13 +451,33 @@ mod tests {
             counts.dedup();
             assert_eq!(counts.len(), lit.solved().len(), "{:?}", lit.solved());
             let n = lit.mesh().len();
-            assert!(lit.solved().contains(&n) && lit.solved().contains(&(2 * n)));
-            assert_eq!(lit.estimate().unwrap().elements, n);
+            assert!(lit.solved().contains(&n) && lit.solved().contains(&(3 * n)));
+            assert!(
+                matches!(lit.estimate(), Some(Estimate::Function(e)) if e.elements == n),
+                "{:?}",
+                lit.estimate()
+            );
+            let function = lit.function().unwrap();
+            assert_eq!(function.element_means.len(), n);
+            assert_eq!(function.rounds.last().unwrap().elements, n);
             // The exact lighting is the solve already made, scored as a re-solve would be.
             let reused = lit.exact_scored().unwrap();
             let again = lit.score(lit.kernel().as_ref(), &never).unwrap();
-            assert_eq!(reused.solution.radiosity, again.solution.radiosity);
-            assert_eq!(reused.errors, again.errors);
+            // (one operator from the Gauss pass of the sweep, the other assembled alone: the
+            // same entries up to rounding, as the sweep's tests show)
+            for (a, b) in reused
+                .solution
+                .radiosity
+                .iter()
+                .zip(&again.solution.radiosity)
+            {
+                assert!((a - b).abs() <= 1e-9 * b.abs().max(1e-12), "{a} vs {b}");
+            }
+            let (a, b) = (
+                reused.errors.rel_l2_reflected,
+                again.errors.rel_l2_reflected,
+            );
+            assert!((a - b).abs() <= 1e-6 * b.max(1e-12), "{a} vs {b}");
         }
     }
 
@@ -315,15 +490,36 @@ mod tests {
             ..LitParams::default()
         };
         let lit = LitScene::new(kernel, &params, &never).unwrap();
-        assert_eq!(lit.solved(), [256, 512, 1024]);
+        assert_eq!(lit.solved(), [256, 768, 1024]);
         assert_eq!(lit.reference().mesh().len(), 1024);
         let finer = LitParams {
             reference: ReferenceMesh::Finer,
             ..params
         };
         let lit = LitScene::new(Arc::clone(lit.kernel()), &finer, &never).unwrap();
-        assert_eq!(lit.solved(), [256, 512]);
-        assert_eq!(lit.reference().mesh().len(), 512);
+        assert_eq!(lit.solved(), [256, 768]);
+        assert_eq!(lit.reference().mesh().len(), 768);
+        // The bench's reference: the function solve's own mesh cut in four.
+        let four = LitParams {
+            reference: ReferenceMesh::FourTimes,
+            ..params
+        };
+        let lit = LitScene::new(Arc::clone(lit.kernel()), &four, &never).unwrap();
+        assert_eq!(lit.solved(), [256, 768, 1024]);
+        let fine = lit.reference().mesh();
+        assert_eq!(fine.elements()[4 * 7].s[0], lit.mesh().elements()[7].s[0]);
+        // The doubling at the collocation points is still there, its estimate saying so.
+        let doubling = LitParams {
+            elements: Elements::ForError(DEFAULT_ERROR_BOUND),
+            reference: ReferenceMesh::Finer,
+            ..LitParams::default()
+        };
+        let lit = LitScene::new(Arc::clone(lit.kernel()), &doubling, &never).unwrap();
+        assert_eq!(lit.solved(), [512, 1024]);
+        let estimate = lit.estimate().unwrap();
+        assert!(matches!(estimate, Estimate::Collocation(_)));
+        assert!(estimate.covers().contains("collocation points only"));
+        assert!(lit.function().is_none());
     }
 
     #[test]

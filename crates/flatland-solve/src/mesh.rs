@@ -69,6 +69,8 @@ pub struct Mesh {
     elements: Vec<Element>,
     /// Frame coordinates of each element's end points and midpoint.
     local: Vec<[DVec2; 3]>,
+    /// Each element's `[u0, u1, u_mid]` along its mesh edge.
+    fractions: Vec<[f64; 3]>,
     frame: InputFrame,
     total_length: f64,
     fingerprint: u64,
@@ -133,14 +135,7 @@ impl Mesh {
 
     fn build(kernel: &Kernel, runs: Vec<Range<usize>>, cuts: &[Vec<f64>], elements: usize) -> Mesh {
         let scene = kernel.scene();
-        let total_length = scene.total_length();
-        let lengths: Vec<f64> = runs
-            .iter()
-            .map(|r| {
-                let e = scene.edges();
-                (e[r.end - 1].b - e[r.start].a).length()
-            })
-            .collect();
+        let lengths = run_lengths(scene, &runs);
         // Sections: the parts of each edge between its ends and junctions, in order.
         let sections: Vec<(usize, f64, f64)> = cuts
             .iter()
@@ -152,62 +147,222 @@ impl Mesh {
             .map(|&(k, u0, u1)| (u1 - u0) * lengths[k])
             .collect();
         let counts = apportion(&section_lengths, elements);
-        let frame = InputFrame::of(scene);
-        let local_point = |p: DVec2| DVec2::from(frame.map(p));
-        let mut edges: Vec<MeshEdge> = Vec::with_capacity(runs.len());
-        let mut out = Vec::with_capacity(elements);
-        let mut local = Vec::with_capacity(elements);
+        let mut fractions: Vec<Vec<[f64; 3]>> = vec![Vec::new(); runs.len()];
         for (&(k, u_start, u_end), &count) in sections.iter().zip(&counts) {
-            let run = &runs[k];
-            if edges.len() == k {
-                edges.push(MeshEdge::of_run(kernel, run, &cuts[k], out.len()));
-            }
-            let MeshEdge {
-                a, b, s: [s0, s1], ..
-            } = edges[k];
+            fractions[k].extend((0..count).map(|e| {
+                let along = |e: f64| {
+                    if e >= count as f64 {
+                        u_end
+                    } else {
+                        u_start + (u_end - u_start) * e / count as f64
+                    }
+                };
+                [
+                    along(e as f64),
+                    along(e as f64 + 1.0),
+                    along(e as f64 + 0.5),
+                ]
+            }));
+        }
+        let junctions = cuts.iter().map(|c| c[1..c.len() - 1].to_vec()).collect();
+        Mesh::from_fractions(kernel, runs, junctions, fractions)
+    }
+
+    /// The mesh whose elements on run `k` span the fractions `fractions[k]` of it (`[u0, u1,
+    /// u_mid]` from its start to its end, in order, tiling `[0, 1]`).
+    fn from_fractions(
+        kernel: &Kernel,
+        runs: Vec<Range<usize>>,
+        junctions: Vec<Vec<f64>>,
+        fractions: Vec<Vec<[f64; 3]>>,
+    ) -> Mesh {
+        let scene = kernel.scene();
+        let frame = InputFrame::of(scene);
+        let edges: Vec<MeshEdge> = runs
+            .into_iter()
+            .zip(junctions)
+            .map(|(run, junctions)| {
+                let first = scene.edges()[run.start];
+                let param = |e: usize| {
+                    scene
+                        .edge_param_range(EdgeId::new(e))
+                        .expect("a surface edge has a parameter range")
+                };
+                MeshEdge {
+                    s: [param(run.start).0, param(run.end - 1).1],
+                    a: first.a,
+                    b: scene.edges()[run.end - 1].b,
+                    normal: first.normal(),
+                    reflectance: first.reflectance,
+                    emission: first.emission,
+                    source_weight: kernel.source_weight(EdgeId::new(run.start)),
+                    elements: 0..0,
+                    junctions,
+                    pieces: run,
+                }
+            })
+            .collect();
+        Mesh::assemble(
+            edges,
+            &fractions,
+            frame,
+            scene.total_length(),
+            scene.fingerprint(),
+        )
+    }
+
+    /// The elements of `edges` spanning `fractions` (per edge, as in
+    /// [`Mesh::from_fractions`]).
+    fn assemble(
+        mut edges: Vec<MeshEdge>,
+        fractions: &[Vec<[f64; 3]>],
+        frame: InputFrame,
+        total_length: f64,
+        fingerprint: u64,
+    ) -> Mesh {
+        let count: usize = fractions.iter().map(Vec::len).sum();
+        let local_point = |p: DVec2| DVec2::from(frame.map(p));
+        let mut out = Vec::with_capacity(count);
+        let mut local = Vec::with_capacity(count);
+        let mut kept = Vec::with_capacity(count);
+        for (k, (edge, parts)) in edges.iter_mut().zip(fractions).enumerate() {
+            let (a, b, [s0, s1]) = (edge.a, edge.b, edge.s);
+            let length = (b - a).length();
             // Positions as Scene::point computes them (a + (b − a) u), so a midpoint's `s`
             // names that very point.
             let at = |u: f64| if u >= 1.0 { b } else { a + (b - a) * u };
             let param = |u: f64| if u >= 1.0 { s1 } else { s0 + (s1 - s0) * u };
-            let along = |e: f64| {
-                if e >= count as f64 {
-                    u_end
-                } else {
-                    u_start + (u_end - u_start) * e / count as f64
-                }
-            };
-            let pieces = run.len();
-            for e in 0..count {
-                let (u0, u1, um) = (
-                    along(e as f64),
-                    along(e as f64 + 1.0),
-                    along(e as f64 + 0.5),
-                );
+            let pieces = edge.pieces.len();
+            let first = out.len();
+            for &[u0, u1, um] in parts {
                 let (pa, pb, pm) = (at(u0), at(u1), at(um));
                 out.push(Element {
                     mesh_edge: k,
-                    edge: EdgeId::new(run.start + ((um * pieces as f64) as usize).min(pieces - 1)),
+                    edge: EdgeId::new(
+                        edge.pieces.start + ((um * pieces as f64) as usize).min(pieces - 1),
+                    ),
                     s: [param(u0), param(u1)],
                     s_mid: param(um),
                     a: pa,
                     b: pb,
                     midpoint: pm,
-                    length: (u1 - u0) * lengths[k],
+                    length: (u1 - u0) * length,
                 });
                 local.push([local_point(pa), local_point(pb), local_point(pm)]);
+                kept.push([u0, u1, um]);
             }
-            edges[k].elements.end = out.len();
+            edge.elements = first..out.len();
         }
         Mesh {
             edges,
             elements: out,
             local,
+            fractions: kept,
             frame,
             total_length,
-            fingerprint: scene.fingerprint(),
+            fingerprint,
             lights: Vec::new(),
             direct: Vec::new(),
         }
+    }
+
+    /// This mesh with element `i` split into `parts[i]` equal elements (1 keeps it).
+    /// Errors: `parts` not one count ≥ 1 per element, or more than [`MAX_MESH_ELEMENTS`] in all.
+    pub(crate) fn split_unlit(&self, parts: &[usize]) -> Result<Mesh, SolveError> {
+        let total: usize = parts.iter().sum();
+        if parts.len() != self.len() || parts.contains(&0) || total > MAX_MESH_ELEMENTS {
+            return Err(SolveError::InvalidParameter {
+                name: "parts",
+                value: format!("{} counts, {total} elements in all", parts.len()),
+                valid: "one count ≥ 1 per element, at most 16777216 elements in all",
+            });
+        }
+        Ok(self.refine(|i, [u0, u1, um], out| {
+            let n = parts[i];
+            if n == 1 {
+                out.push([u0, u1, um]);
+                return;
+            }
+            let along = |p: f64| {
+                if p >= n as f64 {
+                    u1
+                } else {
+                    u0 + (u1 - u0) * p / n as f64
+                }
+            };
+            out.extend((0..n).map(|p| {
+                let p = p as f64;
+                [along(p), along(p + 1.0), along(p + 0.5)]
+            }));
+        }))
+    }
+
+    /// This mesh with every element cut at the fractions `cuts` of it (ascending, inside
+    /// `(0, 1)`), each new element's midpoint at `mids` (one per new element, inside it): a
+    /// nested mesh whose collocation points lie where its parent wants them. Errors: cuts or
+    /// midpoints out of order or range, or more than [`MAX_MESH_ELEMENTS`] elements.
+    pub(crate) fn cut_unlit(&self, cuts: &[f64], mids: &[f64]) -> Result<Mesh, SolveError> {
+        let bounds: Vec<f64> = std::iter::once(0.0)
+            .chain(cuts.iter().copied())
+            .chain(std::iter::once(1.0))
+            .collect();
+        let ordered = bounds.windows(2).all(|w| w[0] < w[1]);
+        let inside = mids.len() + 1 == bounds.len()
+            && mids
+                .iter()
+                .zip(bounds.windows(2))
+                .all(|(m, w)| w[0] < *m && m < &w[1]);
+        if !ordered || !inside || mids.len() * self.len() > MAX_MESH_ELEMENTS {
+            return Err(SolveError::InvalidParameter {
+                name: "cuts",
+                value: format!("{cuts:?} with midpoints {mids:?}"),
+                valid: "ascending fractions in (0, 1), one midpoint inside each piece, at most \
+                        16777216 elements in all",
+            });
+        }
+        Ok(self.refine(|_, [u0, u1, _], out| {
+            let at = |x: f64| if x >= 1.0 { u1 } else { u0 + (u1 - u0) * x };
+            out.extend(
+                bounds
+                    .windows(2)
+                    .zip(mids)
+                    .map(|(w, &m)| [at(w[0]), at(w[1]), at(m)]),
+            );
+        }))
+    }
+
+    /// This mesh with element `i` (`[u0, u1, u_mid]`) replaced by what `pieces(i, span, out)`
+    /// appends to `out`: spans tiling it, in order.
+    fn refine(&self, pieces: impl Fn(usize, [f64; 3], &mut Vec<[f64; 3]>)) -> Mesh {
+        let fractions: Vec<Vec<[f64; 3]>> = self
+            .edges
+            .iter()
+            .map(|edge| {
+                let mut out = Vec::with_capacity(edge.elements.len());
+                for i in edge.elements.clone() {
+                    pieces(i, self.fractions[i], &mut out);
+                }
+                out
+            })
+            .collect();
+        let mut edges = self.edges.clone();
+        for edge in &mut edges {
+            edge.elements = 0..0;
+        }
+        Mesh::assemble(
+            edges,
+            &fractions,
+            self.frame,
+            self.total_length,
+            self.fingerprint,
+        )
+    }
+
+    /// Element `i`'s span along its mesh edge: `[u0, u1, u_mid]`, fractions from the edge's
+    /// start `a` to its end `b`.
+    #[must_use]
+    pub fn fractions(&self, i: usize) -> [f64; 3] {
+        self.fractions[i]
     }
 
     /// [`Mesh::coarsest`] without the lights' direct light.
@@ -330,6 +485,16 @@ impl Mesh {
         let k = self.elements.partition_point(|e| e.s[0] <= s);
         k.saturating_sub(1)
     }
+}
+
+/// The length of each run, end to end.
+fn run_lengths(scene: &Scene, runs: &[Range<usize>]) -> Vec<f64> {
+    runs.iter()
+        .map(|r| {
+            let e = scene.edges();
+            (e[r.end - 1].b - e[r.start].a).length()
+        })
+        .collect()
 }
 
 /// The surface edges of `scene` as runs of pieces (indices into [`Scene::edges`]), in
@@ -475,32 +640,6 @@ fn apportion(lengths: &[f64], total: usize) -> Vec<usize> {
         }
     }
     counts
-}
-
-impl MeshEdge {
-    /// The mesh edge of the scene edges `run` (the pieces of one edge) cut at `cuts` (its ends
-    /// and junctions), its elements to start at `first_element`.
-    fn of_run(kernel: &Kernel, run: &Range<usize>, cuts: &[f64], first_element: usize) -> Self {
-        let scene = kernel.scene();
-        let first = scene.edges()[run.start];
-        let param_range = |i: usize| {
-            scene
-                .edge_param_range(EdgeId::new(i))
-                .expect("a surface edge has a parameter range")
-        };
-        MeshEdge {
-            pieces: run.clone(),
-            s: [param_range(run.start).0, param_range(run.end - 1).1],
-            a: first.a,
-            b: scene.edges()[run.end - 1].b,
-            normal: first.normal(),
-            reflectance: first.reflectance,
-            emission: first.emission,
-            source_weight: kernel.source_weight(EdgeId::new(run.start)),
-            elements: first_element..first_element,
-            junctions: cuts[1..cuts.len() - 1].to_vec(),
-        }
-    }
 }
 
 #[cfg(test)]
@@ -716,6 +855,85 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(err.contains("at most 16777216"), "{err}");
+    }
+
+    /// Every element of `coarse` is tiled, in order, by `pieces[i]` consecutive elements of
+    /// `fine`, each where the scene's parameterization puts it and on the piece it names.
+    fn assert_nested(kernel: &Kernel, coarse: &Mesh, fine: &Mesh, pieces: &[usize]) {
+        let mut j = 0;
+        for (i, e) in coarse.elements().iter().enumerate() {
+            let parts = &fine.elements()[j..j + pieces[i]];
+            assert_eq!(parts[0].s[0], e.s[0], "element {i}");
+            assert_eq!(parts[parts.len() - 1].s[1], e.s[1], "element {i}");
+            for w in parts.windows(2) {
+                assert_eq!(w[0].s[1], w[1].s[0], "element {i}");
+                assert!(w[0].b.distance(w[1].a) < 1e-15, "element {i}");
+            }
+            let length: f64 = parts.iter().map(|p| p.length).sum();
+            assert_close!(length, e.length, 1e-12 * e.length);
+            for p in parts {
+                assert_eq!(p.mesh_edge, e.mesh_edge);
+                let at = kernel.scene().point(p.s_mid);
+                assert_eq!(at.edge, p.edge, "element {i}");
+                assert!(at.position.distance(p.midpoint) < 1e-12, "element {i}");
+                assert!(p.s[0] < p.s_mid && p.s_mid < p.s[1]);
+            }
+            j += pieces[i];
+        }
+        assert_eq!(j, fine.len());
+        assert_eq!(fine.edges().len(), coarse.edges().len());
+        assert_close!(fine.total_length(), coarse.total_length(), 0.0);
+    }
+
+    #[test]
+    fn split_meshes_nest_in_their_parent() {
+        let scenes = [
+            bundled("maze"),
+            bundled("corners"),
+            bundled("fig3").subdivide(3).unwrap(),
+        ];
+        for scene in scenes {
+            let kernel = Kernel::new(scene);
+            let mesh = Mesh::new(&kernel, 120).unwrap();
+            let same = mesh.split_unlit(&[1; 120]).unwrap();
+            assert_eq!(same.elements(), mesh.elements());
+            let parts: Vec<usize> = (0..120).map(|i| 1 + i % 4).collect();
+            let split = mesh.split_unlit(&parts).unwrap();
+            assert_nested(&kernel, &mesh, &split, &parts);
+            // Junctions stay element boundaries, and splitting again nests too.
+            let again = split.split_unlit(&vec![2; split.len()]).unwrap();
+            assert_nested(&kernel, &split, &again, &vec![2; split.len()]);
+        }
+        let kernel = Kernel::new(bundled("maze"));
+        let mesh = Mesh::new(&kernel, 50).unwrap();
+        for bad in [vec![1; 49], vec![0; 50]] {
+            let err = mesh.split_unlit(&bad).unwrap_err().to_string();
+            assert!(err.contains("one count ≥ 1 per element"), "{err}");
+        }
+    }
+
+    #[test]
+    fn cut_meshes_put_their_midpoints_where_asked() {
+        let kernel = Kernel::new(bundled("corners"));
+        let mesh = Mesh::new(&kernel, 80).unwrap();
+        let (cuts, mids) = ([0.2, 0.7], [0.1, 0.45, 0.85]);
+        let cut = mesh.cut_unlit(&cuts, &mids).unwrap();
+        assert_nested(&kernel, &mesh, &cut, &[3; 80]);
+        for (i, e) in mesh.elements().iter().enumerate() {
+            for (k, m) in mids.iter().enumerate() {
+                let at = e.s[0] + (e.s[1] - e.s[0]) * m;
+                assert_close!(cut.elements()[3 * i + k].s_mid, at, 1e-15);
+            }
+        }
+        for (cuts, mids) in [
+            (vec![0.7, 0.2], vec![0.1, 0.45, 0.85]),
+            (vec![0.2, 0.7], vec![0.3, 0.45, 0.85]),
+            (vec![0.2, 0.7], vec![0.1, 0.45]),
+            (vec![0.0, 0.7], vec![0.0, 0.45, 0.85]),
+        ] {
+            let err = mesh.cut_unlit(&cuts, &mids).unwrap_err().to_string();
+            assert!(err.contains("ascending fractions in (0, 1)"), "{err}");
+        }
     }
 
     #[test]

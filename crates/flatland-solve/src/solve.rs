@@ -9,6 +9,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::exact::{self, PairTable};
+use crate::field::Receiver;
 use crate::sweep::{self, SweepBuffers, SweepScene};
 use crate::{
     DirectLight, ExactMethod, LitSurfaces, MAX_ELEMENTS, MAX_MESH_ELEMENTS, Mesh, Representation,
@@ -190,6 +191,8 @@ pub struct ExactReference {
     /// What the scene's point lights see, for their irradiance at other points; `None`
     /// without lights.
     lit: Option<LitSurfaces>,
+    /// Numbers its operator held: `n²` dense, the non-zeros by the sweep.
+    nonzeros: usize,
 }
 
 /// What an [`ExactReference`] keeps to evaluate the exact transfer at other points.
@@ -220,23 +223,57 @@ impl ExactReference {
         params: &SolveParams,
         stop: &Stop,
     ) -> Result<ExactReference, SolveError> {
-        params.validate()?;
         method.check(elements)?;
         let mesh = Mesh::new(kernel, elements)?;
-        let started = Instant::now();
-        let (visibility, op): (Visibility, Box<dyn TransferOperator>) = match method {
-            ExactMethod::Dense => {
-                let table = PairTable::new(kernel, &mesh)?;
-                let op = exact::exact_operator_with(&table, &mesh, stop)?;
-                (Visibility::Pairs(table), Box::new(op))
+        ExactReference::on_mesh_with(kernel, mesh, method, params, stop)
+    }
+
+    /// Solves `kernel` exactly on `mesh` (a mesh of its scene: uniform, split or adapted), by
+    /// [`ExactMethod::of`] the scene, or by the sweep where the mesh is past the dense limit.
+    pub fn on_mesh(
+        kernel: &Kernel,
+        mesh: Mesh,
+        params: &SolveParams,
+        stop: &Stop,
+    ) -> Result<ExactReference, SolveError> {
+        let method = match ExactMethod::of(kernel) {
+            ExactMethod::Dense if ExactMethod::Dense.check(mesh.len()).is_err() => {
+                ExactMethod::Sweep
             }
-            ExactMethod::Sweep => {
-                check_scene(kernel, &mesh)?;
-                let scene = SweepScene::new(kernel.scene(), &mesh);
-                let op = sweep::sweep_operator_with(&scene, &mesh, true, stop)?;
-                (Visibility::Sweep(scene), Box::new(op))
-            }
+            method => method,
         };
+        check_scene(kernel, &mesh)?;
+        ExactReference::on_mesh_with(kernel, mesh, method, params, stop)
+    }
+
+    pub(crate) fn on_mesh_with(
+        kernel: &Kernel,
+        mesh: Mesh,
+        method: ExactMethod,
+        params: &SolveParams,
+        stop: &Stop,
+    ) -> Result<ExactReference, SolveError> {
+        params.validate()?;
+        let started = Instant::now();
+        let (visibility, op, nonzeros): (Visibility, Box<dyn TransferOperator>, usize) =
+            match method {
+                ExactMethod::Dense => {
+                    let table = PairTable::new(kernel, &mesh)?;
+                    let op = exact::exact_operator_with(&table, &mesh, stop)?;
+                    (
+                        Visibility::Pairs(table),
+                        Box::new(op),
+                        mesh.len() * mesh.len(),
+                    )
+                }
+                ExactMethod::Sweep => {
+                    check_scene(kernel, &mesh)?;
+                    let scene = SweepScene::new(kernel.scene(), &mesh);
+                    let op = sweep::sweep_operator_with(&scene, &mesh, true, stop)?;
+                    let nonzeros = op.nonzeros();
+                    (Visibility::Sweep(scene), Box::new(op), nonzeros)
+                }
+            };
         let assembly_s = started.elapsed().as_secs_f64();
         let mut solution = solve_operator(op.as_ref(), &mesh, params, stop)?;
         solution.assembly_s = assembly_s;
@@ -251,7 +288,32 @@ impl ExactReference {
             visibility,
             solution,
             lit,
+            nonzeros,
         })
+    }
+
+    /// A solve by the sweep on `mesh` already made: its hierarchy and solution (and what the
+    /// scene's lights see, if it has any).
+    pub(crate) fn from_sweep(
+        mesh: Mesh,
+        scene: SweepScene,
+        solution: Solution,
+        lit: Option<LitSurfaces>,
+        nonzeros: usize,
+    ) -> ExactReference {
+        ExactReference {
+            mesh,
+            visibility: Visibility::Sweep(scene),
+            solution,
+            lit,
+            nonzeros,
+        }
+    }
+
+    /// Numbers its operator held: `n²` for a dense one, the non-zeros of the sweep's.
+    #[must_use]
+    pub fn nonzeros(&self) -> usize {
+        self.nonzeros
     }
 
     /// The default fine resolution for comparing solutions on `elements` elements: four times
@@ -315,22 +377,65 @@ impl ExactReference {
                         point lights",
             });
         }
+        let receivers: Vec<Receiver> = (0..mesh.len())
+            .map(|i| Receiver {
+                edge: mesh.elements()[i].mesh_edge,
+                local: mesh.local(i)[2],
+                point: mesh.elements()[i].midpoint,
+            })
+            .collect();
+        self.gather_at(&receivers, stop)
+    }
+
+    /// [`ExactReference::radiosity_on`] with the lights' direct light taken as each element's
+    /// mean instead of its value at the midpoint: what a solve on `mesh` holds at its
+    /// collocation points (its source is `E + ρ H̄`), so a solution on `mesh` is compared with
+    /// it like for like, with no error charged for the shadow edges inside its elements that
+    /// element values cannot hold. The same as `radiosity_on` without lights.
+    pub fn collocated_on(&self, mesh: &Mesh, stop: &Stop) -> Result<Vec<f64>, SolveError> {
+        let mut b = self.radiosity_on(mesh, stop)?;
+        if let Some(lit) = &self.lit {
+            let means = mesh.direct_irradiance();
+            for (i, v) in b.iter_mut().enumerate() {
+                let e = mesh.elements()[i];
+                let rho = mesh.edges()[e.mesh_edge].reflectance;
+                let at_midpoint = lit.irradiance_at(mesh, e.mesh_edge, e.midpoint);
+                *v += rho * (means[i] - at_midpoint);
+            }
+        }
+        Ok(b)
+    }
+
+    /// B as a function: the exact B at the surface parameters `points` (each in `[0, 1)`),
+    /// the equation itself evaluated there from this solve (the final gather, as
+    /// [`ExactReference::radiosity_on`] at collocation points; a point at an end of its edge
+    /// is taken just inside, see [`FinalGather`](crate::FinalGather)). Points in parallel;
+    /// `stop` polled per point.
+    pub fn radiosity_at(&self, points: &[f64], stop: &Stop) -> Result<Vec<f64>, SolveError> {
+        let receivers: Vec<Receiver> = points
+            .iter()
+            .map(|&s| crate::field::locate(&self.mesh, s))
+            .collect();
+        self.gather_at(&receivers, stop)
+    }
+
+    /// `E + ρ (H + Σ_j B_j ∫_{fine element j} G V)` at each receiver.
+    fn gather_at(&self, receivers: &[Receiver], stop: &Stop) -> Result<Vec<f64>, SolveError> {
+        let b = &self.solution.radiosity;
         match &self.visibility {
             Visibility::Pairs(table) => self.interpolate(
-                mesh,
+                receivers,
                 || vec![0.0; self.mesh.len()],
                 |row, k, y| {
                     exact::transfer_row(&self.mesh, table, k, y, row, &exact::visible);
-                    let b = &self.solution.radiosity;
                     row.iter().zip(b).map(|(t, bj)| t * bj).sum()
                 },
                 stop,
             ),
             Visibility::Sweep(scene) => self.interpolate(
-                mesh,
+                receivers,
                 SweepBuffers::default,
                 |buffers, k, y| {
-                    let b = &self.solution.radiosity;
                     let row = sweep::transfers(scene, &self.mesh, k, y, true, buffers);
                     row.iter().map(|&(j, t)| t * b[j as usize]).sum()
                 },
@@ -339,36 +444,33 @@ impl ExactReference {
         }
     }
 
-    /// `E + ρ · gather(scratch, k, y)` at every collocation point `y` (on edge `k`) of `mesh`,
-    /// where `gather` is `Σ_j B_j ∫_{fine element j} G V` at `y`; rows in parallel, each
-    /// thread with its own scratch from `init`.
+    /// `E + ρ · (H + gather(scratch, k, y))` at every receiver (frame point `y` on mesh edge
+    /// `k`, H the lights' irradiance there), where `gather` is `Σ_j B_j ∫_{fine element j} G V` at `y`; receivers in
+    /// parallel, each thread with its own scratch from `init`.
     fn interpolate<S: Send>(
         &self,
-        mesh: &Mesh,
+        receivers: &[Receiver],
         init: impl Fn() -> S + Sync + Send,
         gather: impl Fn(&mut S, usize, DVec2) -> f64 + Sync + Send,
         stop: &Stop,
     ) -> Result<Vec<f64>, SolveError> {
-        (0..mesh.len())
-            .into_par_iter()
+        receivers
+            .par_iter()
             .with_min_len(8)
-            .map_init(init, |scratch, i| {
+            .map_init(init, |scratch, r| {
                 if stop() {
                     return Err(SolveError::Interrupted);
                 }
-                let edge = mesh.edge_of(i);
+                let edge = &self.mesh.edges()[r.edge];
                 if edge.reflectance == 0.0 {
                     return Ok(edge.emission);
                 }
-                let k = mesh.elements()[i].mesh_edge;
-                let gathered = gather(scratch, k, mesh.local(i)[2]);
-                Ok(match &self.lit {
-                    None => edge.emission + edge.reflectance * gathered,
-                    Some(lit) => {
-                        let direct = lit.irradiance_at(mesh, k, mesh.elements()[i].midpoint);
-                        edge.emission + edge.reflectance * (direct + gathered)
-                    }
-                })
+                let gathered = gather(scratch, r.edge, r.local);
+                let direct = self
+                    .lit
+                    .as_ref()
+                    .map_or(0.0, |lit| lit.irradiance_at(&self.mesh, r.edge, r.point));
+                Ok(edge.emission + edge.reflectance * (direct + gathered))
             })
             .collect()
     }

@@ -1,6 +1,7 @@
-//! A solved radiosity as the CSV every command writes: one row per element, in order of `s`.
+//! A solved radiosity as the CSV every command writes: one row per element, in order of `s`,
+//! or one row per sample point of B as a function.
 
-use crate::Mesh;
+use crate::{FieldSample, Mesh};
 
 /// The header of [`radiosity_csv`].
 pub const RADIOSITY_HEADER: &str = "edge,s,x,y,b";
@@ -28,6 +29,18 @@ pub fn radiosity_rows(
         writeln!(out, "{prefix}{},{},{x},{y},{value}", e.edge, e.s_mid)?;
     }
     Ok(())
+}
+
+/// B as a function at surface points ([`FinalGather::samples`](crate::FinalGather::samples))
+/// as CSV: the header `edge,s,x,y,b`, one row per sample in the order given.
+#[must_use]
+pub fn samples_csv(samples: &[FieldSample]) -> String {
+    let mut out = format!("{RADIOSITY_HEADER}\n");
+    for p in samples {
+        let (x, y) = (p.position.x, p.position.y);
+        out.push_str(&format!("{},{},{x},{y},{}\n", p.edge, p.s, p.b));
+    }
+    out
 }
 
 #[cfg(test)]
@@ -58,5 +71,25 @@ mod tests {
             assert_eq!(row, format!("7,{plain}"));
         }
         assert_eq!(prefixed.lines().count(), 64);
+    }
+
+    #[test]
+    fn samples_are_rows_at_their_points() {
+        let kernel = Kernel::new(bundled("fig3"));
+        let mesh = Mesh::new(&kernel, 32).unwrap();
+        let gather = crate::FinalGather::new(&kernel, &mesh).unwrap();
+        let b = vec![0.5; 32];
+        let samples = gather.samples(&b, 3, &crate::never).unwrap();
+        let csv = samples_csv(&samples);
+        let rows: Vec<&str> = csv.lines().collect();
+        assert_eq!(rows[0], "edge,s,x,y,b");
+        assert_eq!(rows.len(), 1 + 3 * 32);
+        for (row, p) in rows[1..].iter().zip(&samples) {
+            let cells: Vec<f64> = row.split(',').map(|c| c.parse().unwrap()).collect();
+            assert_eq!(
+                cells,
+                [p.edge.index() as f64, p.s, p.position.x, p.position.y, p.b]
+            );
+        }
     }
 }

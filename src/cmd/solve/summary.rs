@@ -2,7 +2,7 @@
 
 use flatland_lab::memory::peak_bytes;
 use flatland_methods::{Account, Lit};
-use flatland_solve::LitScene;
+use flatland_solve::{Estimate, LitScene};
 
 /// The `--json` object; `note` only when the method built a count other than asked (or
 /// traced), the learner's keys only for the light-driven learner.
@@ -22,8 +22,13 @@ pub fn json(scene: &str, kernel: &str, lit: &LitScene, l: &Lit) -> serde_json::V
         "peak_memory_bytes": peak_bytes(),
         "build_s": l.build_s,
         "reference_elements": lit.reference().mesh().len(),
-        "discretization_error_estimate": lit.estimate().map(|e| e.estimate),
+        "discretization_error_estimate": lit.estimate().map(|e| e.estimate()),
+        "error_estimate": lit.estimate().map(|e| e.estimate()),
+        "error_estimate_covers": lit.estimate().map(|e| e.covers()),
     });
+    if let Some(f) = lit.function() {
+        json["refinement_rounds"] = f.rounds.len().into();
+    }
     if let Some(note) = &l.note {
         json["note"] = note.as_str().into();
     }
@@ -47,9 +52,21 @@ pub fn print(scene: &str, kernel: &str, lit: &LitScene, l: &Lit) {
     let (n, reference) = (lit.mesh().len(), lit.reference().mesh().len());
     rows.push(("elements", format!("{n} (exact reference: {reference})")));
     if let Some(e) = lit.estimate() {
-        let (estimate, finer) = (e.estimate, e.finer_elements);
-        let text = format!("≈ {estimate:.1e} (estimated from a solve on 2N = {finer} elements)");
+        let estimate = e.estimate();
+        let covers = match e {
+            Estimate::Function(_) => {
+                "of B − E as a function along the surfaces, between the \
+                                      collocation points too"
+            }
+            Estimate::Collocation(_) => "of B − E at the collocation points only",
+        };
+        let finer = e.finer_elements();
+        let text = format!("≈ {estimate:.1e} ({covers}; from a solve on {finer} elements)");
         rows.push(("discretization error", text));
+        if let Some(f) = lit.function() {
+            let counts: Vec<String> = f.rounds.iter().map(|r| r.elements.to_string()).collect();
+            rows.push(("mesh refined", format!("{} elements", counts.join(" → "))));
+        }
     }
     rows.push(("rel. L2 of B", format!("{:.5}", c.errors.rel_l2_b)));
     let reflected = c.errors.rel_l2_reflected;

@@ -165,12 +165,16 @@ pub fn summary(doc: &mut String, real: &Real) -> Result<()> {
     writeln!(
         doc,
         "The measure is the lit scene: the relative L2 error of the solved reflected radiosity \
-         B − E against the exact solve on twice the elements, reached within a time (build + \
-         solve), each method swept over its own knob until a row takes over {} s: the default \
-         learner (`default`, the light-driven learner `flatland solve` runs) by its tolerance, \
-         the exact kernel's own solve by elements, hierarchical radiosity by links, the Monte \
-         Carlo light tracer by photons. Scenes: the bundled floor plan and hall, and generated \
-         ones whose seeds no default was chosen on.\n",
+         B − E against the exact reference at the mesh's midpoints, reached within a time \
+         (build + solve), each method swept over its own knob until a row takes over {} s: the \
+         default learner (`default`, the light-driven learner `flatland solve` runs) by its \
+         tolerance, the exact kernel's own solve by elements, hierarchical radiosity by links, \
+         the Monte Carlo light tracer by photons. The mesh and the reference are `flatland \
+         solve`'s: a mesh refined until the exact B as a function is within 1 %, and the finer \
+         solve of that estimate, read by its final gather; how good both are, against much \
+         finer solves and the tracer: [docs/FUNCTION-ERROR.md](docs/FUNCTION-ERROR.md). \
+         Scenes: the bundled floor plan and hall, and generated ones whose seeds no default \
+         was chosen on.\n",
         real.max_seconds
     )?;
     for s in &real.scenes {
@@ -326,7 +330,7 @@ pub fn sections(doc: &mut String, real: &Real) -> Result<()> {
         doc,
         "`flatland bench --scaling`: each method with its default arguments on generated floor \
          plans and halls; time to the lit scene, the heap's peak while it ran, rays, and the \
-         error of B − E against the exact solve on twice the elements. A method whose time, \
+         error of B − E against the exact reference of `flatland solve`. A method whose time, \
          extrapolated from the smaller scenes, is over the time budget is skipped there (HR's \
          initial linking grows with the square of the edges).\n"
     )?;

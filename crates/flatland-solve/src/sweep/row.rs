@@ -19,17 +19,44 @@ pub(crate) fn transfers<'b>(
     cull: bool,
     buffers: &'b mut SweepBuffers,
 ) -> &'b [(u32, f64)] {
-    let receiver = &mesh.edges()[k];
-    let skip = scene.segment_of[k];
+    let view = View::new(y, mesh.edges()[k].normal);
+    scene.envelope(&view, scene.segment_of[k], cull, buffers);
     let mut out = std::mem::take(&mut buffers.transfers);
+    collect(scene, &view, mesh, buffers, &mut out);
+    buffers.transfers = out;
+    &buffers.transfers
+}
+
+/// [`transfers`] at `y` to the elements of two meshes of the same scene (`mesh`, and `other`
+/// into `other_out`) from one envelope: what `y` sees does not depend on how it is meshed.
+pub(crate) fn transfers_to_both<'b>(
+    scene: &SweepScene,
+    mesh: &Mesh,
+    other: &Mesh,
+    k: usize,
+    y: DVec2,
+    buffers: &'b mut SweepBuffers,
+    other_out: &mut Vec<(u32, f64)>,
+) -> &'b [(u32, f64)] {
+    transfers(scene, mesh, k, y, true, buffers);
+    let view = View::new(y, mesh.edges()[k].normal);
+    collect(scene, &view, other, buffers, other_out);
+    &buffers.transfers
+}
+
+/// The transfer of the envelope in `buffers` (built from `view`) to every element of `mesh`,
+/// into `out` (cleared first), sorted by element.
+fn collect(
+    scene: &SweepScene,
+    view: &View,
+    mesh: &Mesh,
+    buffers: &SweepBuffers,
+    out: &mut Vec<(u32, f64)>,
+) {
     out.clear();
-    let view = View::new(y, receiver.normal);
-    scene.envelope(&view, skip, cull, buffers);
     for piece in buffers.envelope.pieces() {
         if let Some(m) = scene.mesh_edge[piece.segment as usize] {
-            seen_part(&view, mesh, m as usize, piece, &mut out, |lo, hi| {
-                0.5 * (hi - lo)
-            });
+            seen_part(view, mesh, m as usize, piece, out, |lo, hi| 0.5 * (hi - lo));
         }
     }
     // Pieces of one element seen in several places (between occluders) sum.
@@ -41,8 +68,6 @@ pub(crate) fn transfers<'b>(
         }
         same
     });
-    buffers.transfers = out;
-    &buffers.transfers
 }
 
 /// Appends `measure(σ₁, σ₂)` of the part `[σ₁, σ₂]` of `piece` of surface `m` that each
