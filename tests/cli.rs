@@ -360,7 +360,7 @@ fn solve_writes_the_csv_one_row_per_element_in_order_of_s() {
 }
 
 /// A lamp-lit plan generated for the test (`flatland scene floorplan --lamps`).
-fn lamp_plan(dir: &Path, size: &str, seed: &str) -> PathBuf {
+fn seeded_lamp_plan(dir: &Path, size: &str, seed: &str) -> PathBuf {
     let plan = dir.join(format!("plan-{size}-{seed}.json"));
     let out = flatland(&[
         "scene",
@@ -380,7 +380,7 @@ fn lamp_plan(dir: &Path, size: &str, seed: &str) -> PathBuf {
 #[test]
 fn solve_by_default_meets_its_tolerance_as_a_function_and_says_what_it_covers() {
     let dir = temp_dir("solve-function");
-    let plan = lamp_plan(&dir, "200", "7");
+    let plan = seeded_lamp_plan(&dir, "200", "7");
     let json = solve_json(&["--scene", as_str(&plan)]);
     let estimate = json["error_estimate"].as_f64().unwrap();
     assert!(estimate > 0.0 && estimate <= 0.01, "{json}");
@@ -402,7 +402,7 @@ fn solve_by_default_meets_its_tolerance_as_a_function_and_says_what_it_covers() 
 #[test]
 fn solve_samples_write_b_as_a_function_n_rows_per_element() {
     let dir = temp_dir("solve-samples");
-    let plan = lamp_plan(&dir, "120", "3");
+    let plan = seeded_lamp_plan(&dir, "120", "3");
     let (means, samples) = (dir.join("means.csv"), dir.join("samples.csv"));
     let run = |extra: &[&str]| {
         let mut args = vec!["solve", "--scene", as_str(&plan), "--elements", "400"];

@@ -119,7 +119,7 @@ pub fn run(args: &Args) -> Result<()> {
         }
         (Some(path), Some("svg")) => {
             let title = format!("{label} lit by the {kernel_label} kernel");
-            let b = &lighting.comparison.solution.radiosity;
+            let b = element_values(args, &lit, &lighting);
             let plan =
                 flatland_pictures::plan::lit_plan(lit.kernel().scene(), lit.mesh(), b, &title);
             interrupt::writing(|| write_atomic(path, plan.svg().as_bytes()))?;
@@ -142,7 +142,6 @@ pub fn run(args: &Args) -> Result<()> {
 /// element (the exact kernel's the mean of its function over the element).
 fn table(args: &Args, lit: &LitScene, lighting: &Lit, stop: &Stop) -> Result<String> {
     let b = &lighting.comparison.solution.radiosity;
-    let exact = args.kernel == KernelArg::Method(Method::Exact);
     let gather = match lit.function() {
         Some(function) => std::borrow::Cow::Borrowed(&function.gather),
         None => std::borrow::Cow::Owned(FinalGather::new(lit.kernel(), lit.mesh())?),
@@ -153,11 +152,19 @@ fn table(args: &Args, lit: &LitScene, lighting: &Lit, stop: &Stop) -> Result<Str
                 .map_err(|e| super::interrupted(MethodError::from(e)))?;
             samples_csv(&samples)
         }
-        None => match lit.function() {
-            Some(function) if exact => radiosity_csv(lit.mesh(), &function.element_means),
-            _ => radiosity_csv(lit.mesh(), b),
-        },
+        None => radiosity_csv(lit.mesh(), element_values(args, lit, lighting)),
     })
+}
+
+/// One value per element, as the CSV and the drawing give them: the exact kernel's the mean of
+/// its function over the element, another kernel's its element value.
+fn element_values<'a>(args: &Args, lit: &'a LitScene, lighting: &'a Lit) -> &'a [f64] {
+    match lit.function() {
+        Some(function) if args.kernel == KernelArg::Method(Method::Exact) => {
+            &function.element_means
+        }
+        _ => &lighting.comparison.solution.radiosity,
+    }
 }
 
 /// Lights `lit` with `--kernel`, a bar showing a learner's cells.

@@ -154,17 +154,7 @@ fn measure(
     );
     let (points, exact) = truth_on(mesh)?;
     let ours_true = points.relative_l2_reflected(&solve.radiosity_at(&points.s, &never)?, &exact);
-    let doublings = (today_steps / DEFAULT_ERROR_BOUND).log2().ceil().max(0.0) as u32;
-    let needed = today.coarse.mesh().len() << doublings;
-    let needed_s = if timed_doubling && needed <= 40_000 && doublings > 0 {
-        let (_, s) = seconds(|| {
-            let coarse = ExactReference::new(&kernel, needed, &params, &never)?;
-            Ok(Discretization::of(coarse, &kernel, &params, &never)?)
-        })?;
-        Some(s)
-    } else {
-        None
-    };
+    let (needed, needed_s) = doubling_for_tolerance(&kernel, &today, today_steps, timed_doubling)?;
     let learner = learner
         .then(|| learner_errors(&kernel, solve, &reference))
         .transpose()?;
@@ -187,6 +177,28 @@ fn measure(
         today,
         today_for_tolerance: (needed, needed_s),
     })
+}
+
+/// The elements today's doubling would need for its steps to reach 1 % (their error halves
+/// with each doubling), and, when asked and affordable, the seconds of that doubling's last
+/// step alone.
+fn doubling_for_tolerance(
+    kernel: &Kernel,
+    today: &Discretization,
+    today_steps: f64,
+    timed: bool,
+) -> Result<(usize, Option<f64>)> {
+    let params = SolveParams::default();
+    let doublings = (today_steps / DEFAULT_ERROR_BOUND).log2().ceil().max(0.0) as u32;
+    let needed = today.coarse.mesh().len() << doublings;
+    if !(timed && needed <= 40_000 && doublings > 0) {
+        return Ok((needed, None));
+    }
+    let (_, s) = seconds(|| {
+        let coarse = ExactReference::new(kernel, needed, &params, &never)?;
+        Ok(Discretization::of(coarse, kernel, &params, &never)?)
+    })?;
+    Ok((needed, Some(s)))
 }
 
 /// The light-driven learner (`flatland_light::LightFit`, default parameters) on the function

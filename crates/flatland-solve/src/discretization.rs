@@ -48,8 +48,8 @@ use crate::sweep::{SweepScene, gauss_operators};
 use crate::field::{GAUSS_OFFSET, GAUSS_WEIGHTS};
 use crate::{
     DEFAULT_ELEMENTS, ExactMethod, ExactReference, FieldSample, FinalGather, LitSurfaces,
-    MAX_MESH_ELEMENTS, MAX_NONZEROS, Mesh, SolveError, SolveParams, Stop, predicted_nonzeros,
-    solve_errors, solve_linear, solve_operator,
+    MAX_MESH_ELEMENTS, MAX_NONZEROS, Mesh, SolveError, SolveParams, SparseOperator, Stop,
+    predicted_nonzeros, solve_errors, solve_linear, solve_operator,
 };
 
 /// The bound [`elements_for_error`] meets by default: 1 % relative L2 error of `B − E`.
@@ -276,28 +276,7 @@ impl FunctionSolve {
         let nonzeros = ops.fine.nonzeros();
         let lit = lit_mesh(&scene, &mesh);
         let direct = DirectAtNodes::new(lit.as_ref(), &mesh, &finer_mesh);
-        let at_gauss_points: Vec<[f64; 3]> = (0..b.len())
-            .map(|i| {
-                let emission = mesh.edge_of(i).emission;
-                let gathered = |r: usize| {
-                    let (columns, values) = ops.gather.row(r);
-                    let sum: f64 = columns
-                        .iter()
-                        .zip(values)
-                        .map(|(&j, t)| t * b[j as usize])
-                        .sum();
-                    emission + sum
-                };
-                let [d0, d1, d2] = direct.at_nodes[i];
-                // The middle node is the element's own value, its mean direct light swapped
-                // for the light at the node.
-                [
-                    gathered(2 * i) + d0,
-                    b[i] - direct.coarse_mean[i] + d1,
-                    gathered(2 * i + 1) + d2,
-                ]
-            })
-            .collect();
+        let at_gauss_points = coarse_at_gauss_points(&ops.gather, &mesh, b, &direct);
         let finer_at_nodes: Vec<f64> = finer_solution
             .radiosity
             .iter()
@@ -374,6 +353,39 @@ impl FunctionSolve {
             })
             .collect()
     }
+}
+
+/// The coarse solve's B at each element's three Gauss points: the gathered light at the outer
+/// two (rows `2i`, `2i + 1` of `gather`, ρ included), the element's own value at the middle,
+/// each with the lights' direct light at the point.
+fn coarse_at_gauss_points(
+    gather: &SparseOperator,
+    mesh: &Mesh,
+    b: &[f64],
+    direct: &DirectAtNodes,
+) -> Vec<[f64; 3]> {
+    (0..b.len())
+        .map(|i| {
+            let emission = mesh.edge_of(i).emission;
+            let gathered = |r: usize| {
+                let (columns, values) = gather.row(r);
+                let sum: f64 = columns
+                    .iter()
+                    .zip(values)
+                    .map(|(&j, t)| t * b[j as usize])
+                    .sum();
+                emission + sum
+            };
+            let [d0, d1, d2] = direct.at_nodes[i];
+            // The middle node is the element's own value, its mean direct light swapped for
+            // the light at the node.
+            [
+                gathered(2 * i) + d0,
+                b[i] - direct.coarse_mean[i] + d1,
+                gathered(2 * i + 1) + d2,
+            ]
+        })
+        .collect()
 }
 
 /// `mesh` with every element cut in three so that the new elements' midpoints are its

@@ -140,8 +140,8 @@ mod independent;
 mod test_support;
 
 pub use adapt::{
-    RefinementRound, ToleranceParams, ToleranceSolve, initial_elements, predicted_nonzeros,
-    refine_for, solve_to_tolerance,
+    RefinementRound, ToleranceParams, ToleranceSolve, initial_elements, refine_for,
+    solve_to_tolerance,
 };
 pub use discretization::{
     DEFAULT_ERROR_BOUND, Discretization, ErrorEstimate, FUNCTION_SAFETY, FunctionEstimate,
@@ -176,7 +176,7 @@ pub use solve::{
     Comparison, ExactReference, Solution, SolveErrors, solve, solve_against, solve_errors,
     solve_linear, solve_operator,
 };
-pub use sparse::{MAX_NONZEROS, SparseOperator};
+pub use sparse::{MAX_NONZEROS, SparseOperator, predicted_nonzeros};
 pub use sweep::{ProbeBuffers, SeenSpan, Sweep, sweep_operator};
 pub use table::{RADIOSITY_HEADER, radiosity_csv, radiosity_rows, samples_csv};
 pub use transfer::{Receiver, Sender, point_to_segment, point_to_segment_visible};

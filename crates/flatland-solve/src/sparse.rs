@@ -44,6 +44,19 @@ impl RowBlock {
     }
 }
 
+/// The non-zeros of the finer operator of a round on `next` elements, predicted from this
+/// round's (`nonzeros` on `current`): rows grow with the elements and so does what each row
+/// sees, so the count grows with the square of the ratio (an upper estimate when only some
+/// elements are cut: a row sees the finer elements only where they are). Predicted before any
+/// of it is built, so a round that cannot be held is never started.
+#[must_use]
+pub fn predicted_nonzeros(nonzeros: usize, current: usize, next: usize) -> usize {
+    let ratio = next as f64 / current.max(1) as f64;
+    (nonzeros as f64 * ratio * ratio)
+        .ceil()
+        .min(usize::MAX as f64) as usize
+}
+
 impl SparseOperator {
     /// Builds row `i` with `row(i, scratch, out)`: it appends `(column, value)` to `out`
     /// (empty on entry), columns strictly ascending and below `n`. Blocks of rows run in
