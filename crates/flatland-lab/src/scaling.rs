@@ -446,7 +446,7 @@ mod tests {
             assert!(r.row.total_s > 0.0, "{r:?}");
         }
         // The exact solve on the chosen mesh is within the discretization bound of the
-        // reference on twice the elements (with room: the bound is on an estimate).
+        // reference, the finer solve of its estimate (with room: the bound is on an estimate).
         for r in all.rows.iter().filter(|r| r.row.method == Method::Exact) {
             assert!(
                 r.row.reflected_error().unwrap() < 2.0 * flatland_solve::DEFAULT_ERROR_BOUND,
