@@ -35,9 +35,10 @@ pub enum MethodError {
     /// The tracer lights a scene without any kernel: it has no representation to build.
     #[error("`{0}` lights a scene without a kernel: it has no representation to build")]
     NotAKernel(&'static str),
-    /// A method that is named but not built yet (the learned transport).
-    #[error("`{0}` ({1}) is not built yet")]
-    NotBuilt(&'static str, &'static str),
+    /// A method that lights one scene for a moving light only (the learned transport): it has
+    /// no kernel to solve once with.
+    #[error("`{0}` ({1}) is for a moving light: run `flatland relight --kernel {0}`")]
+    RelightOnly(&'static str, &'static str),
     /// A build parameter out of its range.
     #[error("{name} must be {valid}, but is {value}")]
     InvalidParameter {

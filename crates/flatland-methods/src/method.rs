@@ -121,10 +121,10 @@ impl Method {
         }
     }
 
-    /// The error refusing this method as named but not built yet.
+    /// The error refusing this method where one lighting is asked for: it relights only.
     #[must_use]
-    pub fn not_built(self) -> crate::MethodError {
-        crate::MethodError::NotBuilt(self.name(), self.title())
+    pub fn relight_only(self) -> crate::MethodError {
+        crate::MethodError::RelightOnly(self.name(), self.title())
     }
 
     /// Parses [`Method::name`] (clap's `ValueEnum` parser); a name the project used before
@@ -171,10 +171,10 @@ impl Method {
         }
     }
 
-    /// Whether it exists yet: every method but the learned transport, which the next issue
-    /// builds.
+    /// Whether it lights a scene once (`solve`, `bench`): every method but the learned
+    /// transport, which relights one scene for a moving light (`flatland relight`).
     #[must_use]
-    pub fn is_built(self) -> bool {
+    pub fn lights_once(self) -> bool {
         self != Method::Transport
     }
 
@@ -339,17 +339,18 @@ mod tests {
     }
 
     #[test]
-    fn the_transport_is_named_and_refused_as_not_built() {
+    fn the_transport_is_named_and_refused_where_one_lighting_is_asked_for() {
         assert_eq!(Method::parse("transport").unwrap(), Method::Transport);
         assert!(
             Method::ALL
                 .iter()
-                .all(|m| m.is_built() != (*m == Method::Transport))
+                .all(|m| m.lights_once() != (*m == Method::Transport))
         );
-        let msg = Method::Transport.not_built().to_string();
+        let msg = Method::Transport.relight_only().to_string();
         assert_eq!(
             msg,
-            "`transport` (learned transport of the later bounces) is not built yet"
+            "`transport` (learned transport of the later bounces) is for a moving light: run \
+             `flatland relight --kernel transport`"
         );
     }
 
