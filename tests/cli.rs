@@ -1754,6 +1754,20 @@ fn relight_writes_a_block_of_rows_per_position_and_a_picture_each() {
     for k in 0..4 {
         let png = image::open(dir.join(format!("frames/position-{k}.png"))).unwrap();
         assert_eq!((png.width(), png.height()), (760, 760));
+        // The lit plan beside it: one segment per element, its B as in the CSV's block.
+        let svg = std::fs::read_to_string(dir.join(format!("frames/position-{k}.svg"))).unwrap();
+        let mut drawn: Vec<f64> = svg
+            .split("data-b=\"")
+            .skip(1)
+            .map(|rest| rest.split('"').next().unwrap().parse().unwrap())
+            .collect();
+        let mut block: Vec<f64> = rows[k * per_position..(k + 1) * per_position]
+            .iter()
+            .map(|r| r[5])
+            .collect();
+        drawn.sort_by(f64::total_cmp);
+        block.sort_by(f64::total_cmp);
+        assert_eq!(drawn, block, "position {k}");
     }
 }
 

@@ -21,6 +21,7 @@ use flatland_lab::timed::walk::{
 };
 use flatland_lab::{interrupt, output};
 use flatland_pictures::lit::{Panel, panel_png};
+use flatland_pictures::plan::{PlanColours, lit_plan_by};
 use flatland_solve::{
     RADIOSITY_HEADER, RelightParams, Relighter, SolveError, Stop, check_elements, radiosity_rows,
 };
@@ -69,7 +70,9 @@ pub struct Args {
     #[arg(long, value_name = "X", default_value_t = RelightParams::default().tolerance)]
     pub tolerance: f64,
     /// Write B at every position: a `.csv` file (`position,edge,s,x,y,b`, one block of rows per
-    /// position) or a folder (one PNG per position, the lights marked).
+    /// position) or a folder (per position a PNG of the lit scene and the lit plan as SVG —
+    /// each element a segment in its B colour carrying `data-b` —, the lights marked, one
+    /// colour scale for every position).
     #[arg(long, value_name = "B.csv|DIR")]
     pub out: Option<PathBuf>,
     /// Print one JSON object: setup_s, bytes, positions, ms_per_move_median,
@@ -315,7 +318,7 @@ fn relight(
     );
     let bar = super::progress_bar(moves.len() as u64, "positions");
     let digits = moves.len().to_string().len();
-    let mut top = None;
+    let mut scale = None;
     let stop: &Stop = &interrupt::requested;
     let (records, stopped) =
         relight_moves(mover, exact, kernel, moves, args.check, stop, |k, b| {
@@ -324,8 +327,8 @@ fn relight(
                 radiosity_rows(file, &format!("{k},"), &mesh, b)?;
             }
             if let Some(Output::Pictures(dir)) = output {
-                let top = *top
-                    .get_or_insert_with(|| flatland_pictures::colormap::radiosity_top(&mesh, b));
+                let colours = *scale.get_or_insert_with(|| PlanColours::new(&mesh, b));
+                let top = colours.scale().top;
                 let panel = Panel {
                     scene: kernel.scene(),
                     caption: format!("{label}: position {k} of {}", moves.len()),
@@ -337,6 +340,10 @@ fn relight(
                 let png = panel_png(&panel)?;
                 let path = dir.join(format!("position-{k:0digits$}.png"));
                 interrupt::writing(|| write_atomic(&path, &png))?;
+                let title = &panel.caption;
+                let plan = lit_plan_by(kernel.scene(), &mesh, b, &moves[k], title, &colours);
+                let path = path.with_extension("svg");
+                interrupt::writing(|| write_atomic(&path, plan.svg().as_bytes()))?;
             }
             Ok(())
         })?;

@@ -4,7 +4,7 @@
 //! and of the viewer. It opens in any browser and over the user's own drawing; its PNG is the
 //! same SVG rendered.
 
-use flatland_geom::{Role, Scene};
+use flatland_geom::{PointLight, Role, Scene};
 use flatland_solve::Mesh;
 use flatland_svg::{ColourScale, LitPlan, LitSegment, LitSvg, lit_svg};
 
@@ -33,6 +33,15 @@ impl PlanColours {
                 top: radiosity_top(mesh, b),
                 log: Scale::wants_log(&lit),
             },
+        }
+    }
+
+    /// A scale whose top is `top` (one scale for many pictures, e.g. every position of a
+    /// moving light), log or linear.
+    #[must_use]
+    pub fn with_top(top: f64, log: bool) -> Self {
+        PlanColours {
+            scale: Scale { top, log },
         }
     }
 
@@ -77,6 +86,24 @@ impl ColourScale for PlanColours {
 /// of its own mesh).
 #[must_use]
 pub fn lit_plan(scene: &Scene, mesh: &Mesh, b: &[f64], title: &str) -> LitSvg {
+    let colours = PlanColours::new(mesh, b);
+    lit_plan_by(scene, mesh, b, mesh.lights(), title, &colours)
+}
+
+/// [`lit_plan`] lit by `lights` (which may not be the mesh's own: a moving light) and coloured
+/// by `colours`.
+///
+/// # Panics
+/// As [`lit_plan`].
+#[must_use]
+pub fn lit_plan_by(
+    scene: &Scene,
+    mesh: &Mesh,
+    b: &[f64],
+    lights: &[PointLight],
+    title: &str,
+    colours: &PlanColours,
+) -> LitSvg {
     assert_eq!(b.len(), mesh.len(), "one radiosity per element");
     let segments: Vec<LitSegment> = mesh
         .elements()
@@ -96,14 +123,13 @@ pub fn lit_plan(scene: &Scene, mesh: &Mesh, b: &[f64], title: &str) -> LitSvg {
         .filter(|e| e.role == Role::Blocker)
         .map(|e| (e.a, e.b))
         .collect();
-    let lights: Vec<_> = mesh.lights().iter().map(|l| l.at).collect();
-    let colours = PlanColours::new(mesh, b);
+    let lights: Vec<_> = lights.iter().map(|l| l.at).collect();
     lit_svg(&LitPlan {
         title,
         segments: &segments,
         blockers: &blockers,
         lights: &lights,
-        colours: &colours,
+        colours,
     })
 }
 
