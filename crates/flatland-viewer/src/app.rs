@@ -4,7 +4,7 @@
 //! Its parts: what tests and the binary can ask ([`queries`]), what they can do ([`actions`]),
 //! the top bar ([`top_bar`]), the controls panel ([`controls`]), the timeline bar
 //! ([`timeline_bar`]), the plots and scenes of the central area ([`panels`], laid out by
-//! [`layout`], textured by [`heatmaps`]), the readout under the pointer ([`readout`]), export
+//! [`layout`], textured by [`heatmaps`]), the moving lights of the relit scene ([`lamps`]), the readout under the pointer ([`readout`]), export
 //! ([`export`]) and the frame counter ([`fps`]). Drawing is in [`crate::views`], the learner
 //! in [`crate::worker`], settings in [`crate::settings`].
 
@@ -13,6 +13,7 @@ mod controls;
 mod export;
 mod fps;
 mod heatmaps;
+mod lamps;
 mod layout;
 mod panels;
 mod queries;
@@ -30,6 +31,7 @@ use kernel_fit::FitParams;
 
 use crate::background::Priority;
 use crate::learner::Learner;
+use crate::relit::{ExactRelight, RelitHandle};
 use crate::scenes;
 use crate::scenes::SceneChoice;
 use crate::settings::{SETTINGS_KEY, Settings};
@@ -122,9 +124,10 @@ pub struct ViewerApp {
     hover: Hover,
     drag: Option<SceneDrag>,
     textures: heatmaps::Textures,
-    /// The lines of the scene view and of the scene lit by the exact kernel.
+    /// The lines of the scene view.
     scene_edges: EdgesTexture,
-    exact_edges: EdgesTexture,
+    /// The scene relit under its moving lights, on a thread of its own.
+    lamps: lamps::Lamps,
     fps: fps::FpsMeter,
     export: export::Exports,
 }
@@ -217,6 +220,11 @@ impl ViewerApp {
         }
         let repaint_ctx = ctx.clone();
         let worker = WorkerHandle::spawn(priority, move || repaint_ctx.request_repaint());
+        // At normal priority: each move is short, and the window waits for the light to follow.
+        let relit_ctx = ctx.clone();
+        let relit = RelitHandle::spawn(Priority::Normal, ExactRelight::make, move || {
+            relit_ctx.request_repaint();
+        });
         let mut app = ViewerApp {
             fit_learner: settings.learner,
             fit_params: settings.params,
@@ -247,7 +255,7 @@ impl ViewerApp {
             drag: None,
             textures: heatmaps::Textures::default(),
             scene_edges: EdgesTexture::default(),
-            exact_edges: EdgesTexture::default(),
+            lamps: lamps::Lamps::new(relit),
             fps: fps::FpsMeter::default(),
             export: export::Exports::new(),
             settings,
@@ -386,6 +394,7 @@ impl ViewerApp {
     /// One frame.
     pub fn show(&mut self, ui: &mut egui::Ui) {
         self.poll();
+        self.tick_lamps(ui.ctx());
         self.fps.tick();
         self.log_fps();
         self.export.take_finished(&mut self.message);

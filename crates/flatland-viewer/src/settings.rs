@@ -58,6 +58,12 @@ pub struct Settings {
     pub show_samples: bool,
     /// Solve the radiosity with the learned kernel while it learns, and colour the scene by it.
     pub lit: bool,
+    /// The relit scene's first light wanders along a walk through the free space by itself.
+    pub wander: bool,
+    /// The lit scenes' exposure, in stops: the colour scale's top is divided by 2^exposure.
+    pub exposure: f32,
+    /// A logarithmic tone scale for the lit scenes (else linear).
+    pub tone_log: bool,
 }
 
 impl Default for Settings {
@@ -78,6 +84,9 @@ impl Default for Settings {
             show_edges: true,
             show_samples: false,
             lit: true,
+            wander: true,
+            exposure: 0.0,
+            tone_log: true,
         }
     }
 }

@@ -1,12 +1,13 @@
 //! Drawing: functions of what they show plus a little interaction state; nothing here trains
 //! or waits. The `(s, t)` plots in [`plot`] with the cells' overlay rastered in [`overlay`]
 //! and their layers composited into one image in [`layers`],
-//! the scene view in [`scene`], a scene's edges and the lit scene in [`edges`] (their lines
+//! the scene view in [`scene`], the relit scene and its moving lights in [`lamps`], a scene's edges and the lit scene in [`edges`] (their lines
 //! rastered once per change in [`raster`]), the learning
 //! curves in [`curves`], the small pieces they share in [`widgets`].
 
 mod curves;
 mod edges;
+mod lamps;
 mod layers;
 mod overlay;
 mod plot;
@@ -18,7 +19,8 @@ use egui::Color32;
 use flatland_geom::DVec2;
 
 pub use curves::curves;
-pub use edges::{LitPaint, lit_view};
+pub use edges::LitPaint;
+pub use lamps::{LampsOut, RelitFrameView, relit_view};
 pub use layers::composite;
 pub use overlay::{Marks, NEW_FOR, boundaries_image, overlay_image};
 pub use plot::{Overlay, PlotFrame, kernel_plot};

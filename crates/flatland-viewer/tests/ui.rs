@@ -897,3 +897,85 @@ fn the_learner_named_on_the_command_line_runs_and_names_the_exports() {
     assert!(dir.join("fig3-paper-step0.model.json").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// [`wait_until`] on the app's state, waiting on the relighting thread in between.
+fn wait_relit(h: &mut Harness<'_, ViewerApp>, what: &str, cond: impl Fn(&ViewerApp) -> bool) {
+    let deadline = Instant::now() + DEADLINE;
+    loop {
+        h.run_steps(1);
+        if cond(h.state()) {
+            return;
+        }
+        let left = deadline.saturating_duration_since(Instant::now());
+        assert!(
+            !left.is_zero(),
+            "timed out after {DEADLINE:?} waiting for {what}"
+        );
+        h.state().wait_for_relit(left.min(Duration::from_secs(1)));
+    }
+}
+
+fn button(pos: egui::Pos2, button: egui::PointerButton, pressed: bool) -> egui::Event {
+    egui::Event::PointerButton {
+        pos,
+        button,
+        pressed,
+        modifiers: Default::default(),
+    }
+}
+
+#[test]
+fn a_dragged_light_follows_the_pointer_b_follows_it_and_a_right_click_deletes_it() {
+    let mut settings = quick_settings();
+    settings.wander = false;
+    let mut h = harness(settings);
+    wait_relit(&mut h, "the first relit B and its light's mark", |a| {
+        a.relit().is_some_and(|f| f.lights.len() == 1) && a.light_marks().len() == 1
+    });
+    let first_b = h.state().relit().unwrap().b.clone();
+    let from = h.state().lights()[0].at;
+    let p = h.state().light_marks()[0];
+    h.event(egui::Event::PointerMoved(p));
+    h.run_steps(1);
+    h.event(button(p, egui::PointerButton::Primary, true));
+    h.run_steps(1);
+    for k in 1..=4 {
+        h.event(egui::Event::PointerMoved(
+            p + egui::vec2(-3.0 * k as f32, -2.0 * k as f32),
+        ));
+        h.run_steps(1);
+    }
+    h.event(button(
+        p + egui::vec2(-12.0, -8.0),
+        egui::PointerButton::Primary,
+        false,
+    ));
+    wait_relit(&mut h, "B lit by the light where it was dragged", |a| {
+        let at = a.lights()[0].at;
+        at != from && a.relit().is_some_and(|f| f.lights[0].at == at)
+    });
+    let to = h.state().lights()[0].at;
+    assert!(to.x < from.x && to.y > from.y, "left and up: {from} → {to}");
+    assert_ne!(h.state().relit().unwrap().b, first_b, "B follows the light");
+    let p = h.state().light_marks()[0];
+    h.event(egui::Event::PointerMoved(p));
+    h.run_steps(1);
+    h.event(button(p, egui::PointerButton::Secondary, true));
+    h.run_steps(1);
+    h.event(button(p, egui::PointerButton::Secondary, false));
+    wait_relit(&mut h, "B without the deleted light", |a| {
+        a.lights().is_empty() && a.relit().is_some_and(|f| f.lights.is_empty())
+    });
+    assert_ne!(h.state().relit().unwrap().b, first_b);
+}
+
+#[test]
+fn on_first_launch_the_light_wanders_by_itself() {
+    let mut h = harness(quick_settings());
+    assert!(h.state().settings().wander, "on by default");
+    wait_relit(&mut h, "the first relit B", |a| a.relit().is_some());
+    let start = h.state().relit().unwrap().lights[0].at;
+    wait_relit(&mut h, "B lit by the light somewhere else", |a| {
+        a.relit().is_some_and(|f| f.lights[0].at != start)
+    });
+}

@@ -316,6 +316,26 @@ impl ViewerApp {
                  faces join cells that never answer the same ray",
             );
         ui.checkbox(&mut self.settings.show_samples, "samples, coloured by set");
+        ui.checkbox(
+            &mut self.settings.wander,
+            "the light wanders (grab it to stop)",
+        )
+        .on_hover_text(
+            "the relit scene's first light walks through the rooms by itself; drag a light, \
+                 click the floor to add one, right-click one to delete it",
+        );
+        ui.add(
+            egui::Slider::new(&mut self.settings.exposure, -4.0..=8.0)
+                .step_by(0.5)
+                .text("exposure (stops)"),
+        );
+        ui.checkbox(
+            &mut self.settings.tone_log,
+            format!(
+                "log tone scale for the lit scenes ({} decades)",
+                flatland_pictures::colormap::LOG_DECADES
+            ),
+        );
         let lit = ui
             .checkbox(&mut self.settings.lit, "lit scene (solve B while learning)")
             .on_hover_text(

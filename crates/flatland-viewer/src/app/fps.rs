@@ -103,8 +103,18 @@ impl ViewerApp {
             return;
         };
         let rate = self.status.as_ref().map_or(0.0, |s| s.steps_per_s);
+        let relit = self
+            .lamps
+            .frame
+            .as_ref()
+            .map_or("relight –".to_owned(), |f| {
+                format!(
+                    "relight {:.1} ms/move (median)  moves {}  dropped {}  residual {:.0e}",
+                    f.median_ms, f.moves, f.dropped, f.residual
+                )
+            });
         eprintln!(
-            "{frames}  steps/s {rate:.0}  steps {}  cells {}  samples {}  edges {}  frames {}",
+            "{frames}  {relit}  steps/s {rate:.0}  steps {}  cells {}  samples {}  edges {}  frames {}",
             self.steps(),
             self.cells(),
             self.status.as_ref().map_or(0, |s| s.samples.len()),

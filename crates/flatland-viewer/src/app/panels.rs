@@ -1,5 +1,6 @@
 //! The central area at the moment shown: the exact ζ with the cells over it, the learned ζ and
-//! the error, the scene (lit by the learned kernel) and the exact lit scene, the curves.
+//! the error, the scene lit by its moving lights, the scene lit by the learned kernel, the
+//! curves.
 
 use std::sync::Arc;
 
@@ -10,8 +11,9 @@ use super::layout::Layout;
 use super::readout::{Learned, readout_text};
 use super::top_bar::error_text;
 use super::{Shown, ViewerApp};
+use crate::relit::RelitState;
 use crate::views::{self, LitPaint, NEW_FOR, PlotFrame};
-use crate::worker::{Command, Lit, LitState, Progress};
+use crate::worker::{Command, Lit, Progress};
 
 /// The kernel plot's exact ζ is computed at its width in pixels rounded up to a multiple of
 /// this (so a window resized by a few pixels does not ask again).
@@ -61,7 +63,7 @@ impl ViewerApp {
             });
             return;
         };
-        let layout = Layout::of(full, self.settings.lit);
+        let layout = Layout::of(full);
         self.kernel_panels(ui, &layout, &shown);
         self.scene_panels(ui, &layout, &shown);
         let history = shown
@@ -166,13 +168,15 @@ impl ViewerApp {
     }
 
     /// The scene (lit by the learned B when there is one; hovered ray, hovered s, dragged end
-    /// points when live) and, with the lit view on, the scene lit by the exact kernel.
+    /// points when live) and the relit scene with its moving lights.
     fn scene_panels(&mut self, ui: &mut egui::Ui, layout: &Layout, shown: &Shown) {
         let lit = self.shown_lit(shown);
+        let tone = self.tone();
         let learned_paint = lit.map(|l| LitPaint {
             mesh: l.setup.mesh(),
             b: &l.solve.b,
-            top: l.setup.top,
+            top: l.setup.top / tone.0,
+            log: tone.1,
         });
         let scene_title = match lit {
             Some(l) => format!(
@@ -206,37 +210,57 @@ impl ViewerApp {
         if let Some((from, to)) = scene_out.moved {
             self.move_point(from, to);
         }
-        if let Some(rect) = layout.exact {
-            self.exact_panel(ui, rect, shown, lit);
-        }
+        self.relit_panel(ui, layout.relit);
     }
 
-    /// The scene lit by the exact kernel, or why it is not there yet.
-    fn exact_panel(&mut self, ui: &mut egui::Ui, rect: Rect, shown: &Shown, lit: Option<&Lit>) {
-        let title = "lit by the exact kernel";
-        if let Some(l) = lit {
-            let paint = LitPaint {
-                mesh: l.setup.mesh(),
-                b: l.setup.exact(),
-                top: l.setup.top,
-            };
-            views::lit_view(
-                ui,
-                rect,
-                title,
-                &shown.world.scene,
-                &paint,
-                &mut self.exact_edges,
-            );
+    /// The exposure's factor (2^stops) and whether the tone scale is logarithmic.
+    fn tone(&self) -> (f64, bool) {
+        (
+            2f64.powf(f64::from(self.settings.exposure)),
+            self.settings.tone_log,
+        )
+    }
+
+    /// The scene lit by its moving lights (the newest B the relighting thread published), the
+    /// lights' marks, and what the user does to them.
+    fn relit_panel(&mut self, ui: &mut egui::Ui, rect: Rect) {
+        let Some(world) = self.lamps.world.clone() else {
+            views::placeholder(ui, rect, "moving light", "waiting for the scene…");
             return;
-        }
-        let why = match (&self.lit, shown.live) {
-            (_, false) => "no lit scene had been solved at this moment",
-            (Some(LitState::Failed(why)), true) => why.as_str(),
-            (Some(LitState::Off), true) => "the lit scene is off (View)",
-            (Some(LitState::Pending(what)), true) => what,
-            _ => "solving the exact radiosity…",
         };
-        views::placeholder(ui, rect, title, why);
+        let tone = self.tone();
+        let frame = self.lamps.frame.clone();
+        let paint = frame
+            .as_deref()
+            .zip(self.lamps.top)
+            .map(|(f, top)| LitPaint {
+                mesh: &f.mesh,
+                b: &f.b,
+                top: top / tone.0,
+                log: tone.1,
+            });
+        let title = match (&frame, &self.lamps.state) {
+            (Some(f), _) => format!(
+                "moving light{}: {:.1} ms per move (median of the last {}), residual {:.0e}, {} el.",
+                if f.lights.len() == 1 { "" } else { "s" },
+                f.median_ms,
+                f.moves.min(crate::relit::TIMED_MOVES as u64),
+                f.residual,
+                f.mesh.len(),
+            ),
+            (None, RelitState::Failed(why)) => format!("moving light: {why}"),
+            (None, _) => "moving light: building the exact operator…".to_owned(),
+        };
+        let view = views::RelitFrameView {
+            rect,
+            title: &title,
+            scene: &world.scene,
+            lit: paint.as_ref(),
+            lights: &self.lamps.lights,
+        };
+        let (out, marks) =
+            views::relit_view(ui, &view, &mut self.lamps.grabbed, &mut self.lamps.texture);
+        self.lamps.marks = marks;
+        self.apply_lamps(&out);
     }
 }

@@ -98,6 +98,27 @@ impl ViewerApp {
             .as_ref()
             .is_some_and(|s| s.handled == self.worker.sent())
     }
+    /// The relit scene's lights, where the user sees them.
+    pub fn lights(&self) -> &[flatland_geom::PointLight] {
+        &self.lamps.lights
+    }
+
+    /// The newest B the relighting thread published for the current scene.
+    pub fn relit(&self) -> Option<&crate::relit::RelitFrame> {
+        self.lamps.frame.as_deref()
+    }
+
+    /// Where the lights' marks were drawn in the last frame (in points), by light.
+    pub fn light_marks(&self) -> &[egui::Pos2] {
+        &self.lamps.marks
+    }
+
+    /// Blocks until the relighting thread publishes something this app has not taken yet, or
+    /// `timeout` passes (for tests). The UI never calls it.
+    pub fn wait_for_relit(&self, timeout: Duration) -> bool {
+        self.lamps.handle.wait(timeout)
+    }
+
     /// Blocks until the learner publishes something this app has not taken yet, or `timeout`
     /// passes (for tests: wait on the learner instead of sleeping). The UI never calls it.
     pub fn wait_for_learner(&self, timeout: Duration) -> bool {

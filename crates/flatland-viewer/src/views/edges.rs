@@ -1,16 +1,17 @@
 //! A scene's edges: by role, or each element in the colour of its radiosity with a colour bar
-//! (the lit scene, [`lit_view`]); front-side ticks and surface indices only where they have
+//! (the lit scenes); front-side ticks and surface indices only where they have
 //! room, so a scene of a thousand edges is drawn as lines, not as a smear of labels.
 
 use std::collections::HashSet;
 use std::hash::{BuildHasher, Hasher};
 
-use egui::{Align2, Color32, FontId, Painter, Rect, Sense, Stroke, pos2, vec2};
+use egui::{Align2, Color32, FontId, Painter, Rect, Stroke, pos2, vec2};
 use flatland_geom::{Role, Scene};
+use flatland_pictures::colormap::Scale;
 use flatland_solve::Mesh;
 
 use super::raster::{EdgesTexture, Pen};
-use super::widgets::{View, gradient, legend, panel_frame, short};
+use super::widgets::{View, gradient, short};
 use super::{BLOCKER, EMITTER, LIT_BLOCKER, SURFACE, TITLE_H};
 use crate::colormap::colour;
 
@@ -36,20 +37,30 @@ pub(super) const LIT_LEGEND: [(&str, Color32); 2] =
     [("• emitter", EMITTER), ("blocker", LIT_BLOCKER)];
 
 /// A scene's edges coloured by a radiosity: `b` per element of `mesh`, on a linear scale from
-/// 0 to `top` (emitters, brighter, are drawn at the top colour and marked).
+/// 0 to `top` or a logarithmic one of [`flatland_pictures::colormap::LOG_DECADES`] below it
+/// (emitters, brighter, are drawn at the top colour and marked).
 #[derive(Clone, Copy, Debug)]
 pub struct LitPaint<'a> {
     /// The elements.
     pub mesh: &'a Mesh,
     /// B per element.
     pub b: &'a [f64],
-    /// The value drawn in the top colour.
+    /// The value drawn in the top colour (the exposure moves it).
     pub top: f64,
+    /// A logarithmic tone scale instead of a linear one.
+    pub log: bool,
 }
 
 impl LitPaint<'_> {
+    fn scale(&self) -> Scale {
+        Scale {
+            top: self.top,
+            log: self.log,
+        }
+    }
+
     fn color(&self, b: f64) -> Color32 {
-        colour(b / self.top)
+        colour(self.scale().unit(b))
     }
 }
 
@@ -90,7 +101,11 @@ pub(super) fn draw_edges_once(
     weak: Color32,
 ) {
     let lit_key = lit.map_or(0, |l| {
-        fingerprint(l.b.iter().map(|b| b.to_bits()).chain([l.top.to_bits()]))
+        fingerprint(
+            l.b.iter()
+                .map(|b| b.to_bits())
+                .chain([l.top.to_bits(), u64::from(l.log)]),
+        )
     });
     texture.paint(
         painter,
@@ -140,9 +155,10 @@ fn draw_lines(pen: &mut impl Pen, view: &View, scene: &Scene, lit: Option<&LitPa
             }
         }
         if lit.is_some() && e.role == Role::Surface && e.emission > 0.0 {
-            let sun = a + (b - a) * 0.5 + n * 13.0;
-            pen.disc(sun, 6.0, EMITTER);
-            pen.ring(sun, 6.0, Stroke::new(1.0, Color32::BLACK));
+            // Small: a floor plan's emitters are many, and big marks would cover the rooms.
+            let sun = a + (b - a) * 0.5 + n * 7.0;
+            pen.disc(sun, 3.0, EMITTER);
+            pen.ring(sun, 3.0, Stroke::new(0.8, Color32::BLACK));
         }
     }
 }
@@ -215,8 +231,10 @@ impl LabelGrid {
     }
 }
 
-/// A vertical colour bar at the right of `rect`: 0 at the bottom, `top` at the top.
-pub(super) fn colour_bar(painter: &Painter, rect: Rect, top: f64, text: Color32) {
+/// A vertical colour bar at the right of `rect` for `lit`'s scale: its bottom value at the
+/// bottom (0, or `top` × 10^−decades on a log scale), `top` at the top.
+pub(super) fn colour_bar(painter: &Painter, rect: Rect, lit: &LitPaint<'_>, text: Color32) {
+    let scale = lit.scale();
     let bar = Rect::from_min_max(
         pos2(
             rect.right() - COLOUR_BAR_W + 10.0,
@@ -239,14 +257,18 @@ pub(super) fn colour_bar(painter: &Painter, rect: Rect, top: f64, text: Color32)
     painter.text(
         bar.right_top() + vec2(3.0, 0.0),
         Align2::LEFT_TOP,
-        short(top),
+        short(scale.top),
         font.clone(),
         text,
     );
     painter.text(
         bar.right_bottom() + vec2(3.0, 0.0),
         Align2::LEFT_BOTTOM,
-        "0",
+        if scale.log {
+            short(scale.value_at(0.0))
+        } else {
+            "0".to_owned()
+        },
         font.clone(),
         text,
     );
@@ -257,26 +279,6 @@ pub(super) fn colour_bar(painter: &Painter, rect: Rect, top: f64, text: Color32)
         font,
         text,
     );
-}
-
-/// A scene lit by `lit` (not interactive): the exact solution beside the learned one. Its
-/// lines are rastered into `texture`, again only when the scene, `lit` or the panel changes.
-pub fn lit_view(
-    ui: &mut egui::Ui,
-    rect: Rect,
-    title: &str,
-    scene: &Scene,
-    lit: &LitPaint<'_>,
-    texture: &mut EdgesTexture,
-) {
-    let _ = ui.allocate_rect(rect, Sense::hover());
-    let painter = ui.painter_at(rect);
-    let weak = ui.visuals().weak_text_color();
-    panel_frame(&painter, rect, title, ui.visuals().text_color());
-    let view = View::of(scene, scene_area(rect, true));
-    draw_edges_once(texture, &painter, rect, &view, scene, Some(lit), weak);
-    colour_bar(&painter, rect, lit.top, weak);
-    let _ = legend(&painter, rect, &LIT_LEGEND);
 }
 
 #[cfg(test)]

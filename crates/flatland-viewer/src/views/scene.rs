@@ -137,7 +137,7 @@ fn captions(
 ) {
     let rect = frame.rect;
     if let Some(lit) = lit {
-        colour_bar(painter, rect, lit.top, weak);
+        colour_bar(painter, rect, lit, weak);
     }
     let x = legend(
         painter,
