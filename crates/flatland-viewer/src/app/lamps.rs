@@ -13,6 +13,11 @@ use crate::relit::{RelitFrame, RelitHandle, RelitState};
 use crate::views::{EdgesTexture, LampsOut};
 use crate::worker::World;
 
+/// A light added to a scene without lights of its own is this many times as strong as its
+/// strongest emitting edge: as strong as one, its bounce into the next room is lost under the
+/// emitters' light there.
+pub const LAMP_OVER_EMITTER: f64 = 4.0;
+
 /// Walk positions the wandering light passes per second.
 pub const WANDER_SPEED: f64 = 6.0;
 
@@ -74,8 +79,8 @@ impl Lamps {
     }
 }
 
-/// Power of a light in `kernel`'s scene: its first light's, else that of its strongest
-/// emitting edge (`E × length`), else 1.
+/// Power of a light in `kernel`'s scene: its first light's, else [`LAMP_OVER_EMITTER`] times
+/// that of its strongest emitting edge (`E × length`), else 1.
 fn light_power(kernel: &Kernel) -> f64 {
     let scene = kernel.scene();
     if let Some(l) = scene.lights().first() {
@@ -86,7 +91,11 @@ fn light_power(kernel: &Kernel) -> f64 {
         .iter()
         .map(|e| e.emission * e.length())
         .fold(0.0, f64::max);
-    if strongest > 0.0 { strongest } else { 1.0 }
+    if strongest > 0.0 {
+        LAMP_OVER_EMITTER * strongest
+    } else {
+        1.0
+    }
 }
 
 /// Where a light may go: inside a room (not behind a wall or inside an object) and off every

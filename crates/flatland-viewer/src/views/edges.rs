@@ -154,8 +154,9 @@ fn draw_lines(pen: &mut impl Pen, view: &View, scene: &Scene, lit: Option<&LitPa
                 }
             }
         }
-        if lit.is_some() && e.role == Role::Surface && e.emission > 0.0 {
-            // Small: a floor plan's emitters are many, and big marks would cover the rooms.
+        if lit.is_some() && e.role == Role::Surface && e.emission > 0.0 && length >= MIN_TICKED {
+            // Small, and only on edges long enough to tick: a big plan's emitters are many, and
+            // their marks would cover the rooms they light.
             let sun = a + (b - a) * 0.5 + n * 7.0;
             pen.disc(sun, 3.0, EMITTER);
             pen.ring(sun, 3.0, Stroke::new(0.8, Color32::BLACK));
