@@ -13,8 +13,9 @@ use crate::colormap::{Scale, inferno, radiosity_top};
 /// How many labelled marks the colour bar has, bottom and top included.
 const TICKS: usize = 5;
 
-/// The colour scale of a lit plan: the viewer's rule (the top is the brightest element that
-/// does not emit; a log scale when the values span more than a linear one can show).
+/// The colour scale of a lit plan: the viewer's default tone (the top is the brightest element
+/// that does not emit, and the scale is logarithmic over four decades below it: on a real level
+/// a linear scale set by the walls beside a lamp shows the rest of the plan black).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PlanColours {
     scale: Scale,
@@ -24,14 +25,10 @@ impl PlanColours {
     /// The scale for radiosity `b` on `mesh`.
     #[must_use]
     pub fn new(mesh: &Mesh, b: &[f64]) -> Self {
-        let lit: Vec<f64> = (0..mesh.len())
-            .filter(|&i| mesh.edge_of(i).emission == 0.0)
-            .map(|i| b[i])
-            .collect();
         PlanColours {
             scale: Scale {
                 top: radiosity_top(mesh, b),
-                log: Scale::wants_log(&lit),
+                log: true,
             },
         }
     }

@@ -1,5 +1,6 @@
 //! Imports an SVG floor plan, solves it exactly with default arguments and writes the lit plan
-//! as SVG and PNG: what `flatland solve --scene plan.svg --out lit.svg` will do once wired.
+//! as SVG and PNG, in a grey ramp of its own: `flatland solve --scene plan.svg --out lit.svg`
+//! does the same in the project's colours.
 //!
 //! `cargo run --release -p flatland-svg --example lit_plan -- scenes/svg/floorplan.svg lit.svg`
 //! (writes `lit.svg` and `lit.png`). The colour map here is a plain grey ramp; the CLI passes
