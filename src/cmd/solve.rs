@@ -2,19 +2,16 @@
 //! trace it) and score the solved radiosity against the exact kernel's, on one [`LitScene`]
 //! that solves each mesh once.
 
-mod summary;
-
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use anyhow::{Context, Result, bail};
 use flatland_geom::{Kernel, write_atomic};
 use flatland_lab::interrupt;
+use flatland_lab::report::solution::Solution;
 use flatland_light::LightParams;
 use flatland_methods::{Ask, KernelArg, Lit, Method, MethodError, Recipes};
-use flatland_solve::{
-    Elements, FinalGather, LitParams, LitScene, ReferenceMesh, Stop, radiosity_csv, samples_csv,
-};
+use flatland_solve::{Elements, LitParams, LitScene, ReferenceMesh, Stop};
 
 use super::SceneArgs;
 
@@ -112,59 +109,32 @@ pub fn run(args: &Args) -> Result<()> {
     let lighting = light(args, &lit, stop)?;
     interrupt::check()?;
     let kernel_label = args.kernel.label();
-    match (&args.out, format) {
-        (Some(path), Some("csv")) => {
-            let csv = table(args, &lit, &lighting, stop)?;
-            interrupt::writing(|| write_atomic(path, csv.as_bytes()))?;
-        }
-        (Some(path), Some("svg")) => {
-            let title = format!("{label} lit by the {kernel_label} kernel");
-            let b = element_values(args, &lit, &lighting);
-            let plan =
-                flatland_pictures::plan::lit_plan(lit.kernel().scene(), lit.mesh(), b, &title);
-            interrupt::writing(|| write_atomic(path, plan.svg().as_bytes()))?;
-        }
-        (Some(path), Some(_)) => picture(path, &lit, &label, &kernel_label, &lighting)?,
-        _ => {}
+    let solution = Solution {
+        lit: &lit,
+        lighting: &lighting,
+        exact: args.kernel == KernelArg::Method(Method::Exact),
+        label: &label,
+        kernel: &kernel_label,
+    };
+    if let (Some(path), Some(format)) = (&args.out, format) {
+        let bytes = match format {
+            "csv" => (solution.csv(args.samples, stop))
+                .map_err(|e| super::interrupted(MethodError::from(e)))?
+                .into_bytes(),
+            "svg" => solution.svg().into_bytes(),
+            _ => solution.png()?,
+        };
+        interrupt::writing(|| write_atomic(path, &bytes))?;
     }
     if args.json {
-        println!("{}", summary::json(&label, &kernel_label, &lit, &lighting));
+        println!("{}", solution.json());
     } else {
-        summary::print(&label, &kernel_label, &lit, &lighting);
+        solution.print();
         if let Some(path) = &args.out {
             println!("wrote {}", path.display());
         }
     }
     Ok(())
-}
-
-/// The CSV of `--out`: `--samples` rows per element of B as a function, or one row per
-/// element (the exact kernel's the mean of its function over the element).
-fn table(args: &Args, lit: &LitScene, lighting: &Lit, stop: &Stop) -> Result<String> {
-    let b = &lighting.comparison.solution.radiosity;
-    let gather = match lit.function() {
-        Some(function) => std::borrow::Cow::Borrowed(&function.gather),
-        None => std::borrow::Cow::Owned(FinalGather::new(lit.kernel(), lit.mesh())?),
-    };
-    Ok(match args.samples {
-        Some(n) => {
-            let samples = (gather.samples(b, n, stop))
-                .map_err(|e| super::interrupted(MethodError::from(e)))?;
-            samples_csv(&samples)
-        }
-        None => radiosity_csv(lit.mesh(), element_values(args, lit, lighting)),
-    })
-}
-
-/// One value per element, as the CSV and the drawing give them: the exact kernel's the mean of
-/// its function over the element, another kernel's its element value.
-fn element_values<'a>(args: &Args, lit: &'a LitScene, lighting: &'a Lit) -> &'a [f64] {
-    match lit.function() {
-        Some(function) if args.kernel == KernelArg::Method(Method::Exact) => {
-            &function.element_means
-        }
-        _ => &lighting.comparison.solution.radiosity,
-    }
 }
 
 /// Lights `lit` with `--kernel`, a bar showing a learner's cells.
@@ -189,20 +159,4 @@ fn light(args: &Args, lit: &LitScene, stop: &Stop) -> Result<Lit> {
         .with_context(|| format!("lighting with the {} kernel", args.kernel.label()))?;
     bar.finish_and_clear();
     Ok(lighting)
-}
-
-/// The lit scene beside B(s) against the exact solution, as a PNG.
-fn picture(path: &Path, lit: &LitScene, label: &str, kernel: &str, lighting: &Lit) -> Result<()> {
-    let c = &lighting.comparison;
-    let picture = flatland_pictures::lit::Picture {
-        scene: lit.kernel().scene(),
-        label,
-        kernel,
-        mesh: lit.mesh(),
-        b: &c.solution.radiosity,
-        reference: lit.reference(),
-        rel_l2_reflected: c.errors.rel_l2_reflected,
-    };
-    let png = flatland_pictures::lit::lit_scene_png(&picture)?;
-    Ok(interrupt::writing(|| write_atomic(path, &png))?)
 }

@@ -5,5 +5,6 @@ pub mod figure;
 pub mod grid;
 pub mod r4;
 pub mod scaling;
+pub mod solution;
 pub mod timed;
 pub mod walk;
