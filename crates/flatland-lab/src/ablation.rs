@@ -74,7 +74,7 @@ pub fn leave_one_out() -> Vec<Variant> {
     };
     vec![
         Variant {
-            name: "default",
+            name: "visibility",
             params: d,
         },
         without("− gating by face (by pair only)", &|p| {

@@ -167,8 +167,7 @@ pub fn summary(doc: &mut String, real: &Real) -> Result<()> {
         "The measure is the lit scene: the relative L2 error of the solved reflected radiosity \
          B − E against the exact reference at the mesh's midpoints, reached within a time \
          (build + solve), each method swept over its own knob until a row takes over {} s: the \
-         default learner (`default`, the light-driven learner `flatland solve` runs) by its \
-         tolerance, the exact kernel's own solve by elements, hierarchical radiosity by links, \
+         light-driven learner (`light`) by its tolerance, the exact kernel's own solve by elements, hierarchical radiosity by links, \
          the Monte Carlo light tracer by photons. The mesh and the reference are `flatland \
          solve`'s: a mesh refined until the exact B as a function is within 1 %, and the finer \
          solve of that estimate, read by its final gather; how good both are, against much \

@@ -30,9 +30,9 @@ pub fn document(f: &Findings) -> Result<String> {
         doc,
         "{HEADLINE_BUDGET} cells, mean of {} seed(s); errors are relative L2 (grid, held out) \
          and relative L1 (grid); \"× HR\" is the grid error over hierarchical radiosity's at \
-         {HEADLINE_BUDGET} links. First the path from the paper's network to the default \
-         learner, one idea at a time; then the default with one idea taken out at a time \
-         (docs/ALGORITHM.md explains each).\n",
+         {HEADLINE_BUDGET} links. First the path from the paper's network to the visibility \
+         network, one idea at a time; then the visibility network with one idea taken out at a \
+         time (docs/ALGORITHM.md explains each).\n",
         f.seeds
     )?;
     for a in &f.ablations {
