@@ -44,10 +44,6 @@ pub const METHODS: [Method; 5] = [
     Method::Tracer,
 ];
 
-/// Clustered HR's links per edge: its resources in proportion to the scene (the default of
-/// `flatland solve --kernel clustered` too).
-pub const CLUSTERED_LINKS_PER_EDGE: usize = flatland_baselines::DEFAULT_LINKS_PER_EDGE;
-
 /// What a scaling run measures.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ScalingPlan {
@@ -337,7 +333,7 @@ fn one(cx: &Context<'_>, method: Method, equal_time: f64) -> TimedRow {
         Method::Hr => cx.baseline(Method::Hr, HR_BASIS, 1),
         Method::Clustered => cx.baseline(
             Method::Clustered,
-            CLUSTERED_LINKS_PER_EDGE * cx.kernel.scene().edges().len(),
+            flatland_baselines::DEFAULT_LINKS_PER_EDGE * cx.kernel.scene().edges().len(),
             1,
         ),
         Method::Tracer => cx.tracer_for(equal_time, 1).map(|mut row| {
@@ -366,7 +362,7 @@ fn setting_of(method: Method, scorer: &Scorer, edges: usize) -> Setting {
         Method::Light => Setting::Tolerance(flatland_light::LightParams::default().tolerance),
         Method::Exact => Setting::Elements(scorer.mesh().len()),
         Method::Tracer => Setting::Photons(0),
-        Method::Clustered => Setting::Budget(CLUSTERED_LINKS_PER_EDGE * edges),
+        Method::Clustered => Setting::Budget(flatland_baselines::DEFAULT_LINKS_PER_EDGE * edges),
         _ => Setting::Budget(HR_BASIS),
     }
 }

@@ -61,3 +61,34 @@ pub enum TransportError {
     #[error("interrupted")]
     Interrupted,
 }
+
+impl TransportError {
+    /// `Ok` when `what` has the mesh's `expected` elements, else [`TransportError::LengthMismatch`].
+    pub(crate) fn check_length(
+        what: &'static str,
+        found: usize,
+        expected: usize,
+    ) -> Result<(), TransportError> {
+        if found == expected {
+            Ok(())
+        } else {
+            Err(TransportError::LengthMismatch {
+                what,
+                found,
+                expected,
+            })
+        }
+    }
+
+    /// What every form's build checks first: `mesh` is a mesh of `kernel`'s scene and
+    /// `operator` is its operator.
+    pub(crate) fn check_inputs(
+        kernel: &flatland_geom::Kernel,
+        mesh: &flatland_solve::Mesh,
+        operator: &flatland_solve::SparseOperator,
+    ) -> Result<(), TransportError> {
+        use flatland_solve::TransferOperator as _;
+        flatland_solve::check_scene(kernel, mesh)?;
+        TransportError::check_length("the operator", operator.len(), mesh.len())
+    }
+}

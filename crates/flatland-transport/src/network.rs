@@ -15,7 +15,7 @@
 use std::time::Instant;
 
 use flatland_geom::{DVec2, Kernel};
-use flatland_solve::{Mesh, SparseOperator, TransferOperator};
+use flatland_solve::{Mesh, SparseOperator};
 use rand::RngExt;
 use rayon::prelude::*;
 
@@ -152,14 +152,7 @@ impl CellNetwork {
         stop: &Stop,
     ) -> Result<CellNetwork, TransportError> {
         params.check()?;
-        flatland_solve::check_scene(kernel, mesh)?;
-        if operator.len() != mesh.len() {
-            return Err(TransportError::LengthMismatch {
-                what: "the operator",
-                found: operator.len(),
-                expected: mesh.len(),
-            });
-        }
+        TransportError::check_inputs(kernel, mesh, operator)?;
         let started = Instant::now();
         let columns = Columns::of(operator);
         let midpoints: Vec<DVec2> = (0..mesh.len()).map(|i| mesh.local(i)[2]).collect();
@@ -597,13 +590,7 @@ impl LaterBounces for CellNetwork {
         out: &mut [f64],
         buffers: &mut QueryBuffers,
     ) -> Result<(), TransportError> {
-        if out.len() != self.n {
-            return Err(TransportError::LengthMismatch {
-                what: "the output",
-                found: out.len(),
-                expected: self.n,
-            });
-        }
+        TransportError::check_length("the output", out.len(), self.n)?;
         buffers.start(self.n);
         self.accumulate(lights.lit, buffers);
         buffers.finish(out, lights.lit.iter().all(|&(_, b)| b >= 0.0));

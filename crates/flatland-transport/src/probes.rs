@@ -8,7 +8,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use flatland_geom::{DVec2, Kernel, PointLight};
-use flatland_solve::{DirectLight, LightBuffers, Mesh, SparseOperator, TransferOperator};
+use flatland_solve::{DirectLight, LightBuffers, Mesh, SparseOperator};
 use rand::RngExt;
 use rayon::prelude::*;
 
@@ -141,14 +141,7 @@ impl LightProbes {
         stop: &Stop,
     ) -> Result<LightProbes, TransportError> {
         params.check()?;
-        flatland_solve::check_scene(kernel, mesh)?;
-        if operator.len() != mesh.len() {
-            return Err(TransportError::LengthMismatch {
-                what: "the operator",
-                found: operator.len(),
-                expected: mesh.len(),
-            });
-        }
+        TransportError::check_inputs(kernel, mesh, operator)?;
         let started = Instant::now();
         let columns = Columns::of(operator);
         let solver = ProbeSolver::new(kernel, mesh, &columns, params)?;
@@ -237,13 +230,7 @@ impl LaterBounces for LightProbes {
         out: &mut [f64],
         buffers: &mut QueryBuffers,
     ) -> Result<(), TransportError> {
-        if out.len() != self.n {
-            return Err(TransportError::LengthMismatch {
-                what: "the output",
-                found: out.len(),
-                expected: self.n,
-            });
-        }
+        TransportError::check_length("the output", out.len(), self.n)?;
         buffers.start(self.n);
         self.accumulate(lights.lights, buffers);
         buffers.finish(out, true);

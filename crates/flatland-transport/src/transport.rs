@@ -3,7 +3,7 @@
 use std::time::Instant;
 
 use flatland_geom::Kernel;
-use flatland_solve::{Mesh, SparseOperator, TransferOperator};
+use flatland_solve::{Mesh, SparseOperator};
 
 use crate::clusters::Clusters;
 use crate::estimate::{estimate, validation_lights};
@@ -81,14 +81,7 @@ impl Transport {
         stop: &Stop,
     ) -> Result<Transport, TransportError> {
         params.check()?;
-        flatland_solve::check_scene(kernel, mesh)?;
-        if operator.len() != mesh.len() {
-            return Err(TransportError::LengthMismatch {
-                what: "the operator",
-                found: operator.len(),
-                expected: mesh.len(),
-            });
-        }
+        TransportError::check_inputs(kernel, mesh, operator)?;
         let started = Instant::now();
         let columns = Columns::of(operator);
         let clusters = Clusters::spatial(mesh, params.cluster_elements);
@@ -126,13 +119,7 @@ impl Transport {
         buffers: &mut QueryBuffers,
     ) -> Result<(), TransportError> {
         let n = self.identity.elements;
-        if out.len() != n {
-            return Err(TransportError::LengthMismatch {
-                what: "the output",
-                found: out.len(),
-                expected: n,
-            });
-        }
+        TransportError::check_length("the output", out.len(), n)?;
         if let Some(&(j, _)) = lit.iter().find(|&&(j, _)| j as usize >= n) {
             return Err(TransportError::InvalidParameter {
                 name: "B₀",
@@ -149,13 +136,7 @@ impl Transport {
     /// `M₂ B₀` for a dense B₀ (length N).
     pub fn later_bounces(&self, b0: &[f64]) -> Result<Vec<f64>, TransportError> {
         let n = self.identity.elements;
-        if b0.len() != n {
-            return Err(TransportError::LengthMismatch {
-                what: "B₀",
-                found: b0.len(),
-                expected: n,
-            });
-        }
+        TransportError::check_length("B₀", b0.len(), n)?;
         let lit: Vec<(u32, f64)> = b0
             .iter()
             .enumerate()
@@ -259,6 +240,7 @@ mod tests {
     use crate::free::free_points;
     use crate::lit_source;
     use flatland_geom::{DVec2, Edge, PointLight, Scene};
+    use flatland_solve::TransferOperator;
     use flatland_solve::{
         DirectLight, LightBuffers, SolveParams, never, solve_linear, sweep_operator,
     };

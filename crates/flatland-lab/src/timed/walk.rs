@@ -46,9 +46,6 @@ pub const METHODS: [Method; 4] = [
     Method::Transport,
 ];
 
-/// Clustered HR's links per edge (its default, as `flatland solve --kernel clustered`).
-pub const CLUSTERED_LINKS_PER_EDGE: usize = flatland_baselines::DEFAULT_LINKS_PER_EDGE;
-
 /// What a relighting bench measures.
 #[derive(Clone, Debug, PartialEq)]
 pub struct WalkPlan {
@@ -427,7 +424,8 @@ fn baselines<'k>(
     for &method in &plan.methods {
         let built: Result<Box<dyn Mover + 'k>> = match method {
             Method::Clustered => {
-                let links = CLUSTERED_LINKS_PER_EDGE * cx.kernel.scene().edges().len();
+                let links =
+                    flatland_baselines::DEFAULT_LINKS_PER_EDGE * cx.kernel.scene().edges().len();
                 ClusteredMover::new(cx.kernel, cx.mesh, links, &plan.clustered, stop)
                     .map(|m| Box::new(m) as Box<dyn Mover + 'k>)
             }
