@@ -141,7 +141,7 @@ fn lighting(w: &mut String, scene: &Scene, emitters: &[usize]) {
         let list = named(
             lights
                 .iter()
-                .map(|l| format!("({}, {}) power {}", l.at.x, l.at.y, l.power)),
+                .map(|l| format!("({}, {}) power {}", short(l.at.x), short(l.at.y), l.power)),
         );
         let _ = writeln!(w, "lights: {}: {list}", lights.len());
     }
@@ -173,6 +173,19 @@ fn plural(n: usize, word: &str) -> String {
         format!("1 {word}")
     } else {
         format!("{n} {word}s")
+    }
+}
+
+/// `x` as written: a coordinate read from a drawing is an `f32` (SVG's precision), printed as
+/// the shortest decimal of that `f32` (`8.2`, not `8.199999809265137`); any other as it is.
+fn short(x: f64) -> String {
+    // Rounding to f32 and back changes nothing only for a value that came from an f32.
+    #[allow(clippy::cast_possible_truncation)]
+    let single = x as f32;
+    if f64::from(single) == x {
+        single.to_string()
+    } else {
+        x.to_string()
     }
 }
 
@@ -215,5 +228,14 @@ mod tests {
         assert_eq!(named(items(3)), "0, 1, 2");
         assert_eq!(named(items(MAX_NAMED)), "0, 1, 2, 3");
         assert_eq!(named(items(12)), "0, 1, 2, 3 and 8 more");
+    }
+
+    #[test]
+    fn coordinates_from_a_drawing_print_as_drawn() {
+        assert_eq!(short(f64::from(8.2_f32)), "8.2");
+        assert_eq!(short(-10.5), "-10.5");
+        // A value no f32 holds keeps every digit it has.
+        assert_eq!(short(0.1), "0.1");
+        assert_eq!(short(1.0 / 3.0), (1.0_f64 / 3.0).to_string());
     }
 }
