@@ -12,7 +12,7 @@ use rayon::prelude::*;
 use crate::Columns;
 use crate::clusters::Clusters;
 use crate::local::{Block, Workspace};
-use crate::{QueryBuffers, Stop, TransportError};
+use crate::{BlockFootprint, QueryBuffers, Stop, TransportError, Watch};
 
 /// One cluster's block `M₂[rows, elements] ≈ U Vᵀ`.
 #[derive(Clone, Debug, PartialEq)]
@@ -69,24 +69,29 @@ pub(crate) struct BlockTolerance {
 }
 
 /// `M₂[:, c]` for every cluster, in parallel (one workspace per thread; each block depends
-/// only on its cluster, so the result does not depend on the thread count).
+/// only on its cluster, so the result does not depend on the thread count). Each block's
+/// footprint goes to `watch` as soon as it is made, in whatever order the threads finish.
 pub(crate) fn build_blocks(
     columns: &Columns,
     clusters: &Clusters,
     tolerance: BlockTolerance,
     stop: &Stop,
+    watch: &Watch<'_>,
 ) -> Result<Vec<ClusterBlock>, TransportError> {
     let n = columns.len();
     clusters
         .members
         .par_iter()
+        .enumerate()
         .map_init(
             || Workspace::new(n),
-            |work, elements| {
+            |work, (c, elements)| {
                 if stop() {
                     return Err(TransportError::Interrupted);
                 }
-                block_of(work, columns, elements, tolerance)
+                let block = block_of(work, columns, elements, tolerance)?;
+                watch(BlockFootprint::of(c, elements, &block));
+                Ok(block)
             },
         )
         .collect()
@@ -198,6 +203,16 @@ impl LowRank {
         }
         buffers.pairs = pairs;
         buffers.scratch = coefficients;
+    }
+
+    /// Every block's footprint, in cluster order.
+    pub fn footprints(&self) -> Vec<BlockFootprint> {
+        self.blocks
+            .iter()
+            .zip(&self.clusters.members)
+            .enumerate()
+            .map(|(c, (block, elements))| BlockFootprint::of(c, elements, block))
+            .collect()
     }
 
     /// Bytes held: the blocks and the clusters' tables.

@@ -9,8 +9,13 @@ use crate::clusters::Clusters;
 use crate::estimate::{estimate, validation_lights};
 use crate::lowrank::{BlockTolerance, LowRank, build_blocks};
 use crate::{
-    Columns, ErrorEstimate, LaterBounces, Move, QueryBuffers, Stop, TransportError, TransportParams,
+    BlockFootprint, Columns, ErrorEstimate, LaterBounces, Move, QueryBuffers, Stop, TransportError,
+    TransportParams,
 };
+
+/// What sees each block of a build as it is made ([`Transport::build_watched`]); called from
+/// the build's threads.
+pub type Watch<'a> = dyn Fn(BlockFootprint) + Sync + 'a;
 
 /// The later bounces `M₂ = K² (I − K)⁻¹` of one scene on one mesh, in a form that answers
 /// `M₂ B₀` for a light's direct light B₀ in a fraction of a millisecond.
@@ -80,6 +85,20 @@ impl Transport {
         params: &TransportParams,
         stop: &Stop,
     ) -> Result<Transport, TransportError> {
+        Transport::build_watched(kernel, mesh, operator, params, stop, &|_| {})
+    }
+
+    /// [`Transport::build`], each block's footprint handed to `watch` as soon as it is made
+    /// (before a budget cuts ranks: [`Transport::footprints`] gives what is kept), so a viewer
+    /// can draw the blocks as they grow.
+    pub fn build_watched(
+        kernel: &Kernel,
+        mesh: &Mesh,
+        operator: &SparseOperator,
+        params: &TransportParams,
+        stop: &Stop,
+        watch: &Watch<'_>,
+    ) -> Result<Transport, TransportError> {
         params.check()?;
         TransportError::check_inputs(kernel, mesh, operator)?;
         let started = Instant::now();
@@ -89,7 +108,7 @@ impl Transport {
             block: params.tolerance,
             solve: params.solve_tolerance,
         };
-        let blocks = build_blocks(&columns, &clusters, tolerance, stop)?;
+        let blocks = build_blocks(&columns, &clusters, tolerance, stop, watch)?;
         let mut form = LowRank { clusters, blocks };
         if let Some(budget) = params.budget {
             form.fit_budget(budget);
@@ -198,6 +217,13 @@ impl Transport {
             model: self.identity.describe(),
             mesh: identity.describe(),
         })
+    }
+
+    /// Where each block lies: its senders and receivers as runs of elements, and its rank (in
+    /// cluster order; one per cluster).
+    #[must_use]
+    pub fn footprints(&self) -> Vec<BlockFootprint> {
+        self.form.footprints()
     }
 
     /// Clusters and the mean rank of their blocks.
@@ -401,6 +427,44 @@ mod tests {
         Transport::build(&kernel, &mesh, &k, &TransportParams::default(), &counting).unwrap();
         let steps = Transport::set_up_steps(&mesh, &TransportParams::default());
         assert_eq!(polls.load(std::sync::atomic::Ordering::Relaxed), steps);
+    }
+
+    #[test]
+    fn the_watched_blocks_are_the_stored_ones_and_cover_what_the_model_holds() {
+        let (kernel, mesh, k) = plan(200, 5);
+        let seen = std::sync::Mutex::new(Vec::new());
+        let watch = |f: BlockFootprint| seen.lock().unwrap().push(f);
+        let params = TransportParams::default();
+        let transport =
+            Transport::build_watched(&kernel, &mesh, &k, &params, &never, &watch).unwrap();
+        let mut seen = seen.into_inner().unwrap();
+        seen.sort_by_key(|f| f.cluster);
+        let stored = transport.footprints();
+        assert_eq!(seen, stored, "no budget: what was watched is what is kept");
+        assert_eq!(stored.len(), Transport::set_up_steps(&mesh, &params));
+        // Every element sends from exactly one block; each block's runs are its rows.
+        let mut sends = vec![0; mesh.len()];
+        for (f, block) in stored.iter().zip(&transport.form.blocks) {
+            f.senders
+                .iter()
+                .cloned()
+                .flatten()
+                .for_each(|e| sends[e as usize] += 1);
+            let rows: Vec<u32> = f.receivers.iter().cloned().flatten().collect();
+            assert_eq!(rows, block.rows);
+            assert_eq!(f.rank, block.rank());
+            assert!(f.pairs() <= block.rows.len() * mesh.len());
+        }
+        assert!(sends.iter().all(|&n| n == 1));
+        assert!(stored.iter().any(|f| f.rank > 0 && f.pairs() > 0));
+        // A budget cuts ranks after the build: the stored footprints say so.
+        let tight = TransportParams {
+            budget: Some(transport.bytes() / 4),
+            ..params
+        };
+        let cut = Transport::build(&kernel, &mesh, &k, &tight, &never).unwrap();
+        let ranks = |t: &Transport| t.footprints().iter().map(|f| f.rank).sum::<usize>();
+        assert!(ranks(&cut) < ranks(&transport));
     }
 
     #[test]
