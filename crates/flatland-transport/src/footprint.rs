@@ -5,8 +5,6 @@
 
 use std::ops::Range;
 
-use crate::lowrank::ClusterBlock;
-
 /// One block of `M₂` as built: its cluster, senders and receivers as runs of element indices,
 /// and the rank it was cut to.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -22,13 +20,19 @@ pub struct BlockFootprint {
 }
 
 impl BlockFootprint {
-    /// The footprint of `block`, cluster `cluster` of `senders` (ascending).
-    pub(crate) fn of(cluster: usize, senders: &[u32], block: &ClusterBlock) -> BlockFootprint {
+    /// The footprint of cluster `cluster`'s block: its `senders` and kept `receivers`
+    /// (both ascending) and its rank.
+    pub(crate) fn of(
+        cluster: usize,
+        senders: &[u32],
+        receivers: &[u32],
+        rank: usize,
+    ) -> BlockFootprint {
         BlockFootprint {
             cluster,
             senders: runs(senders),
-            receivers: runs(&block.rows),
-            rank: block.rank(),
+            receivers: runs(receivers),
+            rank,
         }
     }
 
@@ -39,6 +43,11 @@ impl BlockFootprint {
         count(&self.senders) * count(&self.receivers)
     }
 }
+
+/// What sees each block of a build as it is made
+/// ([`Transport::build_watched`](crate::Transport::build_watched)); called from the build's
+/// threads.
+pub type Watch<'a> = dyn Fn(BlockFootprint) + Sync + 'a;
 
 /// Ascending indices as runs of consecutive ones.
 fn runs(ascending: &[u32]) -> Vec<Range<u32>> {

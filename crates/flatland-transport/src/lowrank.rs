@@ -11,8 +11,9 @@ use rayon::prelude::*;
 
 use crate::Columns;
 use crate::clusters::Clusters;
+use crate::footprint::{BlockFootprint, Watch};
 use crate::local::{Block, Workspace};
-use crate::{BlockFootprint, QueryBuffers, Stop, TransportError, Watch};
+use crate::{QueryBuffers, Stop, TransportError};
 
 /// One cluster's block `M₂[rows, elements] ≈ U Vᵀ`.
 #[derive(Clone, Debug, PartialEq)]
@@ -90,7 +91,7 @@ pub(crate) fn build_blocks(
                     return Err(TransportError::Interrupted);
                 }
                 let block = block_of(work, columns, elements, tolerance)?;
-                watch(BlockFootprint::of(c, elements, &block));
+                watch(BlockFootprint::of(c, elements, &block.rows, block.rank()));
                 Ok(block)
             },
         )
@@ -211,7 +212,9 @@ impl LowRank {
             .iter()
             .zip(&self.clusters.members)
             .enumerate()
-            .map(|(c, (block, elements))| BlockFootprint::of(c, elements, block))
+            .map(|(c, (block, elements))| {
+                BlockFootprint::of(c, elements, &block.rows, block.rank())
+            })
             .collect()
     }
 

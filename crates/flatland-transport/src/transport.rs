@@ -7,15 +7,12 @@ use flatland_solve::{Mesh, SparseOperator};
 
 use crate::clusters::Clusters;
 use crate::estimate::{estimate, validation_lights};
+use crate::footprint::Watch;
 use crate::lowrank::{BlockTolerance, LowRank, build_blocks};
 use crate::{
     BlockFootprint, Columns, ErrorEstimate, LaterBounces, Move, QueryBuffers, Stop, TransportError,
     TransportParams,
 };
-
-/// What sees each block of a build as it is made ([`Transport::build_watched`]); called from
-/// the build's threads.
-pub type Watch<'a> = dyn Fn(BlockFootprint) + Sync + 'a;
 
 /// The later bounces `M₂ = K² (I − K)⁻¹` of one scene on one mesh, in a form that answers
 /// `M₂ B₀` for a light's direct light B₀ in a fraction of a millisecond.
