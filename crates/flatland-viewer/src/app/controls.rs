@@ -324,6 +324,28 @@ impl ViewerApp {
             "the relit scene's first light walks through the rooms by itself; drag a light, \
                  click the floor to add one, right-click one to delete it",
         );
+        if ui
+            .checkbox(
+                &mut self.settings.transport,
+                "the light's later bounces by the learned transport",
+            )
+            .on_hover_text(
+                "on: B = B₀ + K B₀ exact, plus M₂ B₀ from the learned transport of the later \
+                 bounces (docs/ALGORITHM.md §9), built in the background while the exact \
+                 re-solve answers; off: the exact re-solve (GMRES, warm-started) every move",
+            )
+            .changed()
+        {
+            self.lamps.handle.use_transport(self.settings.transport);
+        }
+        ui.checkbox(
+            &mut self.settings.show_blocks,
+            "the transport's blocks over ζ (colour: rank)",
+        )
+        .on_hover_text(
+            "each block of M₂ joins a cluster of senders (rows, s) to the receivers its light \
+             reaches (columns, t); drawn as the build makes them",
+        );
         ui.add(
             egui::Slider::new(&mut self.settings.exposure, -4.0..=8.0)
                 .step_by(0.5)

@@ -82,6 +82,7 @@ impl ViewerApp {
         let ctx = ui.ctx().clone();
         let ppp = ctx.pixels_per_point();
         let mut kernel_frame = PlotFrame::new(layout.kernel, true);
+        let kernel_plot = kernel_frame.plot;
         let (approx_frame, error_frame) = (
             PlotFrame::new(layout.approx, false),
             PlotFrame::new(layout.error, false),
@@ -141,6 +142,7 @@ impl ViewerApp {
             );
             hovered = hovered.or(st);
         }
+        self.transport_blocks(ui, kernel_plot, shown.world.id);
         self.hover.st = hovered;
         if let Some([s, t]) = self.hover.st
             && let Some(pointer) = ui.input(|i| i.pointer.hover_pos())
@@ -148,6 +150,29 @@ impl ViewerApp {
             let text = readout_text(&shown.world.kernel, self.learned_source(shown), s, t);
             views::readout_box(&ctx, pointer, &text);
         }
+    }
+
+    /// The learned transport's blocks over the kernel plot, as they are built (when shown, and
+    /// when the moving light's scene is the plot's).
+    fn transport_blocks(&mut self, ui: &egui::Ui, plot: Rect, world: u64) {
+        let Some(frame) = self.lamps.frame.clone().filter(|f| f.world == world) else {
+            return;
+        };
+        let Some(status) = frame
+            .transport
+            .as_ref()
+            .filter(|_| self.settings.show_blocks)
+        else {
+            return;
+        };
+        let painter = ui.painter_at(plot);
+        self.lamps.blocks.paint(
+            &painter,
+            plot,
+            (world, &frame.mesh),
+            &status.blocks,
+            status.clusters,
+        );
     }
 
     /// The learned value under the pointer: the live model, or a past moment's grid.
@@ -241,11 +266,12 @@ impl ViewerApp {
             });
         let title = match (&frame, &self.lamps.state) {
             (Some(f), _) => format!(
-                "moving light{}: {:.1} ms per move (median of the last {}), residual {:.0e}, {} el.",
+                "moving light{} by the {}: {:.2} ms per move (median of {}), {}, {} el.",
                 if f.lights.len() == 1 { "" } else { "s" },
+                super::lamps::answer_name(f.answer),
                 f.median_ms,
                 f.moves.min(crate::relit::TIMED_MOVES as u64),
-                f.residual,
+                super::lamps::relit_quality(f),
                 f.mesh.len(),
             ),
             (None, RelitState::Failed(why)) => format!("moving light: {why}"),
@@ -257,6 +283,9 @@ impl ViewerApp {
             scene: &world.scene,
             lit: paint.as_ref(),
             lights: &self.lamps.lights,
+            note: &frame
+                .as_deref()
+                .map_or(String::new(), super::lamps::transport_note),
         };
         let (out, marks) =
             views::relit_view(ui, &view, &mut self.lamps.grabbed, &mut self.lamps.texture);

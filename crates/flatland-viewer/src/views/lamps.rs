@@ -36,6 +36,8 @@ pub struct RelitFrameView<'a> {
     pub lit: Option<&'a LitPaint<'a>>,
     /// The lights.
     pub lights: &'a [PointLight],
+    /// A line at the foot of the panel (what answers the moves), right of the legend.
+    pub note: &'a str,
 }
 
 /// Draws the relit scene and its lights' marks, follows a grab (`grabbed`: the light being
@@ -56,7 +58,14 @@ pub fn relit_view(
         draw_edges_once(texture, &painter, rect, &view, frame.scene, Some(lit), weak);
         colour_bar(&painter, rect, lit, weak);
     }
-    let _ = legend(&painter, rect, &LIT_LEGEND);
+    let legend_end = legend(&painter, rect, &LIT_LEGEND);
+    painter.text(
+        egui::pos2(legend_end + 4.0, rect.bottom() - 3.0),
+        egui::Align2::LEFT_BOTTOM,
+        frame.note,
+        egui::FontId::proportional(11.0),
+        weak,
+    );
     let marks: Vec<Pos2> = frame.lights.iter().map(|l| view.screen(l.at)).collect();
     let near = |q: Pos2| {
         marks
