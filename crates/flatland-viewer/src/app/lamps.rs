@@ -85,8 +85,8 @@ impl Lamps {
 /// What answered a move, in words.
 pub(super) fn answer_name(answer: Answer) -> &'static str {
     match answer {
-        Answer::Exact => "exact re-solve",
-        Answer::Transport => "learned transport",
+        Answer::Exact => "moving light, exact re-solve",
+        Answer::Transport => "moving light, learned transport",
     }
 }
 
@@ -111,7 +111,7 @@ pub(super) fn transport_note(frame: &RelitFrame) -> String {
     };
     match &t.phase {
         TransportPhase::Building => format!(
-            "learned transport: building, {} of {} blocks (the exact re-solve answers meanwhile)",
+            "transport building: {} of {} blocks (exact meanwhile)",
             t.blocks.len(),
             t.clusters
         ),
@@ -120,13 +120,13 @@ pub(super) fn transport_note(frame: &RelitFrame) -> String {
             bytes,
             build_s,
         } => format!(
-            "learned transport: {} blocks, {:.1} MB, built in {:.1} s, error estimated on {} lights",
+            "transport: {} blocks, {:.1} MB, built in {:.1} s, est. on {} lights",
             t.clusters,
             *bytes as f64 / 1e6,
             build_s,
             estimate.lights
         ),
-        TransportPhase::Failed(why) => format!("learned transport failed: {why}"),
+        TransportPhase::Failed(why) => format!("transport failed: {why}"),
     }
 }
 

@@ -266,13 +266,10 @@ impl ViewerApp {
             });
         let title = match (&frame, &self.lamps.state) {
             (Some(f), _) => format!(
-                "moving light{} by the {}: {:.2} ms per move (median of {}), {}, {} el.",
-                if f.lights.len() == 1 { "" } else { "s" },
+                "{}: {:.2} ms per move, {}",
                 super::lamps::answer_name(f.answer),
                 f.median_ms,
-                f.moves.min(crate::relit::TIMED_MOVES as u64),
                 super::lamps::relit_quality(f),
-                f.mesh.len(),
             ),
             (None, RelitState::Failed(why)) => format!("moving light: {why}"),
             (None, _) => "moving light: building the exact operator…".to_owned(),
@@ -283,9 +280,14 @@ impl ViewerApp {
             scene: &world.scene,
             lit: paint.as_ref(),
             lights: &self.lamps.lights,
-            note: &frame
-                .as_deref()
-                .map_or(String::new(), super::lamps::transport_note),
+            note: &frame.as_deref().map_or(String::new(), |f| {
+                format!(
+                    "{} moves · {} el. · {}",
+                    f.moves.min(crate::relit::TIMED_MOVES as u64),
+                    f.mesh.len(),
+                    super::lamps::transport_note(f)
+                )
+            }),
         };
         let (out, marks) =
             views::relit_view(ui, &view, &mut self.lamps.grabbed, &mut self.lamps.texture);

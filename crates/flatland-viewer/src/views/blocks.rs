@@ -18,7 +18,7 @@ const MAX_SIDE: usize = 1024;
 /// How often, at most, the image is drawn again while blocks keep coming.
 const REDRAW: Duration = Duration::from_millis(250);
 /// How much of the kernel shows through a block.
-const BLOCK_ALPHA: f32 = 0.5;
+const BLOCK_ALPHA: f32 = 0.35;
 
 /// The colour of a block of `rank`, the largest rank being `top`: blue (rank 1) through green
 /// to red (the largest); a block whose light was all cut (rank 0) is grey.
@@ -135,7 +135,7 @@ impl BlocksTexture {
         };
         painter.image(texture.id(), plot, uv(), Color32::WHITE);
         let text = format!(
-            "blocks of M₂: {} of {clusters} (rank: blue low, red high)",
+            "M₂ blocks {}/{clusters}, rank blue (low) to red",
             shown.blocks
         );
         let at = plot.left_top() + egui::vec2(4.0, 3.0);

@@ -10,6 +10,12 @@ use super::widgets::{View, legend, panel_frame};
 
 /// A light's mark: a small white disc ringed in black (any colour of the map shows it).
 const MARK_R: f32 = 4.0;
+/// Past this many lights their marks are small white dots (a plan of hundreds of lamps would
+/// be covered by full marks, and each costs the software renderer a ringed disc per frame);
+/// the light under the pointer or held is marked in full.
+const MANY_MARKS: usize = 64;
+/// A mark among many.
+const SMALL_MARK_R: f32 = 1.5;
 /// How near the pointer must be to a mark to grab or delete it, in points.
 const GRAB_R: f32 = 10.0;
 
@@ -99,11 +105,19 @@ pub fn relit_view(
         out.deleted = near(q);
     }
     let hovered = response.hover_pos().and_then(near);
+    let many = marks.len() > MANY_MARKS;
     for (i, &m) in marks.iter().enumerate() {
         let hot = hovered == Some(i) || *grabbed == Some(i);
-        let r = if hot { MARK_R + 1.5 } else { MARK_R };
+        // The first light is the one that wanders: always in full.
+        let r = match (hot, many && i > 0) {
+            (true, _) => MARK_R + 1.5,
+            (false, true) => SMALL_MARK_R,
+            (false, false) => MARK_R,
+        };
         painter.circle_filled(m, r, Color32::WHITE);
-        painter.circle_stroke(m, r, Stroke::new(1.0, Color32::BLACK));
+        if r > SMALL_MARK_R {
+            painter.circle_stroke(m, r, Stroke::new(1.0, Color32::BLACK));
+        }
     }
     if hovered.is_some() || grabbed.is_some() {
         ui.ctx().set_cursor_icon(egui::CursorIcon::Grab);
