@@ -206,6 +206,27 @@ impl LowRank {
         buffers.scratch = coefficients;
     }
 
+    /// Visits every entry `M₂[row, column]` the blocks hold (`U_c V_cᵀ` on each block's rows
+    /// and cluster), cluster by cluster.
+    pub fn entries(&self, visit: &mut dyn FnMut(u32, u32, f64)) {
+        for (block, columns) in self.blocks.iter().zip(&self.clusters.members) {
+            let rank = block.rank();
+            if rank == 0 {
+                continue;
+            }
+            for (&row, u) in block.rows.iter().zip(block.u.chunks_exact(rank)) {
+                for (&column, v) in columns.iter().zip(block.v.chunks_exact(rank)) {
+                    let value: f64 = u
+                        .iter()
+                        .zip(v)
+                        .map(|(&a, &b)| f64::from(a) * f64::from(b))
+                        .sum();
+                    visit(row, column, value);
+                }
+            }
+        }
+    }
+
     /// Every block's footprint, in cluster order.
     pub fn footprints(&self) -> Vec<BlockFootprint> {
         self.blocks

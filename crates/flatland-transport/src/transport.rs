@@ -223,6 +223,13 @@ impl Transport {
         self.form.footprints()
     }
 
+    /// Visits every entry `(receiver, sender, M₂[receiver, sender])` the model holds — the
+    /// learned kernel of the later bounces, for a picture of it (a query clamps what it sums
+    /// at 0; an entry is as stored, and may dip below 0 by the truncation).
+    pub fn entries(&self, mut visit: impl FnMut(u32, u32, f64)) {
+        self.form.entries(&mut visit);
+    }
+
     /// Clusters and the mean rank of their blocks.
     #[must_use]
     pub fn shape(&self) -> (usize, f64, f64) {
@@ -462,6 +469,45 @@ mod tests {
         let cut = Transport::build(&kernel, &mesh, &k, &tight, &never).unwrap();
         let ranks = |t: &Transport| t.footprints().iter().map(|f| f.rank).sum::<usize>();
         assert!(ranks(&cut) < ranks(&transport));
+    }
+
+    #[test]
+    fn the_entries_are_the_columns_a_query_gives() {
+        let (kernel, mesh, k) = plan(150, 6);
+        let transport =
+            Transport::build(&kernel, &mesh, &k, &TransportParams::default(), &never).unwrap();
+        let n = mesh.len();
+        let mut columns = vec![vec![0.0; n]; n];
+        let mut count = 0;
+        transport.entries(|row, column, value| {
+            columns[column as usize][row as usize] += value;
+            count += 1;
+        });
+        let kept: usize = transport
+            .footprints()
+            .iter()
+            .filter(|f| f.rank > 0)
+            .map(|f| {
+                let len =
+                    |runs: &[std::ops::Range<u32>]| runs.iter().map(|r| r.len()).sum::<usize>();
+                len(&f.senders) * len(&f.receivers)
+            })
+            .sum();
+        assert_eq!(count, kept, "one visit per pair of a block");
+        for j in (0..n).step_by(7) {
+            let mut unit = vec![0.0; n];
+            unit[j] = 1.0;
+            let column = transport.later_bounces(&unit).unwrap();
+            for (i, (&queried, &entry)) in column.iter().zip(&columns[j]).enumerate() {
+                assert_close!(
+                    queried,
+                    entry.max(0.0),
+                    rel = 1e-9,
+                    abs = 1e-15,
+                    "M₂[{i}, {j}]"
+                );
+            }
+        }
     }
 
     #[test]

@@ -65,6 +65,8 @@ pub struct Settings {
     pub transport: bool,
     /// Draw the learned transport's blocks over the kernel plot.
     pub show_blocks: bool,
+    /// The kernel plot shows the transport's learned `M₂(s, t)` in place of the exact ζ.
+    pub show_m2: bool,
     /// The lit scenes' exposure, in stops: the colour scale's top is divided by 2^exposure.
     pub exposure: f32,
     /// A logarithmic tone scale for the lit scenes (else linear).
@@ -94,6 +96,7 @@ impl Default for Settings {
             // move at frame rate (the exact re-solve is the CLI's default and one click away).
             transport: true,
             show_blocks: true,
+            show_m2: false,
             exposure: 0.0,
             tone_log: true,
         }

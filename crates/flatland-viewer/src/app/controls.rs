@@ -316,6 +316,41 @@ impl ViewerApp {
                  faces join cells that never answer the same ray",
             );
         ui.checkbox(&mut self.settings.show_samples, "samples, coloured by set");
+        self.moving_light_controls(ui);
+        ui.add(
+            egui::Slider::new(&mut self.settings.exposure, -4.0..=8.0)
+                .step_by(0.5)
+                .text("exposure (stops)"),
+        );
+        ui.checkbox(
+            &mut self.settings.tone_log,
+            format!(
+                "log tone scale for the lit scenes ({} decades)",
+                flatland_pictures::colormap::LOG_DECADES
+            ),
+        );
+        let lit = ui
+            .checkbox(&mut self.settings.lit, "lit scene (solve B while learning)")
+            .on_hover_text(
+                "solve the radiosity with the kernel learned so far, on the learner's thread, \
+                 at most every 0.5 s and ≤ 10 % of its time",
+            );
+        if lit.changed() {
+            self.worker.send(Command::Lit(self.settings.lit));
+        }
+        let network = self.settings.learner.preset().is_some();
+        if ui
+            .add_enabled(network, egui::Button::new("Restore preset"))
+            .on_hover_text("the network's preset parameters (target cells, seed kept)")
+            .clicked()
+        {
+            self.settings.restore_preset();
+        }
+    }
+
+    /// The moving light: the wander, exact or learned transport, the transport's blocks and
+    /// its learned M₂ in the kernel plot.
+    fn moving_light_controls(&mut self, ui: &mut egui::Ui) {
         ui.checkbox(
             &mut self.settings.wander,
             "the light wanders (grab it to stop)",
@@ -346,35 +381,14 @@ impl ViewerApp {
             "each block of M₂ joins a cluster of senders (rows, s) to the receivers its light \
              reaches (columns, t); drawn as the build makes them",
         );
-        ui.add(
-            egui::Slider::new(&mut self.settings.exposure, -4.0..=8.0)
-                .step_by(0.5)
-                .text("exposure (stops)"),
-        );
         ui.checkbox(
-            &mut self.settings.tone_log,
-            format!(
-                "log tone scale for the lit scenes ({} decades)",
-                flatland_pictures::colormap::LOG_DECADES
-            ),
+            &mut self.settings.show_m2,
+            "the kernel plot shows M₂ learned by the transport",
+        )
+        .on_hover_text(
+            "M₂ = K² (I − K)^-1, the later bounces: the kernel the transport's blocks learn, as a \
+             density in s (log scale), in place of the exact ζ once the transport is built",
         );
-        let lit = ui
-            .checkbox(&mut self.settings.lit, "lit scene (solve B while learning)")
-            .on_hover_text(
-                "solve the radiosity with the kernel learned so far, on the learner's thread, \
-                 at most every 0.5 s and ≤ 10 % of its time",
-            );
-        if lit.changed() {
-            self.worker.send(Command::Lit(self.settings.lit));
-        }
-        let network = self.settings.learner.preset().is_some();
-        if ui
-            .add_enabled(network, egui::Button::new("Restore preset"))
-            .on_hover_text("the network's preset parameters (target cells, seed kept)")
-            .clicked()
-        {
-            self.settings.restore_preset();
-        }
     }
 
     /// Save the view as a PNG and the run as a model file, into a folder.

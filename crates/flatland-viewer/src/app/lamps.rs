@@ -7,6 +7,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use flatland_geom::{DVec2, Kernel, PointLight, WalkParams, in_a_room};
+use flatland_pictures::colormap::Scale;
 
 use super::ViewerApp;
 use crate::relit::{Answer, RelitFrame, RelitHandle, RelitState, TransportPhase};
@@ -52,6 +53,8 @@ pub(super) struct Lamps {
     pub(super) texture: EdgesTexture,
     /// The learned transport's blocks over the kernel plot.
     pub(super) blocks: BlocksTexture,
+    /// The learned `M₂(s, t)` shown in the kernel plot: its world, grid, texture and scale.
+    pub(super) m2: Option<(u64, Arc<Vec<f64>>, egui::TextureHandle, Scale)>,
 }
 
 impl Lamps {
@@ -73,6 +76,7 @@ impl Lamps {
             marks: Vec::new(),
             texture: EdgesTexture::default(),
             blocks: BlocksTexture::default(),
+            m2: None,
         }
     }
 
@@ -119,6 +123,7 @@ pub(super) fn transport_note(frame: &RelitFrame) -> String {
             estimate,
             bytes,
             build_s,
+            ..
         } => format!(
             "transport: {} blocks, {:.1} MB, built in {:.1} s, est. on {} lights",
             t.clusters,

@@ -11,7 +11,7 @@ use super::layout::Layout;
 use super::readout::{Learned, readout_text};
 use super::top_bar::error_text;
 use super::{Shown, ViewerApp};
-use crate::relit::RelitState;
+use crate::relit::{M2_RES, RelitState, TransportPhase};
 use crate::views::{self, LitPaint, NEW_FOR, PlotFrame};
 use crate::worker::{Command, Lit, Progress};
 
@@ -101,8 +101,12 @@ impl ViewerApp {
             self.plot_res = res;
             self.worker.send(Command::PlotResolution(res));
         }
+        let m2 = self.m2_texture(&ctx, shown.world.id);
         let textures = self.textures.of(&ctx, shown, &request);
         kernel_frame.scale = Some(textures.scale);
+        if let Some((_, scale)) = m2 {
+            kernel_frame.scale = Some(scale);
+        }
         let progress = shown.moment.as_ref().map(|m| m.status.growth.progress);
         let rounds = matches!(progress, Some(Progress::Rounds { .. }));
         let big = views::Overlay {
@@ -118,12 +122,12 @@ impl ViewerApp {
         let panels = [
             (
                 kernel_frame,
-                if rounds {
-                    "ζ(s, t) exact, with the probes"
-                } else {
-                    "ζ(s, t) exact, with the cells"
+                match (m2.is_some(), rounds) {
+                    (true, _) => "M₂(s, t) learned by the transport",
+                    (false, true) => "ζ(s, t) exact, with the probes",
+                    (false, false) => "ζ(s, t) exact, with the cells",
                 },
-                Some(textures.kernel),
+                Some(m2.map_or(textures.kernel, |(texture, _)| texture)),
                 big,
             ),
             (approx_frame, learned_title, textures.approx, small),
@@ -150,6 +154,38 @@ impl ViewerApp {
             let text = readout_text(&shown.world.kernel, self.learned_source(shown), s, t);
             views::readout_box(&ctx, pointer, &text);
         }
+    }
+
+    /// The learned `M₂(s, t)` of the moving light's transport as a texture and its colour
+    /// scale (log, the one rule), when it is asked for in place of ζ and built for `world`.
+    fn m2_texture(
+        &mut self,
+        ctx: &egui::Context,
+        world: u64,
+    ) -> Option<(egui::TextureId, flatland_pictures::colormap::Scale)> {
+        if !self.settings.show_m2 {
+            return None;
+        }
+        let frame = self.lamps.frame.as_ref().filter(|f| f.world == world)?;
+        let Some(TransportPhase::Ready { m2, .. }) = frame.transport.as_ref().map(|t| &t.phase)
+        else {
+            return None;
+        };
+        let kept = self
+            .lamps
+            .m2
+            .as_ref()
+            .filter(|(w, grid, ..)| *w == world && Arc::ptr_eq(grid, m2));
+        if kept.is_none() {
+            let scale = flatland_pictures::colormap::Scale::fit(m2, true);
+            let image = crate::colormap::grid_image(m2, M2_RES, scale);
+            let texture = ctx.load_texture("learned M2", image, egui::TextureOptions::NEAREST);
+            self.lamps.m2 = Some((world, Arc::clone(m2), texture, scale));
+        }
+        self.lamps
+            .m2
+            .as_ref()
+            .map(|(_, _, texture, scale)| (texture.id(), *scale))
     }
 
     /// The learned transport's blocks over the kernel plot, as they are built (when shown, and

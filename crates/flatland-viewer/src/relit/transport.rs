@@ -47,6 +47,39 @@ impl BlockLog {
     }
 }
 
+/// Cells per side of the learned `M₂(s, t)`'s grid ([`m2_grid`]).
+pub const M2_RES: usize = 256;
+
+/// The learned kernel of the later bounces on an `M2_RES × M2_RES` grid of `(s, t)` (row-major,
+/// row ↔ `s`, the sender, column ↔ `t`, the receiver, as every plot's grid): each cell the mean
+/// over it of the density `m(s, t) = M₂[receiver, sender] / Δs_sender`. An entry's mass goes
+/// to the cells its pair of elements covers (the cell it falls in when smaller than a cell).
+#[must_use]
+pub fn m2_grid(transport: &Transport, mesh: &Mesh) -> Vec<f64> {
+    let res = M2_RES;
+    let mut grid = vec![0.0; res * res];
+    let elements = mesh.elements();
+    let cells = |s: [f64; 2]| {
+        let lo = ((s[0] * res as f64) as usize).min(res - 1);
+        let hi = ((s[1] * res as f64).ceil() as usize).clamp(lo + 1, res);
+        lo..hi
+    };
+    let cell_area = 1.0 / (res * res) as f64;
+    transport.entries(|receiver, sender, value| {
+        let (t, s) = (elements[receiver as usize].s, elements[sender as usize].s);
+        let (rows, columns) = (cells(s), cells(t));
+        // The mass M₂ Δt (density × area) spread over the cells it covers.
+        let spread = rows.len() * columns.len();
+        let add = value * (t[1] - t[0]) / (cell_area * spread as f64);
+        for row in rows {
+            for cell in &mut grid[row * res + columns.start..row * res + columns.end] {
+                *cell += add;
+            }
+        }
+    });
+    grid
+}
+
 /// Where the learned transport of the scene is.
 #[derive(Clone, Debug)]
 pub enum TransportPhase {
@@ -61,6 +94,8 @@ pub enum TransportPhase {
         bytes: usize,
         /// Seconds of its build.
         build_s: f64,
+        /// The learned `M₂(s, t)` ([`m2_grid`]).
+        m2: Arc<Vec<f64>>,
     },
     /// The build failed: why.
     Failed(String),
@@ -82,9 +117,9 @@ enum Slot {
     Off,
     Building {
         cancel: Arc<AtomicBool>,
-        done: Receiver<Result<TransportRelighter, TransportError>>,
+        done: Receiver<Result<(TransportRelighter, Vec<f64>), TransportError>>,
     },
-    Ready(Box<TransportRelighter>),
+    Ready(Box<TransportRelighter>, Arc<Vec<f64>>),
     Failed(String),
 }
 
@@ -138,7 +173,10 @@ impl MovingLight {
                 let params = TransportParams::default();
                 let (mesh, rows) = (copy.mesh(), copy.rows());
                 let built = Transport::build_watched(&kernel, mesh, rows, &params, &stop, &watch)
-                    .and_then(|t| TransportRelighter::new(&kernel, copy, t, &stop));
+                    .and_then(|t| {
+                        let m2 = m2_grid(&t, copy.mesh());
+                        Ok((TransportRelighter::new(&kernel, copy, t, &stop)?, m2))
+                    });
                 // The receiver is gone when the scene changed meanwhile: nothing to do.
                 let _ = send.send(built);
             })
@@ -163,7 +201,7 @@ impl Relight for MovingLight {
 
     fn relight(&mut self, lights: &[PointLight], stop: &Stop) -> Result<Moved<'_>, TransportError> {
         let answer = match (&self.slot, self.chosen) {
-            (Slot::Ready(_), true) => Answer::Transport,
+            (Slot::Ready(..), true) => Answer::Transport,
             _ => Answer::Exact,
         };
         if answer != self.answered {
@@ -174,7 +212,7 @@ impl Relight for MovingLight {
             out.clear();
             out.extend_from_slice(b);
         };
-        if let Slot::Ready(transport) = &mut self.slot
+        if let Slot::Ready(transport, _) = &mut self.slot
             && answer == Answer::Transport
         {
             let radiosity = self.moving.relight(lights, |lights, out| {
@@ -215,7 +253,9 @@ impl Relight for MovingLight {
         };
         match done.try_recv() {
             Err(TryRecvError::Empty) => return false,
-            Ok(Ok(transport)) => self.slot = Slot::Ready(Box::new(transport)),
+            Ok(Ok((transport, m2))) => {
+                self.slot = Slot::Ready(Box::new(transport), Arc::new(m2));
+            }
             Ok(Err(e)) => self.slot = Slot::Failed(e.to_string()),
             Err(TryRecvError::Disconnected) => {
                 self.slot = Slot::Failed("the transport's thread ended".into());
@@ -232,10 +272,11 @@ impl Relight for MovingLight {
         let phase = match &self.slot {
             Slot::Off => return None,
             Slot::Building { .. } => TransportPhase::Building,
-            Slot::Ready(t) => TransportPhase::Ready {
+            Slot::Ready(t, m2) => TransportPhase::Ready {
                 estimate: t.transport().estimated_error(),
                 bytes: t.transport().bytes(),
                 build_s: t.transport().build_s(),
+                m2: Arc::clone(m2),
             },
             Slot::Failed(why) => TransportPhase::Failed(why.clone()),
         };
@@ -304,12 +345,17 @@ mod tests {
         assert!(frame.residual.is_none());
         let status = frame.transport.clone().expect("the transport's status");
         let TransportPhase::Ready {
-            estimate, bytes, ..
+            estimate,
+            bytes,
+            ref m2,
+            ..
         } = status.phase
         else {
             panic!("{:?}", status.phase)
         };
         assert!(bytes > 0 && estimate.lights > 0);
+        assert_eq!(m2.len(), M2_RES * M2_RES);
+        assert!(m2.iter().any(|&v| v > 0.0));
         let mut exact = ExactRelight::make(&kernel, &flatland_solve::never).unwrap();
         let solved = exact.relight(&lights, &flatland_solve::never).unwrap();
         let error = relative(&frame.mesh, &frame.b, solved.radiosity);
@@ -330,6 +376,29 @@ mod tests {
         handle.use_transport(false);
         let back = frame_by(&handle, Answer::Exact);
         assert!(relative(&back.mesh, &back.b, solved.radiosity) < 1e-4);
+    }
+
+    #[test]
+    fn the_m2_grid_keeps_the_mass_of_the_entries() {
+        // Σ over the grid of density × cell area is Σ M₂[i, j] Δt_i, however the entries
+        // fall on the cells.
+        let plan = flatland_geom::generate::floor_plan(120, 4).unwrap();
+        let kernel = Kernel::new(plan);
+        let mesh = Mesh::new(&kernel, 2 * Mesh::min_elements(kernel.scene())).unwrap();
+        let k = flatland_solve::sweep_operator(&kernel, &mesh, &flatland_solve::never).unwrap();
+        let params = TransportParams::default();
+        let transport =
+            Transport::build(&kernel, &mesh, &k, &params, &flatland_solve::never).unwrap();
+        let grid = m2_grid(&transport, &mesh);
+        let cell = 1.0 / (M2_RES * M2_RES) as f64;
+        let mass: f64 = grid.iter().sum::<f64>() * cell;
+        let mut exact = 0.0;
+        let elements = mesh.elements();
+        transport.entries(|i, _, v| {
+            exact += v * (elements[i as usize].s[1] - elements[i as usize].s[0])
+        });
+        assert!(exact > 0.0);
+        assert!((mass - exact).abs() <= 1e-9 * exact, "{mass} vs {exact}");
     }
 
     #[test]
