@@ -362,7 +362,7 @@ impl ViewerApp {
         if ui
             .checkbox(
                 &mut self.settings.transport,
-                "the light's later bounces by the learned transport",
+                "learned transport (else exact)",
             )
             .on_hover_text(
                 "on: B = B₀ + K B₀ exact, plus M₂ B₀ from the learned transport of the later \
@@ -373,22 +373,21 @@ impl ViewerApp {
         {
             self.lamps.handle.use_transport(self.settings.transport);
         }
-        ui.checkbox(
-            &mut self.settings.show_blocks,
-            "the transport's blocks over ζ (colour: rank)",
-        )
-        .on_hover_text(
-            "each block of M₂ joins a cluster of senders (rows, s) to the receivers its light \
-             reaches (columns, t); drawn as the build makes them",
-        );
-        ui.checkbox(
-            &mut self.settings.show_m2,
-            "the kernel plot shows M₂ learned by the transport",
-        )
-        .on_hover_text(
-            "M₂ = K² (I − K)^-1, the later bounces: the kernel the transport's blocks learn, as a \
-             density in s (log scale), in place of the exact ζ once the transport is built",
-        );
+        // One row: the export buttons below must stay on a 1500-point-high window.
+        ui.horizontal(|ui| {
+            ui.checkbox(&mut self.settings.show_blocks, "its blocks")
+                .on_hover_text(
+                    "the learned transport's blocks over the kernel plot, coloured by rank: \
+                     each block of M₂ joins a cluster of senders (rows, s) to the receivers \
+                     its light reaches (columns, t); drawn as the build makes them",
+                );
+            ui.checkbox(&mut self.settings.show_m2, "its M₂ for ζ")
+                .on_hover_text(
+                    "the kernel plot shows M₂ = K² (I − K)^-1, the later bounces the \
+                     transport learned, as a density in s (log scale), in place of the exact \
+                     ζ once the transport is built",
+                );
+        });
     }
 
     /// Save the view as a PNG and the run as a model file, into a folder.
