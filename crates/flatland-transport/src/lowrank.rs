@@ -11,6 +11,7 @@ use rayon::prelude::*;
 
 use crate::Columns;
 use crate::clusters::Clusters;
+use crate::footprint::{BlockFootprint, Watch};
 use crate::local::{Block, Workspace};
 use crate::{QueryBuffers, Stop, TransportError};
 
@@ -69,24 +70,29 @@ pub(crate) struct BlockTolerance {
 }
 
 /// `M₂[:, c]` for every cluster, in parallel (one workspace per thread; each block depends
-/// only on its cluster, so the result does not depend on the thread count).
+/// only on its cluster, so the result does not depend on the thread count). Each block's
+/// footprint goes to `watch` as soon as it is made, in whatever order the threads finish.
 pub(crate) fn build_blocks(
     columns: &Columns,
     clusters: &Clusters,
     tolerance: BlockTolerance,
     stop: &Stop,
+    watch: &Watch<'_>,
 ) -> Result<Vec<ClusterBlock>, TransportError> {
     let n = columns.len();
     clusters
         .members
         .par_iter()
+        .enumerate()
         .map_init(
             || Workspace::new(n),
-            |work, elements| {
+            |work, (c, elements)| {
                 if stop() {
                     return Err(TransportError::Interrupted);
                 }
-                block_of(work, columns, elements, tolerance)
+                let block = block_of(work, columns, elements, tolerance)?;
+                watch(BlockFootprint::of(c, elements, &block.rows, block.rank()));
+                Ok(block)
             },
         )
         .collect()
@@ -198,6 +204,39 @@ impl LowRank {
         }
         buffers.pairs = pairs;
         buffers.scratch = coefficients;
+    }
+
+    /// Visits every entry `M₂[row, column]` the blocks hold (`U_c V_cᵀ` on each block's rows
+    /// and cluster), cluster by cluster.
+    pub fn entries(&self, visit: &mut dyn FnMut(u32, u32, f64)) {
+        for (block, columns) in self.blocks.iter().zip(&self.clusters.members) {
+            let rank = block.rank();
+            if rank == 0 {
+                continue;
+            }
+            for (&row, u) in block.rows.iter().zip(block.u.chunks_exact(rank)) {
+                for (&column, v) in columns.iter().zip(block.v.chunks_exact(rank)) {
+                    let value: f64 = u
+                        .iter()
+                        .zip(v)
+                        .map(|(&a, &b)| f64::from(a) * f64::from(b))
+                        .sum();
+                    visit(row, column, value);
+                }
+            }
+        }
+    }
+
+    /// Every block's footprint, in cluster order.
+    pub fn footprints(&self) -> Vec<BlockFootprint> {
+        self.blocks
+            .iter()
+            .zip(&self.clusters.members)
+            .enumerate()
+            .map(|(c, (block, elements))| {
+                BlockFootprint::of(c, elements, &block.rows, block.rank())
+            })
+            .collect()
     }
 
     /// Bytes held: the blocks and the clusters' tables.

@@ -7,9 +7,11 @@ use flatland_solve::{Mesh, SparseOperator};
 
 use crate::clusters::Clusters;
 use crate::estimate::{estimate, validation_lights};
+use crate::footprint::Watch;
 use crate::lowrank::{BlockTolerance, LowRank, build_blocks};
 use crate::{
-    Columns, ErrorEstimate, LaterBounces, Move, QueryBuffers, Stop, TransportError, TransportParams,
+    BlockFootprint, Columns, ErrorEstimate, LaterBounces, Move, QueryBuffers, Stop, TransportError,
+    TransportParams,
 };
 
 /// The later bounces `M₂ = K² (I − K)⁻¹` of one scene on one mesh, in a form that answers
@@ -80,6 +82,20 @@ impl Transport {
         params: &TransportParams,
         stop: &Stop,
     ) -> Result<Transport, TransportError> {
+        Transport::build_watched(kernel, mesh, operator, params, stop, &|_| {})
+    }
+
+    /// [`Transport::build`], each block's footprint handed to `watch` as soon as it is made
+    /// (before a budget cuts ranks: [`Transport::footprints`] gives what is kept), so a viewer
+    /// can draw the blocks as they grow.
+    pub fn build_watched(
+        kernel: &Kernel,
+        mesh: &Mesh,
+        operator: &SparseOperator,
+        params: &TransportParams,
+        stop: &Stop,
+        watch: &Watch<'_>,
+    ) -> Result<Transport, TransportError> {
         params.check()?;
         TransportError::check_inputs(kernel, mesh, operator)?;
         let started = Instant::now();
@@ -89,7 +105,7 @@ impl Transport {
             block: params.tolerance,
             solve: params.solve_tolerance,
         };
-        let blocks = build_blocks(&columns, &clusters, tolerance, stop)?;
+        let blocks = build_blocks(&columns, &clusters, tolerance, stop, watch)?;
         let mut form = LowRank { clusters, blocks };
         if let Some(budget) = params.budget {
             form.fit_budget(budget);
@@ -198,6 +214,20 @@ impl Transport {
             model: self.identity.describe(),
             mesh: identity.describe(),
         })
+    }
+
+    /// Where each block lies: its senders and receivers as runs of elements, and its rank (in
+    /// cluster order; one per cluster).
+    #[must_use]
+    pub fn footprints(&self) -> Vec<BlockFootprint> {
+        self.form.footprints()
+    }
+
+    /// Visits every entry `(receiver, sender, M₂[receiver, sender])` the model holds — the
+    /// learned kernel of the later bounces, for a picture of it (a query clamps what it sums
+    /// at 0; an entry is as stored, and may dip below 0 by the truncation).
+    pub fn entries(&self, mut visit: impl FnMut(u32, u32, f64)) {
+        self.form.entries(&mut visit);
     }
 
     /// Clusters and the mean rank of their blocks.
@@ -401,6 +431,83 @@ mod tests {
         Transport::build(&kernel, &mesh, &k, &TransportParams::default(), &counting).unwrap();
         let steps = Transport::set_up_steps(&mesh, &TransportParams::default());
         assert_eq!(polls.load(std::sync::atomic::Ordering::Relaxed), steps);
+    }
+
+    #[test]
+    fn the_watched_blocks_are_the_stored_ones_and_cover_what_the_model_holds() {
+        let (kernel, mesh, k) = plan(200, 5);
+        let seen = std::sync::Mutex::new(Vec::new());
+        let watch = |f: BlockFootprint| seen.lock().unwrap().push(f);
+        let params = TransportParams::default();
+        let transport =
+            Transport::build_watched(&kernel, &mesh, &k, &params, &never, &watch).unwrap();
+        let mut seen = seen.into_inner().unwrap();
+        seen.sort_by_key(|f| f.cluster);
+        let stored = transport.footprints();
+        assert_eq!(seen, stored, "no budget: what was watched is what is kept");
+        assert_eq!(stored.len(), Transport::set_up_steps(&mesh, &params));
+        // Every element sends from exactly one block; each block's runs are its rows.
+        let mut sends = vec![0; mesh.len()];
+        for (f, block) in stored.iter().zip(&transport.form.blocks) {
+            f.senders
+                .iter()
+                .cloned()
+                .flatten()
+                .for_each(|e| sends[e as usize] += 1);
+            let rows: Vec<u32> = f.receivers.iter().cloned().flatten().collect();
+            assert_eq!(rows, block.rows);
+            assert_eq!(f.rank, block.rank());
+            assert!(f.pairs() <= block.rows.len() * mesh.len());
+        }
+        assert!(sends.iter().all(|&n| n == 1));
+        assert!(stored.iter().any(|f| f.rank > 0 && f.pairs() > 0));
+        // A budget cuts ranks after the build: the stored footprints say so.
+        let tight = TransportParams {
+            budget: Some(transport.bytes() / 4),
+            ..params
+        };
+        let cut = Transport::build(&kernel, &mesh, &k, &tight, &never).unwrap();
+        let ranks = |t: &Transport| t.footprints().iter().map(|f| f.rank).sum::<usize>();
+        assert!(ranks(&cut) < ranks(&transport));
+    }
+
+    #[test]
+    fn the_entries_are_the_columns_a_query_gives() {
+        let (kernel, mesh, k) = plan(150, 6);
+        let transport =
+            Transport::build(&kernel, &mesh, &k, &TransportParams::default(), &never).unwrap();
+        let n = mesh.len();
+        let mut columns = vec![vec![0.0; n]; n];
+        let mut count = 0;
+        transport.entries(|row, column, value| {
+            columns[column as usize][row as usize] += value;
+            count += 1;
+        });
+        let kept: usize = transport
+            .footprints()
+            .iter()
+            .filter(|f| f.rank > 0)
+            .map(|f| {
+                let len =
+                    |runs: &[std::ops::Range<u32>]| runs.iter().map(|r| r.len()).sum::<usize>();
+                len(&f.senders) * len(&f.receivers)
+            })
+            .sum();
+        assert_eq!(count, kept, "one visit per pair of a block");
+        for j in (0..n).step_by(7) {
+            let mut unit = vec![0.0; n];
+            unit[j] = 1.0;
+            let column = transport.later_bounces(&unit).unwrap();
+            for (i, (&queried, &entry)) in column.iter().zip(&columns[j]).enumerate() {
+                assert_close!(
+                    queried,
+                    entry.max(0.0),
+                    rel = 1e-9,
+                    abs = 1e-15,
+                    "M₂[{i}, {j}]"
+                );
+            }
+        }
     }
 
     #[test]

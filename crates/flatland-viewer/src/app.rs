@@ -31,7 +31,7 @@ use kernel_fit::FitParams;
 
 use crate::background::Priority;
 use crate::learner::Learner;
-use crate::relit::{ExactRelight, RelitHandle};
+use crate::relit::{MovingLight, RelitHandle};
 use crate::scenes;
 use crate::scenes::SceneChoice;
 use crate::settings::{SETTINGS_KEY, Settings};
@@ -222,9 +222,10 @@ impl ViewerApp {
         let worker = WorkerHandle::spawn(priority, move || repaint_ctx.request_repaint());
         // At normal priority: each move is short, and the window waits for the light to follow.
         let relit_ctx = ctx.clone();
-        let relit = RelitHandle::spawn(Priority::Normal, ExactRelight::make, move || {
+        let relit = RelitHandle::spawn(Priority::Normal, MovingLight::make, move || {
             relit_ctx.request_repaint();
         });
+        relit.use_transport(settings.transport);
         let mut app = ViewerApp {
             fit_learner: settings.learner,
             fit_params: settings.params,

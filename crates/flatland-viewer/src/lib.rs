@@ -21,12 +21,17 @@
 //! - **ζ̃ and |ζ̃ − ζ|** beside it, on the same colour scale (paper Fig. 3d). Hovering any of the
 //!   three shows `G`, `V`, `k`, `ζ` and the learned value at the pointer; for the visibility
 //!   network also its `Ṽ` and whether the geometry or the cells of that face decide it.
-//! - **Moving light** (the biggest panel): the scene relit exactly under its point lights (or
-//!   one placed where the free-space walk starts) on a thread of its own ([`relit`]), every
+//! - **Moving light** (the biggest panel): the scene relit under its point lights (or one
+//!   placed where the free-space walk starts) on a thread of its own ([`relit`]), every
 //!   bounce, each time a light moves; on first launch the light wanders along the walk by
-//!   itself. Drag a light's mark, click the floor to add one, right-click one to delete it;
-//!   the title gives the median ms per move and the residual reached. An exposure slider and a
-//!   log or linear tone scale set how B reads.
+//!   itself. By default the later bounces come from the learned transport
+//!   (`flatland_transport`, built in the background while the exact re-solve answers; its
+//!   blocks of `M₂` appear over the kernel plot as they are built, coloured by rank), else
+//!   from the exact re-solve. Drag a light's mark, click the floor to add one, right-click one
+//!   to delete it; the title gives the median ms per move and the residual reached or the
+//!   transport's own error estimate, the panel's foot its bytes and build time. B is drawn as
+//!   a function (linear between element midpoints). An exposure slider and a log or linear
+//!   tone scale set how B reads.
 //! - **Lit scene**: the radiosity `B` solved with the kernel learned so far colours the scene's
 //!   edges, with `B(s)` of it and of the exact kernel and the error of the
 //!   solved `B − E` as the learner goes ([`lit`]: for a network solved on the learner's thread

@@ -3,12 +3,14 @@
 //! ([`RelitHandle::take`]); the thread relights only the newest positions, dropping any that
 //! were overtaken while it worked, so a slow move never queues up behind the pointer.
 //!
-//! What relights is a [`Relight`]: today the exact re-solve ([`ExactRelight`],
+//! What relights is a [`Relight`]: the exact re-solve ([`ExactRelight`],
 //! `flatland_solve::Relighter`: the direct light, the first bounce and the later bounces by a
-//! warm-started GMRES). A learned transport of the later bounces answers the same two
-//! questions (its mesh, B under some lights) and is made by a [`MakeRelight`] of its own.
-//! Per scene the thread also walks the free space ([`flatland_geom::walk`]) once, for the
-//! light that wanders by itself on first launch.
+//! warm-started GMRES), or [`MovingLight`], the viewer's, which answers with the exact
+//! re-solve until the learned transport of the later bounces ([`transport`]) is built on a
+//! thread of its own, then with the transport (or the exact one, as the user chooses). While
+//! it is idle and a build is under way the thread looks every [`POLL`] for the build's end, to
+//! switch at once. Per scene the thread also walks the free space ([`flatland_geom::walk`])
+//! once, for the light that wanders by itself on first launch.
 
 use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -18,8 +20,17 @@ use std::time::{Duration, Instant};
 
 use flatland_geom::{DVec2, Kernel, PointLight, WalkParams, walk};
 use flatland_solve::{Mesh, RelightParams, Relighter, SolveError, Stop};
+use flatland_transport::TransportError;
 
 use crate::background::Priority;
+
+mod one_moving;
+pub mod transport;
+
+pub use transport::{BlockLog, M2_RES, MovingLight, TransportPhase, TransportStatus, m2_grid};
+
+/// How often the idle thread looks whether a transport's build ended.
+pub const POLL: Duration = Duration::from_millis(50);
 
 /// Positions of the wandering light's walk (it runs back and forth along them).
 pub const WALK_POSITIONS: usize = 400;
@@ -28,33 +39,66 @@ pub const WALK_SEED: u64 = 33;
 /// Moves the median time per move is taken over.
 pub const TIMED_MOVES: usize = 32;
 
+/// What answered a move.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Answer {
+    /// The exact re-solve.
+    Exact,
+    /// The exact direct light and first bounce, the learned transport's later bounces.
+    Transport,
+}
+
 /// One relit move: B per element and what it cost.
 #[derive(Clone, Copy, Debug)]
 pub struct Moved<'a> {
     /// B per element of the relighter's mesh.
     pub radiosity: &'a [f64],
-    /// The relative residual of `(I − K) B = B₀` the move reached (its own error estimate).
-    pub residual: f64,
+    /// The relative residual of `(I − K) B = B₀` the exact re-solve reached (its own error
+    /// estimate); `None` for the transport, whose estimate is its own
+    /// ([`TransportStatus`]).
+    pub residual: Option<f64>,
+    /// What answered.
+    pub answer: Answer,
 }
 
-/// What relights one scene per move of its lights: the exact re-solve, or later one whose
-/// later bounces come from a learned transport.
+/// What relights one scene per move of its lights: the exact re-solve, or one whose later
+/// bounces come from a learned transport.
 pub trait Relight: Send {
     /// The elements B is given on.
     fn mesh(&self) -> &Mesh;
     /// B under `lights` (the scene's emitting edges stay on). Errors name a refused light.
-    fn relight(&mut self, lights: &[PointLight], stop: &Stop) -> Result<Moved<'_>, SolveError>;
+    fn relight(&mut self, lights: &[PointLight], stop: &Stop) -> Result<Moved<'_>, TransportError>;
+    /// Moves go through the learned transport (`true`; built the first time, the exact
+    /// re-solve answering until then) or the exact re-solve. Only an exact relighter
+    /// ignores it.
+    fn use_transport(&mut self, _on: bool) -> Result<(), TransportError> {
+        Ok(())
+    }
+    /// Takes a build's end: `true` when what answers the moves changed with it (the last
+    /// lights are to be relit).
+    fn poll(&mut self) -> bool {
+        false
+    }
+    /// Whether a build is under way that [`Relight::poll`] should be asked about.
+    fn pending(&self) -> bool {
+        false
+    }
+    /// The learned transport's build and figures, once one was asked for.
+    fn transport(&self) -> Option<TransportStatus> {
+        None
+    }
 }
 
 /// Makes the relighter of a scene on the thread (may take a while: `stop` is polled).
-pub type MakeRelight = fn(kernel: &Kernel, stop: &Stop) -> Result<Box<dyn Relight>, SolveError>;
+pub type MakeRelight =
+    fn(kernel: &Arc<Kernel>, stop: &Stop) -> Result<Box<dyn Relight>, TransportError>;
 
 /// The exact re-solve ([`Relighter`]) on the scene's default mesh.
 pub struct ExactRelight(Relighter);
 
 impl ExactRelight {
     /// The exact relighter of `kernel`'s scene on [`Mesh::default_elements`] elements.
-    pub fn make(kernel: &Kernel, stop: &Stop) -> Result<Box<dyn Relight>, SolveError> {
+    pub fn make(kernel: &Arc<Kernel>, stop: &Stop) -> Result<Box<dyn Relight>, TransportError> {
         let mesh = Mesh::new(kernel, Mesh::default_elements(kernel.scene()))?;
         let relighter = Relighter::new(kernel, &mesh, RelightParams::default(), stop)?;
         Ok(Box::new(ExactRelight(relighter)))
@@ -66,11 +110,12 @@ impl Relight for ExactRelight {
         self.0.mesh()
     }
 
-    fn relight(&mut self, lights: &[PointLight], stop: &Stop) -> Result<Moved<'_>, SolveError> {
+    fn relight(&mut self, lights: &[PointLight], stop: &Stop) -> Result<Moved<'_>, TransportError> {
         let relit = self.0.relight(lights, stop)?;
         Ok(Moved {
             radiosity: relit.radiosity,
-            residual: relit.cost.residual,
+            residual: Some(relit.cost.residual),
+            answer: Answer::Exact,
         })
     }
 }
@@ -86,8 +131,12 @@ pub struct RelitFrame {
     pub lights: Vec<PointLight>,
     /// B per element.
     pub b: Vec<f64>,
-    /// The relative residual the move reached.
-    pub residual: f64,
+    /// The relative residual the exact re-solve reached (`None`: the transport answered).
+    pub residual: Option<f64>,
+    /// What answered this move.
+    pub answer: Answer,
+    /// The learned transport's build and figures, once one was asked for.
+    pub transport: Option<TransportStatus>,
     /// Milliseconds this move took.
     pub move_ms: f64,
     /// The median over the last [`TIMED_MOVES`] moves.
@@ -133,6 +182,8 @@ struct Inbox {
     lights: Option<Vec<PointLight>>,
     /// Positions replaced before they were taken.
     overtaken: u64,
+    /// Through the learned transport or not, when the user changed it.
+    transport: Option<bool>,
     quit: bool,
 }
 
@@ -182,6 +233,13 @@ impl RelitHandle {
         inbox.scene = Some((world, kernel));
         inbox.lights = None;
         self.shared.interrupt.store(true, Ordering::Release);
+        self.shared.asked.notify_one();
+    }
+
+    /// Moves through the learned transport (built first, the exact re-solve answering
+    /// meanwhile) or through the exact re-solve, from now on and for the scenes after.
+    pub fn use_transport(&self, on: bool) {
+        lock(&self.shared.inbox).transport = Some(on);
         self.shared.asked.notify_one();
     }
 
@@ -239,6 +297,8 @@ struct RelitThread {
     make: MakeRelight,
     repaint: Box<dyn Fn() + Send>,
     current: Option<Current>,
+    /// Whether moves go through the learned transport.
+    transport: bool,
 }
 
 /// The scene being relit.
@@ -249,12 +309,19 @@ struct Current {
     times: VecDeque<f64>,
     moves: u64,
     dropped_before: u64,
+    /// The lights last relit, and the positions overtaken then.
+    last: Option<(Vec<PointLight>, u64)>,
+    /// What answered the last move.
+    answered: Option<Answer>,
 }
 
 /// What the thread is asked next.
 enum Job {
     Scene(u64, Arc<Kernel>),
     Lights(Vec<PointLight>, u64),
+    Transport(bool),
+    /// Nothing asked within [`POLL`] while a build is under way.
+    Poll,
     Quit,
 }
 
@@ -265,6 +332,7 @@ impl RelitThread {
             make,
             repaint,
             current: None,
+            transport: false,
         }
     }
 
@@ -274,7 +342,38 @@ impl RelitThread {
                 Job::Quit => return,
                 Job::Scene(world, kernel) => self.build(world, &kernel),
                 Job::Lights(lights, overtaken) => self.relight(&lights, overtaken),
+                Job::Transport(on) => self.choose(on),
+                Job::Poll => self.poll(),
             }
+        }
+    }
+
+    /// Moves through the transport or not; the last lights relit by the new choice.
+    fn choose(&mut self, on: bool) {
+        self.transport = on;
+        let Some(c) = self.current.as_mut() else {
+            return;
+        };
+        if let Err(e) = c.relight.use_transport(on) {
+            self.publish(|m| m.state = Some(RelitState::Failed(e.to_string())));
+            return;
+        }
+        self.relight_last();
+    }
+
+    /// A build's end: the last lights relit when it changed what answers them.
+    fn poll(&mut self) {
+        if self.current.as_mut().is_some_and(|c| c.relight.poll()) {
+            self.relight_last();
+        } else {
+            // The blocks grew: the UI draws them.
+            (self.repaint)();
+        }
+    }
+
+    fn relight_last(&mut self) {
+        if let Some((lights, overtaken)) = self.current.as_ref().and_then(|c| c.last.clone()) {
+            self.relight(&lights, overtaken);
         }
     }
 
@@ -289,8 +388,23 @@ impl RelitThread {
                 self.shared.interrupt.store(false, Ordering::Release);
                 return Job::Scene(world, kernel);
             }
+            if let Some(on) = inbox.transport.take() {
+                return Job::Transport(on);
+            }
             if let Some(lights) = inbox.lights.take() {
                 return Job::Lights(lights, inbox.overtaken);
+            }
+            if self.current.as_ref().is_some_and(|c| c.relight.pending()) {
+                let (guard, waited) = self
+                    .shared
+                    .asked
+                    .wait_timeout(inbox, POLL)
+                    .unwrap_or_else(std::sync::PoisonError::into_inner);
+                inbox = guard;
+                if waited.timed_out() {
+                    return Job::Poll;
+                }
+                continue;
             }
             inbox = self
                 .shared
@@ -310,18 +424,21 @@ impl RelitThread {
     }
 
     /// Builds the relighter and the walk of a new scene (interrupted by a newer one).
-    fn build(&mut self, world: u64, kernel: &Kernel) {
+    fn build(&mut self, world: u64, kernel: &Arc<Kernel>) {
         self.current = None;
         self.publish(|m| m.state = Some(RelitState::Building));
         // `Stop` is `'static`: the flag is reached through the shared state, not borrowed.
         let shared = Arc::clone(&self.shared);
         let stop = move || shared.interrupt.load(Ordering::Acquire);
         let started = Instant::now();
-        let made = (self.make)(kernel, &stop);
+        let made = (self.make)(kernel, &stop)
+            .and_then(|mut r| r.use_transport(self.transport).map(|()| r));
         let built_s = started.elapsed().as_secs_f64();
         let relight = match made {
             Ok(r) => r,
-            Err(SolveError::Interrupted) => return,
+            Err(TransportError::Interrupted | TransportError::Solve(SolveError::Interrupted)) => {
+                return;
+            }
             Err(e) => {
                 self.publish(|m| m.state = Some(RelitState::Failed(e.to_string())));
                 return;
@@ -336,6 +453,8 @@ impl RelitThread {
             times: VecDeque::new(),
             moves: 0,
             dropped_before,
+            last: None,
+            answered: None,
         });
         self.publish(|m| {
             m.built = Some((world, built_s));
@@ -351,10 +470,18 @@ impl RelitThread {
         let Some(c) = self.current.as_mut() else {
             return;
         };
+        c.last = Some((lights.to_vec(), overtaken));
         let started = Instant::now();
         let state = match c.relight.relight(lights, &flatland_solve::never) {
             Ok(moved) => {
                 let move_ms = 1e3 * started.elapsed().as_secs_f64();
+                let (residual, answer) = (moved.residual, moved.answer);
+                let b = moved.radiosity.to_vec();
+                if c.answered != Some(answer) {
+                    // The median is of the moves of what answers now.
+                    c.times.clear();
+                    c.answered = Some(answer);
+                }
                 if c.times.len() == TIMED_MOVES {
                     c.times.pop_front();
                 }
@@ -364,8 +491,10 @@ impl RelitThread {
                     world: c.world,
                     mesh: Arc::clone(&c.mesh),
                     lights: lights.to_vec(),
-                    b: moved.radiosity.to_vec(),
-                    residual: moved.residual,
+                    b,
+                    residual,
+                    answer,
+                    transport: c.relight.transport(),
                     move_ms,
                     median_ms: median(&c.times),
                     moves: c.moves,
@@ -430,7 +559,8 @@ mod tests {
         let later = frame_at(walk[WALK_POSITIONS / 2]);
         assert_eq!(first.world, 7);
         assert_eq!(first.b.len(), first.mesh.len());
-        assert!(first.residual <= 1e-6 && first.median_ms > 0.0);
+        assert!(first.residual.is_some_and(|r| r <= 1e-6) && first.median_ms > 0.0);
+        assert_eq!(first.answer, Answer::Exact);
         assert_ne!(first.b, later.b, "B follows the light");
         // A light on a wall is refused, and says which.
         let wall = kernel.scene().edges()[0];

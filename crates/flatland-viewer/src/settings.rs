@@ -60,6 +60,13 @@ pub struct Settings {
     pub lit: bool,
     /// The relit scene's first light wanders along a walk through the free space by itself.
     pub wander: bool,
+    /// The moving light's later bounces come from the learned transport (built in the
+    /// background, the exact re-solve answering meanwhile), else from the exact re-solve.
+    pub transport: bool,
+    /// Draw the learned transport's blocks over the kernel plot.
+    pub show_blocks: bool,
+    /// The kernel plot shows the transport's learned `M₂(s, t)` in place of the exact ζ.
+    pub show_m2: bool,
     /// The lit scenes' exposure, in stops: the colour scale's top is divided by 2^exposure.
     pub exposure: f32,
     /// A logarithmic tone scale for the lit scenes (else linear).
@@ -85,6 +92,11 @@ impl Default for Settings {
             show_samples: false,
             lit: true,
             wander: true,
+            // The viewer shows the transport at work: it is what makes a light on a big plan
+            // move at frame rate (the exact re-solve is the CLI's default and one click away).
+            transport: true,
+            show_blocks: true,
+            show_m2: false,
             exposure: 0.0,
             tone_log: true,
         }

@@ -1,14 +1,17 @@
 //! Drawing: functions of what they show plus a little interaction state; nothing here trains
 //! or waits. The `(s, t)` plots in [`plot`] with the cells' overlay rastered in [`overlay`]
 //! and their layers composited into one image in [`layers`],
+//! the learned transport's blocks over a plot in [`blocks`],
 //! the scene view in [`scene`], the relit scene and its moving lights in [`lamps`], a scene's edges and the lit scene in [`edges`] (their lines
 //! rastered once per change in [`raster`]), the learning
 //! curves in [`curves`], the small pieces they share in [`widgets`].
 
+mod blocks;
 mod curves;
 mod edges;
 mod lamps;
 mod layers;
+mod lit_pieces;
 mod overlay;
 mod plot;
 mod raster;
@@ -18,6 +21,7 @@ mod widgets;
 use egui::Color32;
 use flatland_geom::DVec2;
 
+pub use blocks::BlocksTexture;
 pub use curves::curves;
 pub use edges::LitPaint;
 pub use lamps::{LampsOut, RelitFrameView, relit_view};

@@ -316,14 +316,7 @@ impl ViewerApp {
                  faces join cells that never answer the same ray",
             );
         ui.checkbox(&mut self.settings.show_samples, "samples, coloured by set");
-        ui.checkbox(
-            &mut self.settings.wander,
-            "the light wanders (grab it to stop)",
-        )
-        .on_hover_text(
-            "the relit scene's first light walks through the rooms by itself; drag a light, \
-                 click the floor to add one, right-click one to delete it",
-        );
+        self.moving_light_controls(ui);
         ui.add(
             egui::Slider::new(&mut self.settings.exposure, -4.0..=8.0)
                 .step_by(0.5)
@@ -353,6 +346,48 @@ impl ViewerApp {
         {
             self.settings.restore_preset();
         }
+    }
+
+    /// The moving light: the wander, exact or learned transport, the transport's blocks and
+    /// its learned M₂ in the kernel plot.
+    fn moving_light_controls(&mut self, ui: &mut egui::Ui) {
+        ui.checkbox(
+            &mut self.settings.wander,
+            "the light wanders (grab it to stop)",
+        )
+        .on_hover_text(
+            "the relit scene's first light walks through the rooms by itself; drag a light, \
+                 click the floor to add one, right-click one to delete it",
+        );
+        if ui
+            .checkbox(
+                &mut self.settings.transport,
+                "learned transport (else exact)",
+            )
+            .on_hover_text(
+                "on: B = B₀ + K B₀ exact, plus M₂ B₀ from the learned transport of the later \
+                 bounces (docs/ALGORITHM.md §9), built in the background while the exact \
+                 re-solve answers; off: the exact re-solve (GMRES, warm-started) every move",
+            )
+            .changed()
+        {
+            self.lamps.handle.use_transport(self.settings.transport);
+        }
+        // One row: the export buttons below must stay on a 1500-point-high window.
+        ui.horizontal(|ui| {
+            ui.checkbox(&mut self.settings.show_blocks, "its blocks")
+                .on_hover_text(
+                    "the learned transport's blocks over the kernel plot, coloured by rank: \
+                     each block of M₂ joins a cluster of senders (rows, s) to the receivers \
+                     its light reaches (columns, t); drawn as the build makes them",
+                );
+            ui.checkbox(&mut self.settings.show_m2, "its M₂ for ζ")
+                .on_hover_text(
+                    "the kernel plot shows M₂ = K² (I − K)^-1, the later bounces the \
+                     transport learned, as a density in s (log scale), in place of the exact \
+                     ζ once the transport is built",
+                );
+        });
     }
 
     /// Save the view as a PNG and the run as a model file, into a folder.

@@ -109,8 +109,13 @@ impl ViewerApp {
             .as_ref()
             .map_or("relight –".to_owned(), |f| {
                 format!(
-                    "relight {:.1} ms/move (median)  moves {}  dropped {}  residual {:.0e}",
-                    f.median_ms, f.moves, f.dropped, f.residual
+                    "relight {:.2} ms/move (median, {})  moves {}  dropped {}  {}  {}",
+                    f.median_ms,
+                    super::lamps::answer_name(f.answer),
+                    f.moves,
+                    f.dropped,
+                    super::lamps::relit_quality(f),
+                    super::lamps::transport_note(f),
                 )
             });
         eprintln!(

@@ -7,10 +7,11 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use flatland_geom::{DVec2, Kernel, PointLight, WalkParams, in_a_room};
+use flatland_pictures::colormap::Scale;
 
 use super::ViewerApp;
-use crate::relit::{RelitFrame, RelitHandle, RelitState};
-use crate::views::{EdgesTexture, LampsOut};
+use crate::relit::{Answer, RelitFrame, RelitHandle, RelitState, TransportPhase};
+use crate::views::{BlocksTexture, EdgesTexture, LampsOut};
 use crate::worker::World;
 
 /// A light added to a scene without lights of its own is this many times as strong as its
@@ -50,6 +51,10 @@ pub(super) struct Lamps {
     /// Where the lights' marks were drawn in the last frame (for tests and tools).
     pub(super) marks: Vec<egui::Pos2>,
     pub(super) texture: EdgesTexture,
+    /// The learned transport's blocks over the kernel plot.
+    pub(super) blocks: BlocksTexture,
+    /// The learned `M₂(s, t)` shown in the kernel plot: its world, grid, texture and scale.
+    pub(super) m2: Option<(u64, Arc<Vec<f64>>, egui::TextureHandle, Scale)>,
 }
 
 impl Lamps {
@@ -70,12 +75,63 @@ impl Lamps {
             grabbed: None,
             marks: Vec::new(),
             texture: EdgesTexture::default(),
+            blocks: BlocksTexture::default(),
+            m2: None,
         }
     }
 
     /// The id of the world relit (0: none yet).
     fn world_id(&self) -> u64 {
         self.world.as_ref().map_or(0, |w| w.id)
+    }
+}
+
+/// What answered a move, in words.
+pub(super) fn answer_name(answer: Answer) -> &'static str {
+    match answer {
+        Answer::Exact => "moving light, exact re-solve",
+        Answer::Transport => "moving light, learned transport",
+    }
+}
+
+/// How good a move is: the exact re-solve's residual, or the transport's own error estimate of
+/// B (relative L2 on its validation lights).
+pub(super) fn relit_quality(frame: &RelitFrame) -> String {
+    match (frame.residual, frame.transport.as_ref().map(|t| &t.phase)) {
+        (Some(r), _) => format!("residual {r:.0e}"),
+        (None, Some(TransportPhase::Ready { estimate, .. })) => format!(
+            "est. error of B {:.1} % (max {:.1} %)",
+            100.0 * estimate.b_mean,
+            100.0 * estimate.b_max
+        ),
+        (None, _) => String::new(),
+    }
+}
+
+/// Where the learned transport is: its build's progress, or its bytes and build time.
+pub(super) fn transport_note(frame: &RelitFrame) -> String {
+    let Some(t) = &frame.transport else {
+        return String::new();
+    };
+    match &t.phase {
+        TransportPhase::Building => format!(
+            "transport building: {} of {} blocks (exact meanwhile)",
+            t.blocks.len(),
+            t.clusters
+        ),
+        TransportPhase::Ready {
+            estimate,
+            bytes,
+            build_s,
+            ..
+        } => format!(
+            "transport: {} blocks, {:.1} MB, built in {:.1} s, est. on {} lights",
+            t.clusters,
+            *bytes as f64 / 1e6,
+            build_s,
+            estimate.lights
+        ),
+        TransportPhase::Failed(why) => format!("transport failed: {why}"),
     }
 }
 

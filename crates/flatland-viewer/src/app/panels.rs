@@ -11,7 +11,7 @@ use super::layout::Layout;
 use super::readout::{Learned, readout_text};
 use super::top_bar::error_text;
 use super::{Shown, ViewerApp};
-use crate::relit::RelitState;
+use crate::relit::{M2_RES, RelitState, TransportPhase};
 use crate::views::{self, LitPaint, NEW_FOR, PlotFrame};
 use crate::worker::{Command, Lit, Progress};
 
@@ -82,6 +82,7 @@ impl ViewerApp {
         let ctx = ui.ctx().clone();
         let ppp = ctx.pixels_per_point();
         let mut kernel_frame = PlotFrame::new(layout.kernel, true);
+        let kernel_plot = kernel_frame.plot;
         let (approx_frame, error_frame) = (
             PlotFrame::new(layout.approx, false),
             PlotFrame::new(layout.error, false),
@@ -100,8 +101,12 @@ impl ViewerApp {
             self.plot_res = res;
             self.worker.send(Command::PlotResolution(res));
         }
+        let m2 = self.m2_texture(&ctx, shown.world.id);
         let textures = self.textures.of(&ctx, shown, &request);
         kernel_frame.scale = Some(textures.scale);
+        if let Some((_, scale)) = m2 {
+            kernel_frame.scale = Some(scale);
+        }
         let progress = shown.moment.as_ref().map(|m| m.status.growth.progress);
         let rounds = matches!(progress, Some(Progress::Rounds { .. }));
         let big = views::Overlay {
@@ -117,12 +122,12 @@ impl ViewerApp {
         let panels = [
             (
                 kernel_frame,
-                if rounds {
-                    "ζ(s, t) exact, with the probes"
-                } else {
-                    "ζ(s, t) exact, with the cells"
+                match (m2.is_some(), rounds) {
+                    (true, _) => "M₂(s, t) learned by the transport",
+                    (false, true) => "ζ(s, t) exact, with the probes",
+                    (false, false) => "ζ(s, t) exact, with the cells",
                 },
-                Some(textures.kernel),
+                Some(m2.map_or(textures.kernel, |(texture, _)| texture)),
                 big,
             ),
             (approx_frame, learned_title, textures.approx, small),
@@ -141,6 +146,7 @@ impl ViewerApp {
             );
             hovered = hovered.or(st);
         }
+        self.transport_blocks(ui, kernel_plot, shown.world.id);
         self.hover.st = hovered;
         if let Some([s, t]) = self.hover.st
             && let Some(pointer) = ui.input(|i| i.pointer.hover_pos())
@@ -148,6 +154,61 @@ impl ViewerApp {
             let text = readout_text(&shown.world.kernel, self.learned_source(shown), s, t);
             views::readout_box(&ctx, pointer, &text);
         }
+    }
+
+    /// The learned `M₂(s, t)` of the moving light's transport as a texture and its colour
+    /// scale (log, the one rule), when it is asked for in place of ζ and built for `world`.
+    fn m2_texture(
+        &mut self,
+        ctx: &egui::Context,
+        world: u64,
+    ) -> Option<(egui::TextureId, flatland_pictures::colormap::Scale)> {
+        if !self.settings.show_m2 {
+            return None;
+        }
+        let frame = self.lamps.frame.as_ref().filter(|f| f.world == world)?;
+        let Some(TransportPhase::Ready { m2, .. }) = frame.transport.as_ref().map(|t| &t.phase)
+        else {
+            return None;
+        };
+        let kept = self
+            .lamps
+            .m2
+            .as_ref()
+            .filter(|(w, grid, ..)| *w == world && Arc::ptr_eq(grid, m2));
+        if kept.is_none() {
+            let scale = flatland_pictures::colormap::Scale::fit(m2, true);
+            let image = crate::colormap::grid_image(m2, M2_RES, scale);
+            let texture = ctx.load_texture("learned M2", image, egui::TextureOptions::NEAREST);
+            self.lamps.m2 = Some((world, Arc::clone(m2), texture, scale));
+        }
+        self.lamps
+            .m2
+            .as_ref()
+            .map(|(_, _, texture, scale)| (texture.id(), *scale))
+    }
+
+    /// The learned transport's blocks over the kernel plot, as they are built (when shown, and
+    /// when the moving light's scene is the plot's).
+    fn transport_blocks(&mut self, ui: &egui::Ui, plot: Rect, world: u64) {
+        let Some(frame) = self.lamps.frame.clone().filter(|f| f.world == world) else {
+            return;
+        };
+        let Some(status) = frame
+            .transport
+            .as_ref()
+            .filter(|_| self.settings.show_blocks)
+        else {
+            return;
+        };
+        let painter = ui.painter_at(plot);
+        self.lamps.blocks.paint(
+            &painter,
+            plot,
+            (world, &frame.mesh),
+            &status.blocks,
+            status.clusters,
+        );
     }
 
     /// The learned value under the pointer: the live model, or a past moment's grid.
@@ -241,12 +302,10 @@ impl ViewerApp {
             });
         let title = match (&frame, &self.lamps.state) {
             (Some(f), _) => format!(
-                "moving light{}: {:.1} ms per move (median of the last {}), residual {:.0e}, {} el.",
-                if f.lights.len() == 1 { "" } else { "s" },
+                "{}: {:.2} ms per move, {}",
+                super::lamps::answer_name(f.answer),
                 f.median_ms,
-                f.moves.min(crate::relit::TIMED_MOVES as u64),
-                f.residual,
-                f.mesh.len(),
+                super::lamps::relit_quality(f),
             ),
             (None, RelitState::Failed(why)) => format!("moving light: {why}"),
             (None, _) => "moving light: building the exact operator…".to_owned(),
@@ -257,6 +316,14 @@ impl ViewerApp {
             scene: &world.scene,
             lit: paint.as_ref(),
             lights: &self.lamps.lights,
+            note: &frame.as_deref().map_or(String::new(), |f| {
+                format!(
+                    "{} moves · {} el. · {}",
+                    f.moves.min(crate::relit::TIMED_MOVES as u64),
+                    f.mesh.len(),
+                    super::lamps::transport_note(f)
+                )
+            }),
         };
         let (out, marks) =
             views::relit_view(ui, &view, &mut self.lamps.grabbed, &mut self.lamps.texture);

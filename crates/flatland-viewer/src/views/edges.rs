@@ -10,6 +10,8 @@ use flatland_geom::{Role, Scene};
 use flatland_pictures::colormap::Scale;
 use flatland_solve::Mesh;
 
+use super::lit_pieces::{MIN_PIECE, end_values, pieces};
+use super::raster::Canvas;
 use super::raster::{EdgesTexture, Pen};
 use super::widgets::{View, gradient, short};
 use super::{BLOCKER, EMITTER, LIT_BLOCKER, SURFACE, TITLE_H};
@@ -19,6 +21,8 @@ use crate::colormap::colour;
 pub(super) const COLOUR_BAR_W: f32 = 58.0;
 /// Height of the scene view's line under the title (the hovered ray's k).
 pub(super) const INFO_H: f32 = 12.0;
+/// Width of a lit element, in points.
+const LIT_WIDTH: f32 = 5.0;
 /// An edge shorter than this on screen gets no front-side tick.
 const MIN_TICKED: f32 = 8.0;
 /// An edge shorter than this on screen gets no index.
@@ -59,7 +63,7 @@ impl LitPaint<'_> {
         }
     }
 
-    fn color(&self, b: f64) -> Color32 {
+    pub(super) fn color(&self, b: f64) -> Color32 {
         colour(self.scale().unit(b))
     }
 }
@@ -85,12 +89,13 @@ pub(super) fn draw_edges(
     lit: Option<&LitPaint<'_>>,
     weak: Color32,
 ) {
-    draw_lines(pen, view, scene, lit);
+    draw_lines(pen, view, scene, lit, true);
     draw_labels(painter, view, scene, lit.is_some(), weak);
 }
 
-/// [`draw_edges`] with the lines rastered into `texture` over `rect`, again only when the
-/// scene, `lit` or the panel changed.
+/// [`draw_edges`] rastered into `texture` over `rect` in two layers: the lit elements (again
+/// when B, its scale, the scene or the panel changed: [`draw_lit`]) under the other lines
+/// (again only when the scene or the panel changed). A new B rasters only its elements.
 pub(super) fn draw_edges_once(
     texture: &mut EdgesTexture,
     painter: &Painter,
@@ -100,32 +105,55 @@ pub(super) fn draw_edges_once(
     lit: Option<&LitPaint<'_>>,
     weak: Color32,
 ) {
-    let lit_key = lit.map_or(0, |l| {
-        fingerprint(
-            l.b.iter()
+    if let Some(lit) = lit {
+        let key = fingerprint(
+            lit.b
+                .iter()
                 .map(|b| b.to_bits())
-                .chain([l.top.to_bits(), u64::from(l.log)]),
-        )
-    });
+                .chain([lit.top.to_bits(), u64::from(lit.log)]),
+        );
+        texture.paint_lit(painter, rect, [scene_fingerprint(scene), key], |canvas| {
+            draw_lit(canvas, view, lit);
+        });
+    }
     texture.paint(
         painter,
         rect,
-        [scene_fingerprint(scene), lit_key],
+        [scene_fingerprint(scene), u64::from(lit.is_some())],
         |canvas| {
-            draw_lines(canvas, view, scene, lit);
+            draw_lines(canvas, view, scene, lit, false);
         },
     );
     draw_labels(painter, view, scene, lit.is_some(), weak);
 }
 
-/// The lines of [`draw_edges`]: lit elements, edges, front-side ticks, emitters' suns.
-fn draw_lines(pen: &mut impl Pen, view: &View, scene: &Scene, lit: Option<&LitPaint<'_>>) {
-    if let Some(lit) = lit {
+/// The lit elements as B along them, a function, not flat steps: pieces of at least
+/// [`MIN_PIECE`] points ([`pieces`]), each from its start to its middle and on to its end,
+/// coloured by B there ([`end_values`]: linear between the middles along an edge).
+fn draw_lit(canvas: &mut Canvas, view: &View, lit: &LitPaint<'_>) {
+    let pieces = pieces(view, lit.mesh, lit.b, MIN_PIECE);
+    for (p, [start, end]) in pieces.iter().zip(end_values(&pieces)) {
+        let (m, mid) = (p.a + (p.b - p.a) * 0.5, lit.color(p.value));
+        canvas.span_line(p.a, m, [lit.color(start), mid], LIT_WIDTH);
+        canvas.span_line(m, p.b, [mid, lit.color(end)], LIT_WIDTH);
+    }
+}
+
+/// The lines of [`draw_edges`]: lit elements (unless `elements` is false: drawn as a mesh),
+/// edges, front-side ticks, emitters' suns.
+fn draw_lines(
+    pen: &mut impl Pen,
+    view: &View,
+    scene: &Scene,
+    lit: Option<&LitPaint<'_>>,
+    elements: bool,
+) {
+    if let Some(lit) = lit.filter(|_| elements) {
         for (el, &b) in lit.mesh.elements().iter().zip(lit.b) {
             pen.line(
                 view.screen(el.a),
                 view.screen(el.b),
-                Stroke::new(5.0, lit.color(b)),
+                Stroke::new(LIT_WIDTH, lit.color(b)),
             );
         }
     }

@@ -10,6 +10,12 @@ use super::widgets::{View, legend, panel_frame};
 
 /// A light's mark: a small white disc ringed in black (any colour of the map shows it).
 const MARK_R: f32 = 4.0;
+/// Past this many lights their marks are small white dots (a plan of hundreds of lamps would
+/// be covered by full marks, and each costs the software renderer a ringed disc per frame);
+/// the light under the pointer or held is marked in full.
+const MANY_MARKS: usize = 64;
+/// A mark among many.
+const SMALL_MARK_R: f32 = 1.5;
 /// How near the pointer must be to a mark to grab or delete it, in points.
 const GRAB_R: f32 = 10.0;
 
@@ -36,6 +42,8 @@ pub struct RelitFrameView<'a> {
     pub lit: Option<&'a LitPaint<'a>>,
     /// The lights.
     pub lights: &'a [PointLight],
+    /// A line at the foot of the panel (what answers the moves), right of the legend.
+    pub note: &'a str,
 }
 
 /// Draws the relit scene and its lights' marks, follows a grab (`grabbed`: the light being
@@ -56,7 +64,14 @@ pub fn relit_view(
         draw_edges_once(texture, &painter, rect, &view, frame.scene, Some(lit), weak);
         colour_bar(&painter, rect, lit, weak);
     }
-    let _ = legend(&painter, rect, &LIT_LEGEND);
+    let legend_end = legend(&painter, rect, &LIT_LEGEND);
+    painter.text(
+        egui::pos2(legend_end + 4.0, rect.bottom() - 3.0),
+        egui::Align2::LEFT_BOTTOM,
+        frame.note,
+        egui::FontId::proportional(11.0),
+        weak,
+    );
     let marks: Vec<Pos2> = frame.lights.iter().map(|l| view.screen(l.at)).collect();
     let near = |q: Pos2| {
         marks
@@ -90,11 +105,19 @@ pub fn relit_view(
         out.deleted = near(q);
     }
     let hovered = response.hover_pos().and_then(near);
+    let many = marks.len() > MANY_MARKS;
     for (i, &m) in marks.iter().enumerate() {
         let hot = hovered == Some(i) || *grabbed == Some(i);
-        let r = if hot { MARK_R + 1.5 } else { MARK_R };
+        // The first light is the one that wanders: always in full.
+        let r = match (hot, many && i > 0) {
+            (true, _) => MARK_R + 1.5,
+            (false, true) => SMALL_MARK_R,
+            (false, false) => MARK_R,
+        };
         painter.circle_filled(m, r, Color32::WHITE);
-        painter.circle_stroke(m, r, Stroke::new(1.0, Color32::BLACK));
+        if r > SMALL_MARK_R {
+            painter.circle_stroke(m, r, Stroke::new(1.0, Color32::BLACK));
+        }
     }
     if hovered.is_some() || grabbed.is_some() {
         ui.ctx().set_cursor_icon(egui::CursorIcon::Grab);
