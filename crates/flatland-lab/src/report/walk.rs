@@ -16,10 +16,23 @@ pub const PARTIAL: &str = "relight-walk.partial.csv";
 pub const CSV: &str = "relight-walk.csv";
 /// The table.
 pub const MARKDOWN: &str = "relight-walk.md";
-/// The plots: the error of B, and of the indirect part, against ms per move.
-pub const PLOTS: [&str; 2] = ["relight-walk-b.png", "relight-walk-indirect.png"];
+/// The plots, one per kind of scene (so a legend of some ten series leaves the points in
+/// view): the error of B, and of the indirect part, against ms per move.
+pub const PLOTS: [&str; 4] = [
+    "relight-walk-floorplan-b.png",
+    "relight-walk-floorplan-indirect.png",
+    "relight-walk-hall-b.png",
+    "relight-walk-hall-indirect.png",
+];
 /// Every file a relighting bench writes.
-pub const OUTPUTS: [&str; 5] = [PARTIAL, CSV, MARKDOWN, PLOTS[0], PLOTS[1]];
+pub const OUTPUTS: [&str; 7] = [
+    PARTIAL, CSV, MARKDOWN, PLOTS[0], PLOTS[1], PLOTS[2], PLOTS[3],
+];
+
+/// The kind of a walk's scene: `floorplan` of `floorplan-1000`.
+fn kind(scene: &str) -> &str {
+    scene.rsplit_once('-').map_or(scene, |(kind, _)| kind)
+}
 
 /// The CSV's columns.
 pub const HEADER: [&str; 16] = [
@@ -139,18 +152,28 @@ pub fn table(rows: &[WalkRow]) -> String {
 pub fn write_plots(dir: &Path, rows: &[WalkRow]) -> Result<()> {
     let error_b = |r: &WalkRow| r.figures.rel_l2_b_mean;
     let indirect = |r: &WalkRow| r.figures.rel_l2_indirect_mean;
-    for (name, error, what) in [
-        (PLOTS[0], &error_b as &dyn Fn(&WalkRow) -> Option<f64>, "B"),
-        (PLOTS[1], &indirect, "the indirect part B − B₀"),
-    ] {
-        let series = series(rows, error);
-        let png = log_log(
-            &format!("relighting a moving lamp: error of {what} against time per move"),
-            "ms per move (median)",
-            &format!("relative L2 error of {what} (mean over the walk)"),
-            &series,
-        )?;
-        crate::interrupt::writing(|| write_atomic(&dir.join(name), &png))?;
+    let mut kinds: Vec<&str> = rows.iter().map(|r| kind(&r.scene)).collect();
+    kinds.dedup();
+    for scenes in kinds {
+        let mine: Vec<WalkRow> = rows
+            .iter()
+            .filter(|r| kind(&r.scene) == scenes)
+            .cloned()
+            .collect();
+        for (suffix, error, what) in [
+            ("b", &error_b as &dyn Fn(&WalkRow) -> Option<f64>, "B"),
+            ("indirect", &indirect, "the indirect part B − B₀"),
+        ] {
+            let series = series(&mine, error);
+            let png = log_log(
+                &format!("a moving lamp, {scenes}s: error of {what} against time per move"),
+                "ms per move (median)",
+                &format!("relative L2 error of {what} (mean over the walk)"),
+                &series,
+            )?;
+            let name = format!("relight-walk-{scenes}-{suffix}.png");
+            crate::interrupt::writing(|| write_atomic(&dir.join(&name), &png))?;
+        }
     }
     Ok(())
 }
@@ -236,6 +259,12 @@ mod tests {
             s[0].points,
             vec![(1.0, 1e-2, 1e-2, 1e-2), (3.0, 1e-6, 1e-6, 1e-6)]
         );
+        assert_eq!(kind("floorplan-100"), "floorplan");
+        for k in ["floorplan", "hall"] {
+            for what in ["b", "indirect"] {
+                assert!(PLOTS.contains(&format!("relight-walk-{k}-{what}.png").as_str()));
+            }
+        }
         let t = table(&rows);
         assert_eq!(t.lines().count(), 2 + rows.len());
         // The cold row pays nothing off; the same set-up at 3 ms instead of 9: the first move.

@@ -168,7 +168,9 @@ pub fn section(doc: &mut String, rows: &[WalkRow], quick: bool) -> Result<()> {
         doc,
         "Every row (all four tolerances) is in \
          [docs/results/relight-walk.md](docs/results/relight-walk.md); the error of B against \
-         ms per move:\n\n![error of B against ms per move](docs/results/relight-walk-b.png)\n\n\
+         ms per move, in the floor plans and in the halls:\n\n\
+         ![error of B against ms per move, floor plans](docs/results/relight-walk-floorplan-b.png)\n\
+         ![error of B against ms per move, halls](docs/results/relight-walk-hall-b.png)\n\n\
          How the transport was chosen over the probe grid (uniform and adaptive) and the \
          paper's growing cells on `M₂(s, t)`, one scene at a time with its own error estimates: \
          [docs/MOVING-LIGHT.md](docs/MOVING-LIGHT.md) (measured by \
