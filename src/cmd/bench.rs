@@ -85,9 +85,11 @@ pub struct Args {
     /// Instead of one scene: a lamp carried along a walk of --positions through generated
     /// floor plans and halls of --sizes edges (their own lamps off, no edge emitting), each
     /// position relit by the exact re-solve (at tolerances 1e-6, 1e-2, 1e-4, 1e-8), clustered
-    /// HR and the tracer (given the exact re-solve's time per move), each against a cold exact
-    /// solve there: set-up, bytes, ms per move, errors of B and of the indirect part.
-    /// --methods: of exact, clustered, tracer, transport.
+    /// HR, the tracer (given the exact re-solve's time per move), the learned transport and a
+    /// uniform grid of light-position probes of the transport's bytes, each against a cold
+    /// exact solve there: set-up, bytes, ms per move, errors of B and of the indirect part,
+    /// and after how many moves the set-up pays off. --methods: of exact, clustered, tracer,
+    /// transport, probes (probes with transport).
     #[arg(long)]
     pub relight: bool,
     /// With --relight: positions of the lamp's walk, in [1, 1000000].

@@ -122,7 +122,7 @@ fn visibility(w: &mut String, scene: &Scene, surfaces: &[flatland_geom::EdgeId])
 }
 
 /// The first [`MAX_NAMED`] of `items`, comma-separated, and how many more there are.
-/// The emitters, the point lights, and a warning when nothing (or only lights) lights the scene.
+/// The emitters, the point lights, and a warning when nothing lights the scene.
 fn lighting(w: &mut String, scene: &Scene, emitters: &[usize]) {
     use std::fmt::Write;
     let edges = scene.edges();
@@ -149,12 +149,6 @@ fn lighting(w: &mut String, scene: &Scene, emitters: &[usize]) {
         let _ = writeln!(
             w,
             "warning: nothing emits, so zeta = 0 everywhere (relative errors are undefined)"
-        );
-    } else if emitters.is_empty() {
-        let _ = writeln!(
-            w,
-            "warning: only point lights light the scene: zeta = E' k is 0 everywhere (no edge \
-             emits), so errors of zeta are undefined; B is solved as usual"
         );
     }
 }

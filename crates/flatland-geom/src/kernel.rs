@@ -4,6 +4,7 @@ mod batch;
 mod cache;
 mod eval;
 mod free;
+mod lamps;
 mod pairs;
 mod params;
 mod rays;
@@ -97,7 +98,6 @@ impl Kernel {
     }
 
     fn build(scene: Scene, params: KernelParams) -> Kernel {
-        let floor = params.emission_floor * scene.max_emission();
         let parents: Vec<Parent> = scene
             .groups()
             .iter()
@@ -106,11 +106,8 @@ impl Kernel {
                 d: g.b - g.a,
                 normal: g.normal,
                 reflectance: g.edge.reflectance,
-                weight: if g.edge.emission > 0.0 {
-                    g.edge.emission
-                } else {
-                    floor
-                },
+                // Set below, once the kernel can cast the lamps' rays.
+                weight: g.edge.emission,
                 rank: g.rank,
             })
             .collect();
@@ -128,7 +125,7 @@ impl Kernel {
             .map(|(i, _)| i)
             .collect();
         let shafts = PairCache::new(surface_parents.len());
-        Kernel {
+        let mut kernel = Kernel {
             scene,
             params,
             parents,
@@ -137,6 +134,30 @@ impl Kernel {
             surface_parents,
             shafts,
             varying: OnceLock::new(),
+        };
+        kernel.weigh_senders();
+        kernel
+    }
+
+    /// `E'` of every parent (docs/ALGORITHM.md §2): what it sends of the first light, its
+    /// emission plus what it reflects of the lamps' direct light, and for an edge that emits
+    /// nothing at least the floor, `emission_floor` times the largest of them. Without lamps
+    /// this is the emission of an emitter and the floor elsewhere.
+    fn weigh_senders(&mut self) {
+        let lit = self.lamp_light();
+        let first: Vec<f64> = self
+            .parents
+            .iter()
+            .zip(&lit)
+            .map(|(p, l)| p.weight + l)
+            .collect();
+        let floor = self.params.emission_floor * first.iter().copied().fold(0.0, f64::max);
+        for (p, light) in self.parents.iter_mut().zip(first) {
+            p.weight = if p.weight > 0.0 {
+                light
+            } else {
+                light.max(floor)
+            };
         }
     }
 
@@ -152,8 +173,10 @@ impl Kernel {
         self.params
     }
 
-    /// `E'` of docs/ALGORITHM.md §2: the emission of an emitter, `emission_floor · max emission` for any
-    /// other edge (so 0 everywhere if nothing emits). 0 for an edge not in the scene.
+    /// `E'` of docs/ALGORITHM.md §2, the light an edge sends first: its emission plus what it
+    /// reflects of the scene's lamps' direct light (measured by rays, `kernel/lamps.rs`), and
+    /// for an edge that emits nothing at least `emission_floor` times the largest `E'` (so 0
+    /// everywhere only if nothing emits and no lamp shines). 0 for an edge not in the scene.
     #[must_use]
     pub fn source_weight(&self, edge: EdgeId) -> f64 {
         self.group(edge).map_or(0.0, |g| self.parents[g].weight)

@@ -206,7 +206,7 @@ impl Recipes {
                 baseline(ask.method, run_uniform(kernel, basis, seed, &params)?)
             }
             Method::Tracer => return Err(MethodError::NotAKernel(Method::Tracer.name())),
-            Method::Transport => return Err(Method::Transport.relight_only()),
+            Method::Transport | Method::Probes => return Err(ask.method.relight_only()),
         };
         if built.build_s == 0.0 {
             built.build_s = started.elapsed().as_secs_f64();

@@ -35,10 +35,11 @@ pub enum MethodError {
     /// The tracer lights a scene without any kernel: it has no representation to build.
     #[error("`{0}` lights a scene without a kernel: it has no representation to build")]
     NotAKernel(&'static str),
-    /// A method that lights one scene for a moving light only (the learned transport): it has
-    /// no kernel to solve once with.
-    #[error("`{0}` ({1}) is for a moving light: run `flatland relight --kernel {0}`")]
-    RelightOnly(&'static str, &'static str),
+    /// A method that lights one scene for a moving light only (the learned transport, the
+    /// probe grid): it has no kernel to solve once with. Its name, title and the command that
+    /// runs it.
+    #[error("`{0}` ({1}) is for a moving light: run `{2}`")]
+    RelightOnly(&'static str, &'static str, &'static str),
     /// A build parameter out of its range.
     #[error("{name} must be {valid}, but is {value}")]
     InvalidParameter {

@@ -43,6 +43,10 @@ pub enum Method {
     /// the light that bounces twice or more. Not built yet: named so that commands refuse it
     /// with that reason.
     Transport,
+    /// A uniform grid of precomputed light positions (what game light-probe grids do), given
+    /// the learned transport's bytes: the later bounces of a unit light stored at each, blended
+    /// at a move from the probes nearest the light. Relights only, like the transport.
+    Probes,
 }
 
 /// What a method is, for the tables that sort and sweep them.
@@ -71,7 +75,7 @@ pub enum Knob {
 
 impl Method {
     /// Every method, in the order tables list them.
-    pub const ALL: [Method; 11] = [
+    pub const ALL: [Method; 12] = [
         Method::Light,
         Method::Visibility,
         Method::Paper,
@@ -83,6 +87,7 @@ impl Method {
         Method::Exact,
         Method::Tracer,
         Method::Transport,
+        Method::Probes,
     ];
 
     /// Its one name.
@@ -100,6 +105,7 @@ impl Method {
             Method::UniformExact => "uniform-exact",
             Method::Tracer => "tracer",
             Method::Transport => "transport",
+            Method::Probes => "probes",
         }
     }
 
@@ -118,13 +124,18 @@ impl Method {
             Method::UniformExact => "uniform grid of exact means",
             Method::Tracer => "Monte Carlo tracer",
             Method::Transport => "learned transport of the later bounces",
+            Method::Probes => "uniform grid of light-position probes",
         }
     }
 
     /// The error refusing this method where one lighting is asked for: it relights only.
     #[must_use]
     pub fn relight_only(self) -> crate::MethodError {
-        crate::MethodError::RelightOnly(self.name(), self.title())
+        let command = match self {
+            Method::Probes => "flatland bench --relight",
+            _ => "flatland relight --kernel transport",
+        };
+        crate::MethodError::RelightOnly(self.name(), self.title(), command)
     }
 
     /// Parses [`Method::name`] (clap's `ValueEnum` parser); a name the project used before
@@ -156,7 +167,8 @@ impl Method {
             | Method::Clustered
             | Method::Uniform
             | Method::UniformExact
-            | Method::Tracer => Family::Baseline,
+            | Method::Tracer
+            | Method::Probes => Family::Baseline,
         }
     }
 
@@ -172,10 +184,11 @@ impl Method {
     }
 
     /// Whether it lights a scene once (`solve`, `bench`): every method but the learned
-    /// transport, which relights one scene for a moving light (`flatland relight`).
+    /// transport and the probe grid, which relight one scene for a moving light (`flatland
+    /// relight`, `bench --relight`).
     #[must_use]
     pub fn lights_once(self) -> bool {
-        self != Method::Transport
+        !matches!(self, Method::Transport | Method::Probes)
     }
 
     /// Whether it is swept over budgets of basis functions.
@@ -344,7 +357,7 @@ mod tests {
         assert!(
             Method::ALL
                 .iter()
-                .all(|m| m.lights_once() != (*m == Method::Transport))
+                .all(|m| m.lights_once() != matches!(m, Method::Transport | Method::Probes))
         );
         let msg = Method::Transport.relight_only().to_string();
         assert_eq!(

@@ -58,6 +58,19 @@ pub enum SolveError {
         /// The mesh's scene fingerprint.
         mesh: String,
     },
+    /// A representation of `ζ = E' k` learned under other lamps than the mesh's: `E'` (the
+    /// light a sender sends first, docs/ALGORITHM.md §2) differs, so `ζ̃ / E'` is not `k`.
+    #[error(
+        "the kernel representation learned ζ = E' k with {representation} lamp(s), but the mesh's \
+         scene has {mesh} lamp(s) or lamps elsewhere, and E' (the light each wall sends first) \
+         with them: learn it again on this scene, or put the lamps back"
+    )]
+    LightsMismatch {
+        /// Lamps of the representation's scene.
+        representation: usize,
+        /// Lamps of the mesh's scene.
+        mesh: usize,
+    },
     /// A scene or its lights refused (a light on an edge, named by its index).
     #[error(transparent)]
     Geom(#[from] flatland_geom::GeomError),

@@ -169,7 +169,7 @@ pub use reference::{
 };
 pub use relight::{ColdSolve, MoveCost, RelightParams, Relighter, Relit, WarmStart, cold_solve};
 pub use represent::{
-    Representation, check_fingerprint, inverse_source_weights, quadrature_operator,
+    Representation, check_fingerprint, check_lights, inverse_source_weights, quadrature_operator,
 };
 pub use settings::{SolveParams, Stop, never};
 pub use solve::{

@@ -79,6 +79,18 @@ pub fn check_fingerprint(fingerprint: Option<u64>, mesh: &Mesh) -> Result<(), So
     }
 }
 
+/// Refuses a representation of `ζ = E' k` learned under `lights` on a mesh of other lamps:
+/// `E'` depends on the lamps (docs/ALGORITHM.md §2), so `ζ̃ / E'` would not be `k`.
+pub fn check_lights(lights: &[flatland_geom::PointLight], mesh: &Mesh) -> Result<(), SolveError> {
+    if lights == mesh.lights() {
+        return Ok(());
+    }
+    Err(SolveError::LightsMismatch {
+        representation: lights.len(),
+        mesh: mesh.lights().len(),
+    })
+}
+
 /// Every edge's `1 / E'`, or the error naming the first edge whose `E'` is 0 (there `ζ ≡ 0`
 /// and `k` cannot be recovered from an approximation of ζ).
 pub fn inverse_source_weights(mesh: &Mesh) -> Result<Vec<f64>, SolveError> {

@@ -5,15 +5,16 @@
 use flatland_geom::{LightCheck, PointLight};
 use flatland_solve::{LightBuffers, Relighter, Stop};
 
-use crate::{QueryBuffers, Transport, TransportError, lit_source};
+use crate::{LaterBounces, Move, QueryBuffers, Transport, TransportError, lit_source};
 
 /// The exact relighter's first two terms and a [`Transport`]'s later bounces, per move (see the
 /// module docs). Built from a relighter (its operator, columns and view hierarchy) and a
-/// transport of the same mesh.
+/// transport of the same mesh; any other form of the later bounces ([`LaterBounces`]: the
+/// probe grid) plugs in the same way ([`TransportRelighter::with_form`]).
 #[derive(Debug)]
-pub struct TransportRelighter {
+pub struct TransportRelighter<T = Transport> {
     relighter: Relighter,
-    transport: Transport,
+    transport: T,
     lights: LightCheck,
     /// The exact solution of the static emission alone (`E + K E + M₂ E`): the moving lights
     /// add to it, the equation being linear.
@@ -30,11 +31,24 @@ impl TransportRelighter {
     /// ends that solve.
     pub fn new(
         kernel: &flatland_geom::Kernel,
-        mut relighter: Relighter,
+        relighter: Relighter,
         transport: Transport,
         stop: &Stop,
     ) -> Result<TransportRelighter, TransportError> {
         transport.check_mesh(relighter.mesh())?;
+        TransportRelighter::with_form(kernel, relighter, transport, stop)
+    }
+}
+
+impl<T: LaterBounces> TransportRelighter<T> {
+    /// Joins `relighter` and `form`, a form of the later bounces built on the relighter's
+    /// mesh (a query checks its length only), solving the static emission once, exactly.
+    pub fn with_form(
+        kernel: &flatland_geom::Kernel,
+        mut relighter: Relighter,
+        transport: T,
+        stop: &Stop,
+    ) -> Result<TransportRelighter<T>, TransportError> {
         let started = std::time::Instant::now();
         let still = if relighter.emission().iter().any(|&e| e != 0.0) {
             let solved = relighter.relight(&[], stop).map_err(|e| match e {
@@ -79,14 +93,15 @@ impl TransportRelighter {
         self.relighter
             .columns()
             .gather_columns(&lit, &mut self.radiosity);
+        let lights = Move { lights, lit: &lit };
         self.transport
-            .add_later_bounces_of(&lit, &mut self.radiosity, &mut self.query)?;
+            .add_later_bounces(lights, &mut self.radiosity, &mut self.query)?;
         Ok(&self.radiosity)
     }
 
-    /// The transport.
+    /// The transport (or the form of the later bounces).
     #[must_use]
-    pub fn transport(&self) -> &Transport {
+    pub fn transport(&self) -> &T {
         &self.transport
     }
 

@@ -36,6 +36,14 @@ impl Kernel {
         Some(self.hit(&ray, group, &contact))
     }
 
+    /// The parent (group) [`Kernel::first_hit`] meets from `origin` along `direction`, skipping
+    /// nothing: what a lamp's rays ask (`kernel/lamps.rs`).
+    pub(super) fn first_parent_hit(&self, origin: DVec2, direction: DVec2) -> Option<usize> {
+        let (ray, _) = self.ray(origin, direction, None)?;
+        let (group, _) = self.bvh.first_hit(&ray, None, self.judge(&ray, None))?;
+        Some(group)
+    }
+
     /// For a parent the ray meets: `None` if the meeting does not count (wholly on or behind
     /// the line of `skip`, which the ray leaves into its front), else whether it is a surface
     /// whose front faces the origin (which wins a tie at one point).

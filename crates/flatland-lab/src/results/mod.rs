@@ -4,6 +4,7 @@
 
 mod experiments;
 mod real;
+mod relight;
 mod render;
 
 use std::path::{Path, PathBuf};
@@ -53,6 +54,8 @@ pub(crate) struct Findings {
     pub stress: (String, Option<i32>),
     /// The lit real scenes at equal time, and cost against scene size.
     pub real: real::Real,
+    /// The moving lamp: `bench --relight`'s rows.
+    pub relight: Vec<crate::timed::walk::WalkRow>,
     pub elapsed_s: f64,
 }
 
@@ -117,7 +120,7 @@ pub fn run(args: &Options) -> Result<()> {
     let mut progress = Progress {
         started: Instant::now(),
         stage: 0,
-        stages: 4 + 2 * SCENES.len() + 2 + real::stages(args.quick),
+        stages: 4 + 2 * SCENES.len() + 2 + real::stages(args.quick) + 1,
     };
     let inputs = prepare(args)?;
     let findings = measure(&inputs, &sizes, args.quick, &mut progress)?;
@@ -152,6 +155,8 @@ fn prepare(args: &Options) -> Result<Inputs> {
     for name in SCENES {
         output::folder(&plots.join(name), &OUTPUTS, &inputs)?;
     }
+    let walk = &crate::report::walk::OUTPUTS[2..];
+    output::folder(&plots, walk, &inputs)?;
     interrupt::keep(format!(
         "{} was not written (plots made so far are in {})",
         args.out.display(),
@@ -219,6 +224,8 @@ fn measure(
     progress.next("the stability suite (flatland stress)")?;
     let stress = experiments::stress(quick)?;
     let real = real::measure(&inputs.scenes, plots, quick, |what| progress.next(what))?;
+    progress.next(&relight::stage(quick))?;
+    let relight = relight::measure(plots, quick, &interrupt::requested)?;
     Ok(Findings {
         quick,
         seeds,
@@ -232,6 +239,7 @@ fn measure(
         rooms,
         stress,
         real,
+        relight,
         elapsed_s: progress.started.elapsed().as_secs_f64(),
     })
 }

@@ -66,6 +66,7 @@ pub fn document(f: &Findings) -> Result<String> {
             .1
             .map_or("none (killed)".to_owned(), |c| c.to_string())
     )?;
+    super::relight::section(&mut doc, &f.relight, f.quick)?;
     writeln!(doc, "_Generated in {:.0} s._", f.elapsed_s)?;
     Ok(doc)
 }
@@ -601,6 +602,7 @@ mod tests {
             rooms: Vec::new(),
             stress: (String::new(), Some(0)),
             real: super::super::real::Real::default(),
+            relight: Vec::new(),
             elapsed_s: 0.0,
         };
         let mut doc = String::new();

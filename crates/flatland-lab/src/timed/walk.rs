@@ -11,6 +11,7 @@
 
 mod movers;
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context as _, Result};
@@ -23,7 +24,9 @@ use flatland_solve::{
 };
 use flatland_transport::TransportParams;
 
-pub use movers::{ClusteredMover, ExactMover, Moved, Mover, TracerMover, TransportMover};
+pub use movers::{
+    ClusteredMover, ExactMover, Moved, Mover, ProbeMover, TracerMover, TransportMover,
+};
 
 use super::Method;
 
@@ -38,12 +41,14 @@ pub const DEFAULT_SIZES: [usize; 2] = [1_000, 10_000];
 /// given.
 pub const EXACT_TOLERANCES: [f64; 4] = [1e-6, 1e-2, 1e-4, 1e-8];
 
-/// The methods a relighting bench can run.
-pub const METHODS: [Method; 4] = [
+/// The methods a relighting bench can run. The probe grid is given the transport's bytes, so
+/// it runs after (and only with) the transport.
+pub const METHODS: [Method; 5] = [
     Method::Exact,
     Method::Clustered,
     Method::Tracer,
     Method::Transport,
+    Method::Probes,
 ];
 
 /// What a relighting bench measures.
@@ -107,8 +112,12 @@ impl WalkPlan {
             return bad("positions", positions, "in [1, 1000000]");
         }
         if let Some(m) = self.methods.iter().find(|m| !METHODS.contains(m)) {
-            let valid = "a comma-separated list of exact, clustered, tracer, transport";
+            let valid = "a comma-separated list of exact, clustered, tracer, transport, probes";
             return bad("methods", m.name().to_owned(), valid);
+        }
+        if self.methods.contains(&Method::Probes) && !self.methods.contains(&Method::Transport) {
+            let valid = "with transport too: the probe grid is given the transport's bytes";
+            return bad("methods", "probes without transport".to_owned(), valid);
         }
         Ok(())
     }
@@ -293,6 +302,30 @@ pub struct WalkRow {
 /// The setting of the cold solve's row.
 pub const COLD: &str = "cold: from B0 to 1e-10";
 
+/// After how many moves `row`'s set-up has paid for itself against a cold solve at every
+/// position (`cold`, the same scene's [`COLD`] row): its set-up beyond the cold solve's (the
+/// operator, which the cold solve needs too) over what a move saves, by the median ms per
+/// move. `Some(1)` when nothing is set up beyond the operator; `None` when a move saves
+/// nothing or the row was not measured.
+#[must_use]
+pub fn payoff_moves(row: &WalkRow, cold: &WalkRow) -> Option<u64> {
+    if row.figures.positions == 0 || cold.figures.positions == 0 {
+        return None;
+    }
+    let saved_s = 1e-3 * (cold.figures.ms_median - row.figures.ms_median);
+    if saved_s <= 0.0 {
+        return None;
+    }
+    let extra_s = (row.setup_s - cold.setup_s).max(0.0);
+    Some(((extra_s / saved_s).ceil() as u64).max(1))
+}
+
+/// The [`COLD`] row of `scene` among `rows`.
+#[must_use]
+pub fn cold_row<'r>(rows: &'r [WalkRow], scene: &str) -> Option<&'r WalkRow> {
+    rows.iter().find(|r| r.scene == scene && r.setting == COLD)
+}
+
 /// Runs the plan: per scene, every method along the walk; `progress` gets a line per stage,
 /// `kept` the rows so far after each scene. Ctrl-C (`stop`) ends the walk at the position it
 /// is at, with the positions done kept in the rows.
@@ -330,7 +363,7 @@ pub fn run_walks(
 /// What one scene's walk is measured with.
 struct Walking<'k> {
     name: &'k str,
-    kernel: &'k Kernel,
+    kernel: &'k Arc<Kernel>,
     mesh: &'k Mesh,
 }
 
@@ -359,7 +392,7 @@ fn scene_rows(
     progress: &mut impl FnMut(&str),
 ) -> Result<Vec<WalkRow>> {
     let power = scene.lights().first().map_or(1.0, |l| l.power);
-    let kernel = Kernel::new(scene);
+    let kernel = Arc::new(Kernel::new(scene));
     let mesh = Mesh::new(&kernel, relight_elements(kernel.scene()))?;
     let cx = Walking {
         name,
@@ -421,6 +454,10 @@ fn baselines<'k>(
 ) -> (Vec<Box<dyn Mover + 'k>>, Vec<WalkRow>) {
     let mut movers: Vec<Box<dyn Mover + 'k>> = Vec::new();
     let mut rows = Vec::new();
+    // The transport's bytes, which the probe grid is given.
+    let mut transport_bytes = None;
+    // On the exact movers' operator (shared, not built again), at the default tolerance.
+    let relighter = || exact.relighter().with_params(RelightParams::default());
     for &method in &plan.methods {
         let built: Result<Box<dyn Mover + 'k>> = match method {
             Method::Clustered => {
@@ -432,15 +469,27 @@ fn baselines<'k>(
             Method::Tracer => {
                 TracerMover::new(cx.kernel, cx.mesh, 1).map(|m| Box::new(m) as Box<dyn Mover + 'k>)
             }
-            // On the exact movers' operator (shared, not built again), its default settings.
-            Method::Transport => exact
-                .relighter()
-                .with_params(RelightParams::default())
+            Method::Transport => relighter()
                 .map_err(anyhow::Error::from)
                 .and_then(|r| {
                     TransportMover::build(cx.kernel, r, &TransportParams::default(), stop)
                 })
-                .map(|m| Box::new(m) as Box<dyn Mover + 'k>),
+                .map(|m| {
+                    transport_bytes = Some(flatland_transport::LaterBounces::bytes(
+                        m.relit().transport(),
+                    ));
+                    Box::new(m) as Box<dyn Mover + 'k>
+                }),
+            Method::Probes => match transport_bytes {
+                Some(budget) => relighter()
+                    .map_err(anyhow::Error::from)
+                    .and_then(|r| ProbeMover::build(cx.kernel, r, budget, stop))
+                    .map(|m| Box::new(m) as Box<dyn Mover + 'k>),
+                None => Err(anyhow::anyhow!(
+                    "no probe grid: it is given the transport's bytes, and the transport was \
+                     not built"
+                )),
+            },
             _ => continue,
         };
         match built {
@@ -532,10 +581,12 @@ mod tests {
             .collect();
         assert_eq!(labels[0], (Method::Exact, COLD));
         assert_eq!(labels[1], (Method::Exact, "tolerance 1e-6"));
-        assert_eq!(labels.len(), 1 + EXACT_TOLERANCES.len() + 3, "{labels:?}");
-        // No edge of a lamp-lit plan emits, so clustered HR has nothing to refine towards.
+        assert_eq!(labels.len(), 1 + EXACT_TOLERANCES.len() + 4, "{labels:?}");
+        // No edge of a lamp-lit plan emits; clustered HR weighs its senders by the lamps'
+        // light (E', docs/ALGORITHM.md §2), so it builds links and relights like the others.
         let clustered = rows.iter().find(|r| r.method == Method::Clustered).unwrap();
-        assert!(clustered.note.contains("built no link"), "{clustered:?}");
+        assert!(clustered.note.is_empty(), "{clustered:?}");
+        assert!(clustered.setting.ends_with(" links"), "{clustered:?}");
         // The learned transport: within the issue's bounds (2 % of B, 5 % of the indirect part).
         let transport = rows.iter().find(|r| r.method == Method::Transport).unwrap();
         assert!(transport.note.is_empty(), "{}", transport.note);
@@ -547,8 +598,12 @@ mod tests {
             transport.figures.rel_l2_indirect_mean.unwrap() < 0.05,
             "{transport:?}"
         );
-        let measured = |r: &&WalkRow| r.method != Method::Clustered;
-        for row in rows.iter().filter(measured) {
+        // The probe grid holds about the transport's bytes for the later bounces (its grid's
+        // spacing is chosen from a sample of probes) and answers every move.
+        let probes = rows.iter().find(|r| r.method == Method::Probes).unwrap();
+        assert!(probes.note.is_empty(), "{}", probes.note);
+        assert!(probes.setting.contains(" probes "), "{probes:?}");
+        for row in &rows {
             assert_eq!(row.figures.positions, 6, "{row:?}");
             assert!(row.figures.ms_p95 >= row.figures.ms_median);
         }
@@ -567,6 +622,36 @@ mod tests {
     }
 
     #[test]
+    fn a_set_up_pays_off_after_its_extra_seconds_over_the_milliseconds_a_move_saves() {
+        let row = |setting: &str, setup_s, ms_median| WalkRow {
+            scene: "hall-100".into(),
+            edges: 97,
+            elements: 512,
+            method: Method::Transport,
+            setting: setting.into(),
+            setup_s,
+            bytes: 0,
+            figures: WalkFigures {
+                positions: 4,
+                ms_median,
+                ..WalkFigures::default()
+            },
+            note: String::new(),
+        };
+        let cold = row(COLD, 2.0, 50.0);
+        let rows = [cold.clone(), row("t", 6.0, 10.0)];
+        assert_eq!(cold_row(&rows, "hall-100"), Some(&cold));
+        assert_eq!(cold_row(&rows, "hall-1000"), None);
+        // 4 s more than the operator, 40 ms saved a move: 100 moves.
+        assert_eq!(payoff_moves(&rows[1], &cold), Some(100));
+        // 4.01 s: the 101st move.
+        assert_eq!(payoff_moves(&row("t", 6.01, 10.0), &cold), Some(101));
+        // Nothing beyond the operator: the first move; slower than cold: never.
+        assert_eq!(payoff_moves(&row("t", 1.0, 10.0), &cold), Some(1));
+        assert_eq!(payoff_moves(&row("t", 1.0, 60.0), &cold), None);
+    }
+
+    #[test]
     fn quantiles_by_nearest_rank_and_bad_plans_named() {
         let sorted: Vec<f64> = (1..=200).map(f64::from).collect();
         assert_eq!(nearest_rank(&sorted, 0.5), 100.0);
@@ -582,6 +667,12 @@ mod tests {
             err.contains("hr") && err.contains("exact, clustered"),
             "{err}"
         );
+        let bad = WalkPlan {
+            methods: vec![Method::Exact, Method::Probes],
+            ..WalkPlan::new()
+        };
+        let err = bad.validate().unwrap_err().to_string();
+        assert!(err.contains("transport's bytes"), "{err}");
         let bad = WalkPlan {
             positions: 0,
             ..WalkPlan::new()

@@ -13,7 +13,7 @@ use super::sample::{Sample, unit_scale};
 use crate::visibility::{FaceGate, FaceId, FaceKey};
 use flatland_solve::{
     InputFrame, Mesh, Representation, SolveError, SolveParams, Stop, TransferOperator,
-    check_fingerprint, quadrature_operator,
+    check_fingerprint, check_lights, quadrature_operator,
 };
 
 use crate::{Gating, Target};
@@ -308,6 +308,9 @@ impl Representation for LearnedKernel {
         stop: &Stop,
     ) -> Result<Box<dyn TransferOperator>, SolveError> {
         check_fingerprint(self.scene_fingerprint(), mesh)?;
+        if self.head.visibility_head().is_none() {
+            check_lights(self.scene.lights(), mesh)?;
+        }
         match self.head.visibility_head() {
             Some(v) => Ok(Box::new(super::operator::visibility_operator(
                 &|s, t| self.learned_visibility(s, t),
@@ -315,6 +318,7 @@ impl Representation for LearnedKernel {
                 mesh,
                 stop,
             )?)),
+            // ζ̃ / E' is k only under the lamps it was learned with (E' depends on them).
             None => Ok(Box::new(quadrature_operator(
                 self,
                 mesh,
@@ -322,5 +326,61 @@ impl Representation for LearnedKernel {
                 stop,
             )?)),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::ops::ControlFlow;
+    use std::sync::Arc;
+
+    use flatland_geom::{DVec2, Edge, Kernel, PointLight, Scene};
+    use flatland_solve::{Mesh, Reference, Representation, SolveError, SolveParams, never};
+
+    use crate::{Fit, FitParams, Target};
+
+    /// A room lit by one lamp at `at` only.
+    fn lamp_lit(at: DVec2) -> Kernel {
+        let room = Edge::polygon(&flatland_testkit::rooms::rectangle(2.0, 1.0), 0.5);
+        let scene = Scene::new(room).unwrap();
+        Kernel::new(scene.with_lights(vec![PointLight::new(at, 3.0)]).unwrap())
+    }
+
+    #[test]
+    fn a_model_of_zeta_solves_under_its_own_lamps_and_refuses_them_moved() {
+        // E' weighs the walls by the lamp's light, so a lamp-lit scene has a ζ to learn.
+        let kernel = Arc::new(lamp_lit(DVec2::new(0.5, 0.5)));
+        let reference = Arc::new(Reference::new(&kernel, 16, 64, crate::REFERENCE_SEED));
+        let params = FitParams {
+            target_cells: 12,
+            initial_samples: 60,
+            heldout: 64,
+            refit: false,
+            ..FitParams::default().learning(Target::Zeta)
+        };
+        let mut fit = Fit::new(Arc::clone(&kernel), reference, params).unwrap();
+        fit.run(500, |_| ControlFlow::Continue(())).unwrap();
+        let model = fit.model();
+        let solve = SolveParams::default();
+        let mesh = Mesh::new(&kernel, 40).unwrap();
+        assert!(model.operator(&mesh, &solve, &never).is_ok());
+        // The same walls, the lamp moved: E' differs, so ζ̃ / E' is not k.
+        let moved = lamp_lit(DVec2::new(1.5, 0.5));
+        let mesh = Mesh::new(&moved, 40).unwrap();
+        let err = model.operator(&mesh, &solve, &never).err().unwrap();
+        assert!(
+            matches!(
+                err,
+                SolveError::LightsMismatch {
+                    representation: 1,
+                    mesh: 1
+                }
+            ),
+            "{err}"
+        );
+        assert!(
+            err.to_string().contains("learn it again on this scene"),
+            "{err}"
+        );
     }
 }

@@ -1,7 +1,9 @@
 //! The methods that relight a scene per move of its lights, behind one trait ([`Mover`]): the
 //! exact re-solve, clustered HR re-solved with each move's source, the tracer at a time per
-//! move, and the learned transport of the later bounces.
+//! move, the learned transport of the later bounces, and a uniform grid of light-position
+//! probes of the transport's bytes.
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context as _, Result};
@@ -14,7 +16,9 @@ use flatland_solve::{
     TransferOperator, solve_linear,
 };
 
-use flatland_transport::{Transport, TransportParams, TransportRelighter};
+use flatland_transport::{
+    LightProbes, ProbeParams, Transport, TransportParams, TransportRelighter,
+};
 
 use super::Method;
 
@@ -123,13 +127,13 @@ impl ClusteredMover {
         let started = Instant::now();
         let run = run_clustered(kernel, links, 1, params)
             .with_context(|| format!("clustered HR at {links} links"))?;
-        // Its oracle weighs a sender by E' (docs/ALGORITHM.md §2), 0 on every edge of a scene
-        // no edge of which emits: such a scene gets no link, and a row of it would pass off
-        // the direct light alone as clustered HR's answer.
+        // Its oracle weighs a sender by E' (docs/ALGORITHM.md §2), the light it sends first:
+        // 0 on every edge only of a scene nothing lights, where a row would pass off the
+        // direct light alone as clustered HR's answer.
         anyhow::ensure!(
             run.basis_functions > 0,
-            "clustered HR built no link: its refinement weighs senders by their emission, and \
-             no edge of this scene emits (its light is point lights)"
+            "clustered HR built no link: its refinement weighs senders by the light they send \
+             first, and nothing lights this scene"
         );
         let op = run.approx.operator(mesh, &SolveParams::default(), stop)?;
         let direct = DirectLight::new(kernel, mesh)?;
@@ -308,6 +312,60 @@ impl Mover for TransportMover {
     fn relight(&mut self, lights: &[PointLight], _: f64, _: &Stop) -> Result<Moved<'_>> {
         let radiosity = self.relit.relight(lights)?;
         // No product with K: the work is the query's.
+        Ok(Moved { radiosity, work: 0 })
+    }
+}
+
+/// A uniform grid of light-position probes ([`LightProbes`], what game light-probe grids do) in
+/// the place of the transport: per move the exact relighter's direct light and first bounce,
+/// the probes' blend of `M₂ B₀` for the later bounces.
+pub struct ProbeMover {
+    relit: TransportRelighter<LightProbes>,
+    budget: usize,
+}
+
+impl ProbeMover {
+    /// Probes of `kernel`'s scene on `relighter`'s mesh and operator within `budget` bytes
+    /// (the transport's, for a comparison at equal memory), placed on a uniform grid.
+    pub fn build(
+        kernel: &Arc<Kernel>,
+        relighter: Relighter,
+        budget: usize,
+        stop: &Stop,
+    ) -> Result<Self> {
+        let params = ProbeParams::grid(budget);
+        let probes = LightProbes::build(kernel, relighter.mesh(), relighter.rows(), &params, stop)
+            .with_context(|| format!("building the probe grid of {budget} bytes"))?;
+        let relit = TransportRelighter::with_form(kernel, relighter, probes, stop)?;
+        Ok(ProbeMover { relit, budget })
+    }
+}
+
+impl Mover for ProbeMover {
+    fn method(&self) -> Method {
+        Method::Probes
+    }
+
+    fn setting(&self) -> String {
+        let probes = self.relit.transport();
+        format!(
+            "{} probes {:.2} apart in {:.1} MB",
+            probes.len(),
+            probes.spacing(),
+            self.budget as f64 / 1e6
+        )
+    }
+
+    fn setup_s(&self) -> f64 {
+        self.relit.setup_s()
+    }
+
+    fn bytes(&self) -> usize {
+        self.relit.bytes()
+    }
+
+    fn relight(&mut self, lights: &[PointLight], _: f64, _: &Stop) -> Result<Moved<'_>> {
+        let radiosity = self.relit.relight(lights)?;
         Ok(Moved { radiosity, work: 0 })
     }
 }
