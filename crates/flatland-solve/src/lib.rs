@@ -125,6 +125,7 @@ mod quadrature;
 mod reference;
 mod relight;
 mod represent;
+mod score;
 mod settings;
 mod solve;
 mod sparse;
@@ -151,7 +152,7 @@ pub use error::SolveError;
 pub use exact::{
     ExactMethod, SWEEP_FROM_EDGES, check_scene, exact_block_means, exact_operator, receiver, sender,
 };
-pub use field::{FieldSample, FinalGather, SamplePoints};
+pub use field::{FieldSample, FinalGather, SamplePoints, midpoint_line};
 pub use frame::InputFrame;
 pub use lights::{DirectLight, LightBuffers, LitSurfaces};
 pub use lit::{
@@ -171,6 +172,7 @@ pub use relight::{ColdSolve, MoveCost, RelightParams, Relighter, Relit, WarmStar
 pub use represent::{
     Representation, check_fingerprint, inverse_source_weights, quadrature_operator,
 };
+pub use score::{FunctionReference, SCORE_POINTS_PER_ELEMENT};
 pub use settings::{SolveParams, Stop, never};
 pub use solve::{
     Comparison, ExactReference, Solution, SolveErrors, solve, solve_against, solve_errors,

@@ -12,9 +12,9 @@ use flatland_geom::Kernel;
 
 use crate::{
     Comparison, DEFAULT_ERROR_BOUND, Discretization, ErrorEstimate, ExactMethod, ExactReference,
-    FinalGather, FunctionEstimate, FunctionSolve, Mesh, RefinementRound, Representation, Solution,
-    SolveError, SolveErrors, SolveParams, Stop, ToleranceParams, ToleranceSolve,
-    elements_for_error, solve_against, solve_errors, solve_to_tolerance,
+    FinalGather, FunctionEstimate, FunctionReference, FunctionSolve, Mesh, RefinementRound,
+    Representation, Solution, SolveError, SolveErrors, SolveParams, Stop, ToleranceParams,
+    ToleranceSolve, elements_for_error, solve, solve_to_tolerance,
 };
 
 /// How many elements the lit scene's mesh has.
@@ -166,6 +166,11 @@ pub struct LitScene {
     /// The reference's B at `mesh`'s collocation points, the lights' direct light as each
     /// element's mean ([`ExactReference::collocated_on`]).
     reference_on_mesh: Vec<f64>,
+    /// The reference as a function at the scoring points of `mesh`: what every lighting is
+    /// scored against.
+    scoring: FunctionReference,
+    /// The exact solve on `mesh` read by its final gather and scored, when both were made.
+    exact_errors: Option<SolveErrors>,
     solved: Vec<usize>,
 }
 
@@ -244,9 +249,14 @@ impl LitScene {
             }
         };
         let reference_on_mesh = reference.collocated_on(&mesh, stop)?;
+        let scoring = FunctionReference::new(&reference, &mesh, stop)?;
+        let exact_errors =
+            Some(scoring.gathered_errors(&gather, &coarse.solution().radiosity, stop)?);
         Ok(LitScene {
             kernel,
             mesh,
+            scoring,
+            exact_errors,
             exact: Some((coarse, Estimate::Function(estimate))),
             function: Some(LitFunction {
                 gather,
@@ -293,9 +303,12 @@ impl LitScene {
             }
             _ => (finer, finer_on_coarse),
         };
+        let scoring = FunctionReference::new(&reference, &mesh, stop)?;
         Ok(LitScene {
             kernel,
             mesh,
+            scoring,
+            exact_errors: None,
             exact: Some((coarse, Estimate::Collocation(estimate))),
             function: None,
             reference,
@@ -318,9 +331,12 @@ impl LitScene {
         let mesh = Mesh::new(&kernel, elements)?;
         let reference = ExactReference::new(&kernel, reference_elements, params, stop)?;
         let reference_on_mesh = reference.collocated_on(&mesh, stop)?;
+        let scoring = FunctionReference::new(&reference, &mesh, stop)?;
         Ok(LitScene {
             kernel,
             mesh,
+            scoring,
+            exact_errors: None,
             exact: None,
             function: None,
             reference,
@@ -378,43 +394,74 @@ impl LitScene {
         &self.solved
     }
 
-    /// Solves the scene with `rep` on the mesh and scores the solution against the reference.
-    pub fn score(&self, rep: &dyn Representation, stop: &Stop) -> Result<Comparison, SolveError> {
-        solve_against(
-            rep,
-            &self.mesh,
-            &self.reference_on_mesh,
-            &SolveParams::default(),
-            stop,
-        )
+    /// The reference as a function at the mesh's scoring points, what every score is
+    /// measured against.
+    #[must_use]
+    pub fn function_reference(&self) -> &FunctionReference {
+        &self.scoring
     }
 
-    /// The exact solve on the mesh scored against the reference, without solving again.
+    /// Solves the scene with `rep` on the mesh and scores the solution as a function against
+    /// the reference ([`LitScene::scored`]).
+    pub fn score(&self, rep: &dyn Representation, stop: &Stop) -> Result<Comparison, SolveError> {
+        let solution = solve(rep, &self.mesh, &SolveParams::default(), stop)?;
+        Ok(self.scored(solution))
+    }
+
+    /// The exact solve on the mesh scored against the reference as a function, read by its
+    /// own final gather (what `flatland solve` measures), without solving again.
     #[must_use]
     pub fn exact_scored(&self) -> Option<Comparison> {
-        self.exact().map(|e| self.scored(e.solution().clone()))
+        let solution = self.exact()?.solution().clone();
+        let errors = self.exact_errors?;
+        Some(Comparison { solution, errors })
     }
 
-    /// `solution`, a radiosity on the mesh, scored against the reference.
+    /// `solution`, a radiosity on the mesh, scored against the reference as a function:
+    /// read as the line through its midpoints, with the lights' direct light at each point
+    /// ([`FunctionReference::read`]), at the scoring points.
     #[must_use]
     pub fn scored(&self, solution: Solution) -> Comparison {
-        let errors = solve_errors(&self.mesh, &solution.radiosity, &self.reference_on_mesh);
+        let errors = self.scoring.errors(&solution.radiosity);
         Comparison { solution, errors }
     }
 
     /// The errors of `b`, a radiosity on `mesh` (any mesh of the scene), against the
-    /// reference.
+    /// reference as a function: on the lit scene's own mesh at its scoring points, on
+    /// another at that mesh's (one view of the reference per point, made for this call).
     pub fn errors_on(
         &self,
         mesh: &Mesh,
         b: &[f64],
         stop: &Stop,
     ) -> Result<SolveErrors, SolveError> {
-        if mesh.len() == self.mesh.len() {
-            return Ok(solve_errors(mesh, b, &self.reference_on_mesh));
+        if self.is_own(mesh) {
+            return Ok(self.scoring.errors(b));
         }
-        let exact = self.reference.collocated_on(mesh, stop)?;
-        Ok(solve_errors(mesh, b, &exact))
+        Ok(FunctionReference::new(&self.reference, mesh, stop)?.errors(b))
+    }
+
+    /// The errors of `b`, an exact solve on `mesh` (any mesh of the scene), read by its own
+    /// final gather, against the reference as a function: how an exact solve on another
+    /// mesh is scored like the lit scene's own.
+    pub fn gathered_errors_on(
+        &self,
+        mesh: &Mesh,
+        b: &[f64],
+        stop: &Stop,
+    ) -> Result<SolveErrors, SolveError> {
+        let gather = FinalGather::new(&self.kernel, mesh)?;
+        let scoring = if self.is_own(mesh) {
+            std::borrow::Cow::Borrowed(&self.scoring)
+        } else {
+            std::borrow::Cow::Owned(FunctionReference::new(&self.reference, mesh, stop)?)
+        };
+        scoring.gathered_errors(&gather, b, stop)
+    }
+
+    /// Whether `mesh` is the lit scene's own (the same scene and elements).
+    fn is_own(&self, mesh: &Mesh) -> bool {
+        mesh.fingerprint() == self.mesh.fingerprint() && mesh.elements() == self.mesh.elements()
     }
 }
 
@@ -473,11 +520,18 @@ mod tests {
             {
                 assert!((a - b).abs() <= 1e-9 * b.abs().max(1e-12), "{a} vs {b}");
             }
-            let (a, b) = (
-                reused.errors.rel_l2_reflected,
-                again.errors.rel_l2_reflected,
-            );
+            // Scored as a function: the exact solve by its gather, as a re-solve read by a
+            // gather of its own would be; read as a line through its midpoints (what a
+            // representation without a gather is read as), it is worse.
+            let gathered = lit
+                .gathered_errors_on(lit.mesh(), &again.solution.radiosity, &never)
+                .unwrap();
+            let (a, b) = (reused.errors.rel_l2_reflected, gathered.rel_l2_reflected);
             assert!((a - b).abs() <= 1e-6 * b.max(1e-12), "{a} vs {b}");
+            assert!(
+                again.errors.rel_l2_reflected > a,
+                "{again:?} against {reused:?}"
+            );
         }
     }
 
