@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use flatland_baselines::{TraceBudget, TraceParams, trace};
-use flatland_solve::{Comparison, Estimate, LitScene, Reference, Representation, Solution, Stop};
+use flatland_solve::{Comparison, LitScene, Reference, Representation, Solution, Stop};
 use kernel_fit::ModelFile;
 
 use crate::{Account, Ask, Method, MethodError, Progress, Recipes};
@@ -103,7 +103,7 @@ impl Recipes {
 /// The light-driven learner's estimate with the lit scene's mesh error as a function added,
 /// when the lit scene estimated it on the learner's mesh: then it covers B as a function.
 fn with_mesh_error(account: Account, lit: &LitScene) -> Account {
-    let (Account::Light(light), Some(Estimate::Function(mesh))) = (&account, lit.estimate()) else {
+    let (Account::Light(light), Some(mesh)) = (&account, lit.estimate()) else {
         return account;
     };
     let mut light = *light;

@@ -147,6 +147,19 @@ impl FinalGather {
             .collect())
     }
 
+    /// B at the start, middle and end of every element (just inside its ends), gathered from
+    /// `b`: how B runs along each element, as pictures draw it ([`ALONG`] of each).
+    pub fn along(&self, b: &[f64], stop: &Stop) -> Result<Vec<[f64; 3]>, SolveError> {
+        let points: Vec<f64> = self
+            .mesh
+            .elements()
+            .iter()
+            .flat_map(|e| ALONG.map(|x| e.s[0] + (e.s[1] - e.s[0]) * x))
+            .collect();
+        let values = self.at(b, &points, stop)?;
+        Ok(values.chunks(3).map(|v| [v[0], v[1], v[2]]).collect())
+    }
+
     /// The mean of the gathered B over each element (its integral divided by its length), by
     /// three-point Gauss–Legendre on `panels` (≥ 1) equal parts of it: `3 · panels` gathers
     /// per element, one fewer for an odd count (the middle node is the element's own value).
@@ -282,6 +295,21 @@ pub fn midpoint_line(mesh: &Mesh, b: &[f64], s: f64) -> f64 {
     };
     let (mi, mj) = (elements[i].s_mid, elements[j].s_mid);
     (b[i] + (b[j] - b[i]) * (s - mi) / (mj - mi)).max(0.0)
+}
+
+/// Where along an element pictures take B: just inside its start, its middle, just inside its
+/// end (an end itself belongs to the next element, maybe on another edge).
+pub const ALONG: [f64; 3] = [1e-6, 0.5, 1.0 - 1e-6];
+
+/// Values per element of `mesh` read as the line through their midpoints
+/// ([`midpoint_line`]) at [`ALONG`] of every element: B along each element as pictures draw
+/// a solution without a gather of its own.
+#[must_use]
+pub fn line_along(mesh: &Mesh, b: &[f64]) -> Vec<[f64; 3]> {
+    mesh.elements()
+        .iter()
+        .map(|e| ALONG.map(|x| midpoint_line(mesh, b, e.s[0] + (e.s[1] - e.s[0]) * x)))
+        .collect()
 }
 
 /// Points along the surfaces at which functions of the surface point are compared: `n`

@@ -11,10 +11,9 @@ use std::sync::Arc;
 use flatland_geom::Kernel;
 
 use crate::{
-    Comparison, DEFAULT_ERROR_BOUND, Discretization, ErrorEstimate, ExactMethod, ExactReference,
-    FinalGather, FunctionEstimate, FunctionReference, FunctionSolve, Mesh, RefinementRound,
-    Representation, Solution, SolveError, SolveErrors, SolveParams, Stop, ToleranceParams,
-    ToleranceSolve, elements_for_error, solve, solve_to_tolerance,
+    Comparison, DEFAULT_ERROR_BOUND, ExactMethod, ExactReference, FinalGather, FunctionEstimate,
+    FunctionReference, FunctionSolve, Mesh, RefinementRound, Representation, Solution, SolveError,
+    SolveErrors, SolveParams, Stop, ToleranceParams, ToleranceSolve, solve, solve_to_tolerance,
 };
 
 /// How many elements the lit scene's mesh has.
@@ -23,55 +22,8 @@ pub enum Elements {
     /// A mesh refined where the error of B as a function is until its estimate is at most
     /// this ([`solve_to_tolerance`]; the default, at 1 %).
     ToTolerance(f64),
-    /// The fewest of the doubling from the scene's minimum whose estimated error of `B − E`
-    /// at the collocation points is at most this ([`elements_for_error`]).
-    ForError(f64),
     /// Exactly this many, spread evenly, with the estimate of B as a function.
     Exactly(usize),
-}
-
-/// A lit scene's estimated discretization error, and what it covers.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Estimate {
-    /// Of B as a function along the surfaces (the final gather at any point), from the solve
-    /// on the Gauss refinement ([`FunctionSolve`]).
-    Function(FunctionEstimate),
-    /// Of B at the collocation points only, from a solve on twice the elements
-    /// ([`elements_for_error`]).
-    Collocation(ErrorEstimate),
-}
-
-impl Estimate {
-    /// The estimated relative L2 error of `B − E`.
-    #[must_use]
-    pub fn estimate(&self) -> f64 {
-        match self {
-            Estimate::Function(e) => e.estimate,
-            Estimate::Collocation(e) => e.estimate,
-        }
-    }
-
-    /// Elements of the finer solve it was made from.
-    #[must_use]
-    pub fn finer_elements(&self) -> usize {
-        match self {
-            Estimate::Function(e) => e.finer_elements,
-            Estimate::Collocation(e) => e.finer_elements,
-        }
-    }
-
-    /// What it covers, in words.
-    #[must_use]
-    pub fn covers(&self) -> String {
-        match self {
-            Estimate::Function(e) => e.covers(),
-            Estimate::Collocation(e) => format!(
-                "the relative L2 error of B − E at the {} collocation points only (element \
-                 midpoints), estimated from a solve on {} elements; blind to B between them",
-                e.elements, e.finer_elements
-            ),
-        }
-    }
 }
 
 /// B as a function on the lit scene's mesh: the final gather of its exact solve, and the
@@ -127,16 +79,14 @@ impl LitParams {
     pub fn check(&self, kernel: &Kernel) -> Result<(), SolveError> {
         self.solve.validate()?;
         match self.elements {
-            Elements::ForError(bound) | Elements::ToTolerance(bound)
-                if !(bound > 0.0 && bound < 1.0) =>
-            {
+            Elements::ToTolerance(bound) if !(bound > 0.0 && bound < 1.0) => {
                 return Err(SolveError::InvalidParameter {
                     name: "error bound",
                     value: bound.to_string(),
                     valid: "in (0, 1)",
                 });
             }
-            Elements::ForError(_) | Elements::ToTolerance(_) => {}
+            Elements::ToTolerance(_) => {}
             Elements::Exactly(n) => check_elements(kernel, n)?,
         }
         if let ReferenceMesh::Elements(n) = self.reference {
@@ -159,8 +109,8 @@ pub struct LitScene {
     mesh: Mesh,
     /// The exact solve on `mesh` and its estimated error, when they were made
     /// ([`LitScene::new`]; [`LitScene::scoring`] makes neither).
-    exact: Option<(ExactReference, Estimate)>,
-    /// B as a function, when the estimate was of it.
+    exact: Option<(ExactReference, FunctionEstimate)>,
+    /// B as a function, when the exact solve was made.
     function: Option<LitFunction>,
     reference: ExactReference,
     /// The reference's B at `mesh`'s collocation points, the lights' direct light as each
@@ -185,10 +135,6 @@ impl LitScene {
     ) -> Result<LitScene, SolveError> {
         params.check(&kernel)?;
         match params.elements {
-            Elements::ForError(bound) => {
-                let found = elements_for_error(&kernel, bound, &params.solve, stop)?;
-                LitScene::of_doubling(kernel, params, found, stop)
-            }
             Elements::ToTolerance(tolerance) => {
                 let asked = ToleranceParams {
                     tolerance,
@@ -257,60 +203,12 @@ impl LitScene {
             mesh,
             scoring,
             exact_errors,
-            exact: Some((coarse, Estimate::Function(estimate))),
+            exact: Some((coarse, estimate)),
             function: Some(LitFunction {
                 gather,
                 element_means,
                 rounds,
             }),
-            reference,
-            reference_on_mesh,
-            solved,
-        })
-    }
-
-    /// The lit scene of the doubling to a bound at the collocation points.
-    fn of_doubling(
-        kernel: Arc<Kernel>,
-        params: &LitParams,
-        found: Discretization,
-        stop: &Stop,
-    ) -> Result<LitScene, SolveError> {
-        let Discretization {
-            coarse,
-            finer,
-            finer_on_coarse,
-            estimate,
-            mut solved,
-        } = found;
-        let mesh = coarse.mesh().clone();
-        let reference = match params.reference {
-            ReferenceMesh::FourTimes => {
-                ReferenceMesh::Elements(ExactReference::default_elements_for(&kernel, mesh.len()))
-            }
-            other => other,
-        };
-        let (reference, reference_on_mesh) = match reference {
-            ReferenceMesh::Elements(n) if n != finer.mesh().len() => {
-                let reference = if n == mesh.len() {
-                    coarse.clone()
-                } else {
-                    solved.push(n);
-                    ExactReference::new(&kernel, n, &params.solve, stop)?
-                };
-                let on_mesh = reference.collocated_on(&mesh, stop)?;
-                (reference, on_mesh)
-            }
-            _ => (finer, finer_on_coarse),
-        };
-        let scoring = FunctionReference::new(&reference, &mesh, stop)?;
-        Ok(LitScene {
-            kernel,
-            mesh,
-            scoring,
-            exact_errors: None,
-            exact: Some((coarse, Estimate::Collocation(estimate))),
-            function: None,
             reference,
             reference_on_mesh,
             solved,
@@ -363,14 +261,14 @@ impl LitScene {
         self.exact.as_ref().map(|(e, _)| e)
     }
 
-    /// The exact solve's estimated discretization error, when it was made.
+    /// The exact solve's estimated error of B − E as a function, when it was made.
     #[must_use]
-    pub fn estimate(&self) -> Option<&Estimate> {
+    pub fn estimate(&self) -> Option<&FunctionEstimate> {
         self.exact.as_ref().map(|(_, e)| e)
     }
 
-    /// B as a function on the mesh (the exact solve's final gather), when the estimate was
-    /// of it.
+    /// B as a function on the mesh (the exact solve's final gather), when the exact solve was
+    /// made.
     #[must_use]
     pub fn function(&self) -> Option<&LitFunction> {
         self.function.as_ref()
@@ -499,11 +397,7 @@ mod tests {
             assert_eq!(counts.len(), lit.solved().len(), "{:?}", lit.solved());
             let n = lit.mesh().len();
             assert!(lit.solved().contains(&n) && lit.solved().contains(&(3 * n)));
-            assert!(
-                matches!(lit.estimate(), Some(Estimate::Function(e)) if e.elements == n),
-                "{:?}",
-                lit.estimate()
-            );
+            assert_eq!(lit.estimate().unwrap().elements, n);
             let function = lit.function().unwrap();
             assert_eq!(function.element_means.len(), n);
             assert_eq!(function.rounds.last().unwrap().elements, n);
@@ -562,18 +456,6 @@ mod tests {
         assert_eq!(lit.solved(), [256, 768, 1024]);
         let fine = lit.reference().mesh();
         assert_eq!(fine.elements()[4 * 7].s[0], lit.mesh().elements()[7].s[0]);
-        // The doubling at the collocation points is still there, its estimate saying so.
-        let doubling = LitParams {
-            elements: Elements::ForError(DEFAULT_ERROR_BOUND),
-            reference: ReferenceMesh::Finer,
-            ..LitParams::default()
-        };
-        let lit = LitScene::new(Arc::clone(lit.kernel()), &doubling, &never).unwrap();
-        assert_eq!(lit.solved(), [512, 1024]);
-        let estimate = lit.estimate().unwrap();
-        assert!(matches!(estimate, Estimate::Collocation(_)));
-        assert!(estimate.covers().contains("collocation points only"));
-        assert!(lit.function().is_none());
     }
 
     #[test]
@@ -581,7 +463,7 @@ mod tests {
         let kernel = Arc::new(Kernel::new(bundled("fig3")));
         for params in [
             LitParams {
-                elements: Elements::ForError(0.0),
+                elements: Elements::ToTolerance(0.0),
                 ..LitParams::default()
             },
             LitParams {
