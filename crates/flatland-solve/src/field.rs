@@ -20,7 +20,7 @@ use rayon::prelude::*;
 use crate::exact::check_scene;
 use crate::lights::lit_mesh;
 use crate::sweep::{self, SweepBuffers, SweepScene};
-use crate::{LitSurfaces, Mesh, SolveError, SolveErrors, Stop};
+use crate::{LitSurfaces, Mesh, SolveError, Stop};
 
 /// How close to an end of its surface edge a point is evaluated, as a fraction of the edge:
 /// at a corner itself the gather is the limit along the corner's other wall (which it sees
@@ -360,16 +360,6 @@ impl SamplePoints {
         self.s.iter().map(|&s| midpoint_line(mesh, b, s)).collect()
     }
 
-    /// The relative L2 differences of B and of `B − E` between two functions sampled at
-    /// these points, `exact` the one taken as exact ([`SamplePoints::relative_l2_reflected`]).
-    #[must_use]
-    pub fn errors(&self, approx: &[f64], exact: &[f64]) -> SolveErrors {
-        SolveErrors {
-            rel_l2_b: self.relative_l2(approx, exact, false),
-            rel_l2_reflected: self.relative_l2(approx, exact, true),
-        }
-    }
-
     /// The relative L2 difference of `B − E` between two functions sampled at these points:
     /// `sqrt(Σ w (a − x)² / Σ w (x − E)²)`, `x` the one taken as exact; the absolute RMS
     /// where `x − E` is 0 everywhere, so the number is always finite.
@@ -379,7 +369,7 @@ impl SamplePoints {
     }
 
     /// The relative L2 difference of B, or of `B − E` when `reflected`.
-    fn relative_l2(&self, approx: &[f64], exact: &[f64], reflected: bool) -> f64 {
+    pub(crate) fn relative_l2(&self, approx: &[f64], exact: &[f64], reflected: bool) -> f64 {
         assert_eq!(approx.len(), self.s.len(), "one value per sample point");
         assert_eq!(exact.len(), self.s.len(), "one value per sample point");
         let emitted = if reflected { 1.0 } else { 0.0 };

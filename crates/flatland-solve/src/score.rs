@@ -97,7 +97,7 @@ impl FunctionReference {
     /// ([`FunctionReference::read`]).
     #[must_use]
     pub fn errors(&self, b: &[f64]) -> SolveErrors {
-        self.points.errors(&self.read(b), &self.exact)
+        self.errors_of(&self.read(b))
     }
 
     /// The errors of `b` read by its own final gather (`gather` a gather of this mesh):
@@ -109,7 +109,17 @@ impl FunctionReference {
         stop: &Stop,
     ) -> Result<SolveErrors, SolveError> {
         let values = gather.at(b, &self.points.s, stop)?;
-        Ok(self.points.errors(&values, &self.exact))
+        Ok(self.errors_of(&values))
+    }
+
+    /// The relative L2 errors of B and of `B − E` of `values` (one per point) against the
+    /// reference.
+    #[must_use]
+    pub fn errors_of(&self, values: &[f64]) -> SolveErrors {
+        SolveErrors {
+            rel_l2_b: self.points.relative_l2(values, &self.exact, false),
+            rel_l2_reflected: self.points.relative_l2(values, &self.exact, true),
+        }
     }
 }
 
@@ -176,8 +186,7 @@ mod tests {
         let read = scoring.errors(&b).rel_l2_reflected;
         // The same values read as steps, with the direct light as each element's mean.
         let steps = scoring
-            .points()
-            .errors(&scoring.points().steps(&mesh, &b), scoring.exact())
+            .errors_of(&scoring.points().steps(&mesh, &b))
             .rel_l2_reflected;
         assert!(read < steps / 2.0, "read {read} against steps {steps}");
     }

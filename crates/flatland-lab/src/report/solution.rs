@@ -169,7 +169,9 @@ impl Solution<'_> {
             rows.push(("  estimated by the learner", text));
             if let Some(e) = a.estimate.filter(|e| e.discretization.is_some()) {
                 let text = format!(
-                    "{:.5}   (as a function: the learner's plus the mesh's, above)",
+                    "{:.5}   (its values read by the exact final gather, as --samples \
+                     writes them: the learner's plus the mesh's; the error above reads them as \
+                     a line through the midpoints)",
                     e.estimate()
                 );
                 rows.push(("  with the mesh's error", text));
