@@ -4,7 +4,9 @@
 //! all light a scene through it. By default the mesh is chosen for a tolerance on B as a
 //! function ([`solve_to_tolerance`]): the exact solve answers B at any surface point by its
 //! final gather, its estimate covers B between the collocation points, and the reference is
-//! the finer solve of that estimate (or, for the bench, one four times finer still).
+//! the finer solve of that estimate (or, for the bench, one four times finer still). Every
+//! lighting is scored against the reference as a function ([`FunctionReference`], gathered
+//! once): the exact solve by its gather, any other by the line through its midpoints.
 
 use std::sync::Arc;
 
@@ -280,7 +282,8 @@ impl LitScene {
         &self.reference
     }
 
-    /// The reference's B at the mesh's collocation points.
+    /// The reference's B at the mesh's collocation points (for colour scales and curves; scores
+    /// are measured as functions, [`LitScene::function_reference`]).
     #[must_use]
     pub fn reference_on_mesh(&self) -> &[f64] {
         &self.reference_on_mesh
