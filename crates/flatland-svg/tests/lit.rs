@@ -230,4 +230,22 @@ fn a_segment_is_drawn_as_b_runs_along_it() {
             assert!(off <= 8, "{s:?} at {x}: pixel {got:?}, colour {want:?}");
         }
     }
+    // A segment of under three pixels is drawn in its middle colour: no gradient to write.
+    let mut with_a_speck = segments.to_vec();
+    with_a_speck.push(segment(
+        DVec2::new(0.5, 0.5),
+        DVec2::new(0.501, 0.5),
+        [0.0, 0.5, 1.0],
+    ));
+    let picture = lit_svg(&LitPlan {
+        title: "a ramp and a speck",
+        segments: &with_a_speck,
+        blockers: &[],
+        lights: &[],
+        colours: &colours,
+    });
+    let svg = picture.svg();
+    assert_eq!(svg.matches("gradientUnits=\"userSpaceOnUse\"").count(), 2);
+    let [r, g, b] = colours.colour(0.5);
+    assert!(svg.contains(&format!("stroke=\"#{r:02x}{g:02x}{b:02x}\" stroke-width")));
 }

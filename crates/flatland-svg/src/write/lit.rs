@@ -68,6 +68,8 @@ const TITLE: f64 = 40.0;
 const PANEL: f64 = 150.0;
 /// An element's stroke, in pixels.
 const STROKE: f64 = 4.0;
+/// The shortest segment, in pixels, drawn as a gradient: below it one colour shows the same.
+const MIN_GRADIENT_PIXELS: f64 = 3.0;
 
 /// A written lit plan and where plan points land in it.
 #[derive(Clone, Debug)]
@@ -216,7 +218,7 @@ fn write_plan(out: &mut String, plan: &LitPlan<'_>, picture: &LitSvg) {
                 width + 2.0 / s
             );
         }
-        let stroke = write_stroke(out, plan.colours, seg, k);
+        let stroke = write_stroke(out, plan.colours, seg, k, d.length() * s);
         let _ = writeln!(
             out,
             "<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" transform=\"translate({} {})\" stroke=\"{stroke}\" stroke-width=\"{width}\" data-b=\"{}\" data-edge=\"{}\"{class}/>",
@@ -234,13 +236,21 @@ fn write_plan(out: &mut String, plan: &LitPlan<'_>, picture: &LitSvg) {
     write_marks(out, plan, picture);
 }
 
-/// The stroke of segment `k`: its one colour when B along it stays in one, else a gradient
-/// through its three colours along it, written to `out` (in the segment's own user space, so
-/// it follows the segment whatever its direction; a bounding-box gradient would vanish on a
-/// horizontal or vertical line, whose box has no height or width).
-fn write_stroke(out: &mut String, colours: &dyn ColourScale, seg: &LitSegment, k: usize) -> String {
+/// The stroke of segment `k`, `pixels` long: its one colour when B along it stays in one or
+/// it is too short for a gradient to show (which keeps a plan of 10⁴ edges, mostly elements
+/// of a pixel or two, the size of its flat drawing), else a gradient through its three
+/// colours along it, written to `out` (in the segment's own user space, so it follows the
+/// segment whatever its direction; a bounding-box gradient would vanish on a horizontal or
+/// vertical line, whose box has no height or width).
+fn write_stroke(
+    out: &mut String,
+    colours: &dyn ColourScale,
+    seg: &LitSegment,
+    k: usize,
+    pixels: f64,
+) -> String {
     let [start, middle, end] = seg.along.map(|v| hex(colours.colour(v)));
-    if start == middle && middle == end {
+    if (start == middle && middle == end) || pixels < MIN_GRADIENT_PIXELS {
         return middle;
     }
     let _ = writeln!(
