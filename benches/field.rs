@@ -2,15 +2,20 @@
 //! floor plans and halls of 10³ edges:
 //! - `gather`: the final gather at 8 points per element of a solved mesh (what
 //!   `flatland solve --samples 8` writes), per call;
-//! - `at_equal_elements`: the function solve on a mesh of 4 elements per edge (its solve, the
-//!   Gauss refinement's and the gather: three views per element) against the older estimate
-//!   on the same mesh (the solves on N and 2N and the comparison at N points), which the
-//!   default may cost at most twice;
-//! - `to_tolerance`: the whole default, rounds to 1 % with the error read as a function,
-//!   against the doubling to 1 % at the collocation points (whose steps then miss 1 % by
-//!   3–8 times; see docs/FUNCTION-ERROR.md).
+//! - `at_equal_elements/function_solve`: the function solve on a mesh of 4 elements per edge
+//!   (its solve, the Gauss refinement's and the gather: three views per element);
+//! - `to_tolerance/function_solve`: the whole default, rounds to 1 % with the error read as a
+//!   function;
+//! - `score`: what scoring a lighting as a function costs a lit scene of the bench (the mesh
+//!   of 4 per edge, its reference that mesh cut in four): the reference gathered at 8 points
+//!   per element, once per lit scene (`reference_8_per_element`), beside the reference solve
+//!   it comes with (`reference_solve`), and one solution read and scored there
+//!   (`read_and_score`, per method row).
 //!
-//! Run: `cargo bench --bench field`. Samples of the last two groups take about a second.
+//! The older estimate at the collocation points and its doubling were removed; their figures
+//! are in docs/FUNCTION-ERROR.md.
+//!
+//! Run: `cargo bench --bench field`. Samples of the solve groups take about a second.
 
 use std::hint::black_box;
 use std::time::Duration;
@@ -18,8 +23,8 @@ use std::time::Duration;
 use criterion::{Criterion, criterion_group, criterion_main};
 use flatland_geom::{Kernel, Scene, generate};
 use flatland_solve::{
-    DEFAULT_ERROR_BOUND, Discretization, ExactReference, FunctionSolve, Mesh, SamplePoints,
-    SolveParams, ToleranceParams, elements_for_error, never, solve_to_tolerance,
+    ExactReference, FunctionReference, FunctionSolve, Mesh, SamplePoints, SolveParams,
+    ToleranceParams, never, solve_to_tolerance,
 };
 
 /// Elements per edge of the fixed meshes.
@@ -61,13 +66,6 @@ fn field(c: &mut Criterion) {
         group.bench_function("at_equal_elements/function_solve", |b| {
             b.iter(|| FunctionSolve::new(&kernel, black_box(mesh.clone()), &params, &never))
         });
-        group.bench_function("at_equal_elements/collocation_estimate", |b| {
-            b.iter(|| {
-                let coarse = ExactReference::new(&kernel, black_box(mesh.len()), &params, &never)
-                    .expect("solve");
-                Discretization::of(coarse, &kernel, &params, &never).expect("estimate")
-            })
-        });
         group.bench_function("to_tolerance/function_solve", |b| {
             b.iter(|| {
                 solve_to_tolerance(
@@ -78,8 +76,20 @@ fn field(c: &mut Criterion) {
                 )
             })
         });
-        group.bench_function("to_tolerance/collocation_doubling", |b| {
-            b.iter(|| elements_for_error(black_box(&kernel), DEFAULT_ERROR_BOUND, &params, &never))
+        let fine = mesh
+            .split(&kernel, &vec![4; mesh.len()])
+            .expect("fine mesh");
+        group.bench_function("score/reference_solve", |b| {
+            b.iter(|| ExactReference::on_mesh(&kernel, black_box(fine.clone()), &params, &never))
+        });
+        let reference = ExactReference::on_mesh(&kernel, fine, &params, &never).expect("solve");
+        group.bench_function("score/reference_8_per_element", |b| {
+            b.iter(|| FunctionReference::new(black_box(&reference), &mesh, &never))
+        });
+        let scoring = FunctionReference::new(&reference, &mesh, &never).expect("gather");
+        let b_mesh = &solve.coarse.solution().radiosity;
+        group.bench_function("score/read_and_score", |b| {
+            b.iter(|| scoring.errors(black_box(b_mesh)))
         });
         group.finish();
     }

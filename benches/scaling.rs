@@ -1,6 +1,7 @@
 //! Cost against scene size: the light-driven learner's fit (`LightFit` to its default tolerance)
 //! and solve, and the exact solve, on generated floor plans of 10², 10³ and 10⁴ edges, each
-//! on the mesh `flatland solve` chooses (its exact solve's estimated error below 1 %). Read
+//! on the mesh `flatland solve` chooses (its exact solve's estimated error of B − E as a
+//! function below 1 %, `solve_to_tolerance`). Read
 //! the ratios between sizes: 10× the edges should cost about 10× (the log–log slope, which
 //! `flatland bench --scaling` reports with memory and error, is ≤ 1.3).
 //!
@@ -14,7 +15,7 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use flatland_geom::{Kernel, generate};
 use flatland_light::{LightFit, LightParams};
 use flatland_solve::{
-    DEFAULT_ERROR_BOUND, ExactReference, SolveParams, elements_for_error, never, solve,
+    ExactReference, SolveParams, ToleranceParams, never, solve, solve_to_tolerance,
 };
 
 fn scaling(c: &mut Criterion) {
@@ -26,9 +27,9 @@ fn scaling(c: &mut Criterion) {
             generate::floor_plan(edges, 1).expect("a floor plan"),
         ));
         let params = SolveParams::default();
-        let found =
-            elements_for_error(&kernel, DEFAULT_ERROR_BOUND, &params, &never).expect("a mesh");
-        let mesh = found.coarse.mesh().clone();
+        let found = solve_to_tolerance(&kernel, &ToleranceParams::default(), &params, &never)
+            .expect("a mesh");
+        let mesh = found.solve.coarse.mesh().clone();
         group.bench_function("default_fit_and_solve", |b| {
             b.iter(|| {
                 let mut fit =
@@ -41,7 +42,7 @@ fn scaling(c: &mut Criterion) {
         group.bench_function("exact_solve", |b| {
             b.iter(|| {
                 black_box(
-                    ExactReference::new(black_box(&kernel), mesh.len(), &params, &never)
+                    ExactReference::on_mesh(black_box(&kernel), mesh.clone(), &params, &never)
                         .expect("exact"),
                 )
             })

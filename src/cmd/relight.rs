@@ -23,7 +23,8 @@ use flatland_lab::{interrupt, output};
 use flatland_pictures::lit::{Panel, panel_png};
 use flatland_pictures::plan::{PlanColours, lit_plan_by};
 use flatland_solve::{
-    RADIOSITY_HEADER, RelightParams, Relighter, SolveError, Stop, check_elements, radiosity_rows,
+    RADIOSITY_HEADER, RelightParams, Relighter, SolveError, Stop, check_elements, line_along,
+    radiosity_rows,
 };
 
 use super::SceneArgs;
@@ -329,11 +330,15 @@ fn relight(
             if let Some(Output::Pictures(dir)) = output {
                 let colours = *scale.get_or_insert_with(|| PlanColours::new(&mesh, b));
                 let top = colours.scale().top;
+                // No gather per move (it would cost a view per point of every picture): B
+                // along each element is the line through the midpoints.
+                let along = line_along(&mesh, b);
                 let panel = Panel {
                     scene: kernel.scene(),
                     caption: format!("{label}: position {k} of {}", moves.len()),
                     mesh: &mesh,
                     b,
+                    along: &along,
                     lights: &moves[k],
                     top,
                 };
@@ -341,7 +346,8 @@ fn relight(
                 let path = dir.join(format!("position-{k:0digits$}.png"));
                 interrupt::writing(|| write_atomic(&path, &png))?;
                 let title = &panel.caption;
-                let plan = lit_plan_by(kernel.scene(), &mesh, b, &moves[k], title, &colours);
+                let scene = kernel.scene();
+                let plan = lit_plan_by(scene, &mesh, b, &along, &moves[k], title, &colours);
                 let path = path.with_extension("svg");
                 interrupt::writing(|| write_atomic(&path, plan.svg().as_bytes()))?;
             }

@@ -121,8 +121,15 @@ pub fn run(args: &Args) -> Result<()> {
             "csv" => (solution.csv(args.samples, stop))
                 .map_err(|e| super::interrupted(MethodError::from(e)))?
                 .into_bytes(),
-            "svg" => solution.svg().into_bytes(),
-            _ => solution.png()?,
+            picture => {
+                let along =
+                    (solution.along(stop)).map_err(|e| super::interrupted(MethodError::from(e)))?;
+                if picture == "svg" {
+                    solution.svg(&along).into_bytes()
+                } else {
+                    solution.png(&along)?
+                }
+            }
         };
         interrupt::writing(|| write_atomic(path, &bytes))?;
     }

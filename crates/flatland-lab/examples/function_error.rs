@@ -1,7 +1,8 @@
 //! The measurement behind docs/FUNCTION-ERROR.md: the error of the solved `B − E` read as a
-//! function along the surfaces, for today's default (elements doubled until the estimate at
-//! the collocation points is within 1 %, B read as steps) and for the function solve
-//! (`solve_to_tolerance`: the final gather, the Gauss-refinement estimate, adapted meshes).
+//! function along the surfaces for the function solve (`solve_to_tolerance`: the final
+//! gather, the Gauss-refinement estimate, adapted meshes), against its estimate. (The older
+//! default, the doubling to 1 % at the collocation points, was removed; its columns in the
+//! doc come from this example at commit 22084a5.)
 //!
 //! ```text
 //! cargo run --release -p flatland-lab --example function_error -- [--photons N] [--factor F] SCENE…
@@ -14,8 +15,10 @@
 //! spaced points per element of the mesh measured. With `--photons`, the Monte Carlo tracer
 //! lights the same scene, its tallies kept per element of the function solve's mesh, and the gap of the reference's bin means
 //! to it is printed with the tracer's own noise. With `--learner`, the light-driven learner on
-//! the same mesh: its estimate against its errors (to standard error). With
-//! `--untimed-doubling`, today's doubling to 1 % is counted, not timed.
+//! the same mesh, in a second table: its own estimate and the estimate with the mesh's error
+//! as a function added (`flatland_light::LightEstimate`), against its errors on the elements,
+//! read by the exact final gather (what the added estimate covers) and as the lit scene scores
+//! it (the line through its midpoints, the lamps' direct light at the point).
 
 use std::time::Instant;
 
@@ -23,8 +26,8 @@ use anyhow::{Context, Result, bail};
 use flatland_baselines::{TraceBudget, TraceParams, trace};
 use flatland_geom::{Kernel, Scene};
 use flatland_solve::{
-    DEFAULT_ERROR_BOUND, Discretization, ExactReference, FunctionSolve, Mesh, SamplePoints,
-    SolveParams, ToleranceParams, elements_for_error, never, solve_to_tolerance,
+    ExactReference, FunctionReference, FunctionSolve, SamplePoints, SolveParams, ToleranceParams,
+    never, solve_to_tolerance,
 };
 
 /// Points per element at which every function error is measured.
@@ -72,11 +75,6 @@ fn scene(spec: &str) -> Result<Scene> {
     Ok(flatland_geom::bundled::scene(spec)?)
 }
 
-/// B read as steps (each element's value) at the sample points.
-fn steps(mesh: &Mesh, b: &[f64], points: &SamplePoints) -> Vec<f64> {
-    points.s.iter().map(|&s| b[mesh.element_at(s)]).collect()
-}
-
 fn seconds<T>(work: impl FnOnce() -> Result<T>) -> Result<(T, f64)> {
     let started = Instant::now();
     let value = work()?;
@@ -86,41 +84,22 @@ fn seconds<T>(work: impl FnOnce() -> Result<T>) -> Result<(T, f64)> {
 struct Row {
     spec: String,
     edges: usize,
-    today: Discretization,
-    today_s: f64,
-    today_steps: f64,
     ours_elements: usize,
     ours_rounds: usize,
     ours_s: f64,
     ours_true: f64,
+    /// The same solve's element values read as the line through their midpoints.
+    ours_line: f64,
     ours_estimate: f64,
     reference_elements: usize,
     tracer: Option<String>,
     learner: Option<String>,
-    /// Today's doubling continued until its steps would be within 1 % (their error halves
-    /// with each doubling), and the seconds of its last step alone (the solves on that count
-    /// and twice it, and their comparison): a lower bound on its whole time.
-    today_for_tolerance: (usize, Option<f64>),
 }
 
-fn measure(
-    spec: &str,
-    factor: Option<usize>,
-    photons: u64,
-    learner: bool,
-    timed_doubling: bool,
-) -> Result<Row> {
+fn measure(spec: &str, factor: Option<usize>, photons: u64, learner: bool) -> Result<Row> {
     let kernel = Kernel::new(scene(spec)?);
     let params = SolveParams::default();
     let edges = kernel.scene().edges().len();
-    let (today, today_s) = seconds(|| {
-        Ok(elements_for_error(
-            &kernel,
-            DEFAULT_ERROR_BOUND,
-            &params,
-            &never,
-        )?)
-    })?;
     let (ours, ours_s) = seconds(|| {
         Ok(solve_to_tolerance(
             &kernel,
@@ -138,23 +117,12 @@ fn measure(
         &params,
         &never,
     )?;
-    let truth_on = |mesh: &Mesh| -> Result<(SamplePoints, Vec<f64>)> {
-        let points = SamplePoints::evenly(mesh, POINTS);
-        let exact = reference.radiosity_at(&points.s, &never)?;
-        Ok((points, exact))
-    };
-    let (points, exact) = truth_on(today.coarse.mesh())?;
-    let today_steps = points.relative_l2_reflected(
-        &steps(
-            today.coarse.mesh(),
-            &today.coarse.solution().radiosity,
-            &points,
-        ),
-        &exact,
-    );
-    let (points, exact) = truth_on(mesh)?;
+    let points = SamplePoints::evenly(mesh, POINTS);
+    let exact = reference.radiosity_at(&points.s, &never)?;
     let ours_true = points.relative_l2_reflected(&solve.radiosity_at(&points.s, &never)?, &exact);
-    let (needed, needed_s) = doubling_for_tolerance(&kernel, &today, today_steps, timed_doubling)?;
+    let ours_line = FunctionReference::new(&reference, mesh, &never)?
+        .errors(&solve.coarse.solution().radiosity)
+        .rel_l2_reflected;
     let learner = learner
         .then(|| learner_errors(&kernel, solve, &reference))
         .transpose()?;
@@ -164,47 +132,22 @@ fn measure(
     Ok(Row {
         spec: spec.to_owned(),
         edges,
-        today_s,
-        today_steps,
         ours_elements: mesh.len(),
         ours_rounds: ours.rounds.len(),
         ours_s,
         ours_true,
+        ours_line,
         ours_estimate: solve.estimate.estimate,
         reference_elements: reference.mesh().len(),
         tracer,
         learner,
-        today,
-        today_for_tolerance: (needed, needed_s),
     })
 }
 
-/// The elements today's doubling would need for its steps to reach 1 % (their error halves
-/// with each doubling), and, when asked and affordable, the seconds of that doubling's last
-/// step alone.
-fn doubling_for_tolerance(
-    kernel: &Kernel,
-    today: &Discretization,
-    today_steps: f64,
-    timed: bool,
-) -> Result<(usize, Option<f64>)> {
-    let params = SolveParams::default();
-    let doublings = (today_steps / DEFAULT_ERROR_BOUND).log2().ceil().max(0.0) as u32;
-    let needed = today.coarse.mesh().len() << doublings;
-    if !(timed && needed <= 40_000 && doublings > 0) {
-        return Ok((needed, None));
-    }
-    let (_, s) = seconds(|| {
-        let coarse = ExactReference::new(kernel, needed, &params, &never)?;
-        Ok(Discretization::of(coarse, kernel, &params, &never)?)
-    })?;
-    Ok((needed, Some(s)))
-}
-
 /// The light-driven learner (`flatland_light::LightFit`, default parameters) on the function
-/// solve's mesh: its own estimate, its error on the same elements against the exact solve
-/// there (what the estimate is about), and its B read as a function (the exact final gather
-/// of its element values) against the reference.
+/// solve's mesh: its own estimate (against the exact solve on the same elements) and with the
+/// mesh's error as a function added; its error on the elements, as the lit scene scores it
+/// (the line through its midpoints), and read by the exact final gather of its values.
 fn learner_errors(
     kernel: &Kernel,
     solve: &FunctionSolve,
@@ -214,18 +157,25 @@ fn learner_errors(
     let shared = std::sync::Arc::new(Kernel::new(kernel.scene().clone()));
     let mut fit = flatland_light::LightFit::new(shared, mesh.clone(), Default::default())?;
     let (stopped, s) = seconds(|| Ok(fit.run(&never, |_| {})?))?;
-    let estimate = fit.estimated_error().unwrap_or(f64::NAN);
+    let own = fit.error_estimate().context("the learner ran no round")?;
+    let whole = own
+        .with_discretization(&solve.estimate)
+        .context("the learner's mesh is the function solve's")?;
     let on_elements =
         flatland_solve::solve_errors(mesh, fit.radiosity(), &solve.coarse.solution().radiosity)
             .rel_l2_reflected;
-    let points = SamplePoints::evenly(mesh, POINTS);
-    let exact = reference.radiosity_at(&points.s, &never)?;
-    let gathered = solve.gather.at(fit.radiosity(), &points.s, &never)?;
-    let as_function = points.relative_l2_reflected(&gathered, &exact);
-    let as_steps = points.relative_l2_reflected(&steps(mesh, fit.radiosity(), &points), &exact);
+    let scoring = FunctionReference::new(reference, mesh, &never)?;
+    let as_line = scoring.errors(fit.radiosity()).rel_l2_reflected;
+    let gathered = scoring
+        .gathered_errors(&solve.gather, fit.radiosity(), &never)?
+        .rel_l2_reflected;
     Ok(format!(
-        "learner {s:.2}s ({stopped:?}): estimate {estimate:.4}, error on the elements {on_elements:.4} (ratio {:.2}); as a function (exact gather of its values) {as_function:.4}, as steps {as_steps:.4}",
-        estimate / on_elements
+        "| {} ({stopped:?}, {s:.2} s) | {:.4} | {on_elements:.4} | {:.2} | {:.4} | {gathered:.4} | {:.2} | {as_line:.4} |",
+        mesh.len(),
+        own.estimate(),
+        own.estimate() / on_elements,
+        whole.estimate(),
+        whole.estimate() / gathered,
     ))
 }
 
@@ -283,49 +233,47 @@ fn tracer_gap(
 fn main() -> Result<()> {
     let mut args = std::env::args().skip(1);
     let (mut photons, mut factor, mut learner, mut specs) = (0, None, false, Vec::new());
-    let mut timed_doubling = true;
     while let Some(arg) = args.next() {
         match arg.as_str() {
             "--photons" => photons = args.next().context("--photons N")?.parse()?,
             "--factor" => factor = Some(args.next().context("--factor F")?.parse()?),
             "--learner" => learner = true,
-            "--untimed-doubling" => timed_doubling = false,
             _ if arg.starts_with("--") => bail!("unknown option {arg}"),
             _ => specs.push(arg),
         }
     }
     println!(
-        "| scene | edges | today: elements | s | estimate | steps' error | ratio | today for 1 %: elements | s (≥) | function solve: elements (rounds) | s | error | estimate | ratio | reference | tracer |"
+        "| scene | edges | function solve: elements (rounds) | s | error | estimate | ratio | its values as the line through the midpoints | reference | tracer |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    let mut learners = Vec::new();
     for spec in specs {
-        let r = measure(&spec, factor, photons, learner, timed_doubling)
-            .with_context(|| spec.clone())?;
-        let estimate = r.today.estimate.estimate;
+        let r = measure(&spec, factor, photons, learner).with_context(|| spec.clone())?;
         println!(
-            "| {} | {} | {} | {:.2} | {:.4} | {:.4} | {:.2} | {} | {} | {} ({}) | {:.2} | {:.4} | {:.4} | {:.2} | {} | {} |",
+            "| {} | {} | {} ({}) | {:.2} | {:.4} | {:.4} | {:.2} | {:.4} | {} | {} |",
             r.spec,
             r.edges,
-            r.today.coarse.mesh().len(),
-            r.today_s,
-            estimate,
-            r.today_steps,
-            estimate / r.today_steps,
-            r.today_for_tolerance.0,
-            r.today_for_tolerance
-                .1
-                .map_or("—".to_owned(), |s| format!("{s:.2}")),
             r.ours_elements,
             r.ours_rounds,
             r.ours_s,
             r.ours_true,
             r.ours_estimate,
             r.ours_estimate / r.ours_true,
+            r.ours_line,
             r.reference_elements,
             r.tracer.as_deref().unwrap_or("—"),
         );
-        if let Some(learner) = &r.learner {
-            eprintln!("{}: {learner}", r.spec);
+        if let Some(row) = r.learner {
+            learners.push(format!("| {} {row}", r.spec));
+        }
+    }
+    if !learners.is_empty() {
+        println!(
+            "\n| scene | elements (stop, s) | its estimate | its error on the elements | ratio | with the mesh's | error, gathered | ratio | error, scored (line) |"
+        );
+        println!("|---|---|---|---|---|---|---|---|---|");
+        for row in learners {
+            println!("{row}");
         }
     }
     Ok(())

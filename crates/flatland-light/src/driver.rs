@@ -10,7 +10,7 @@ use flatland_solve::{Mesh, SolveParams, Stop, Sweep, TransferOperator, solve_lin
 use super::probes::{ProbeCell, Probes};
 use super::rows::Rows;
 use super::{LightParams, LightStop, Round, borrow, probe};
-use crate::LightError;
+use crate::{LightError, LightEstimate};
 
 /// Relative residual of a round's solve: the ranking and the estimate need a few digits of B,
 /// not ten; the round that stops polishes its B to the solve's own tolerance.
@@ -277,9 +277,17 @@ impl LightFit {
         &self.history
     }
 
-    /// The estimated relative L2 error of the solved `B − E`, after the last round.
+    /// The estimated relative L2 error of the solved `B − E` against the exact solve on the
+    /// same mesh, after the last round.
     pub fn estimated_error(&self) -> Option<f64> {
         self.history.last().map(|r| r.estimated_error)
+    }
+
+    /// [`LightFit::estimated_error`] with what it covers; add the mesh's own error with
+    /// [`LightEstimate::with_discretization`].
+    pub fn error_estimate(&self) -> Option<LightEstimate> {
+        self.estimated_error()
+            .map(|e| LightEstimate::on_mesh(e, self.mesh.len()))
     }
 
     /// Why it stopped, once it has.

@@ -47,6 +47,7 @@
 
 mod driver;
 mod error;
+mod estimate;
 mod probes;
 mod represent;
 mod rows;
@@ -56,6 +57,7 @@ use rayon::prelude::*;
 
 pub use driver::LightFit;
 pub use error::LightError;
+pub use estimate::LightEstimate;
 pub use probes::ProbeCell;
 
 use probes::{Bracket, Probes};

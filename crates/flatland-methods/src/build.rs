@@ -10,7 +10,7 @@ use flatland_baselines::{
     run_clustered, run_hr_at_budget, run_uniform,
 };
 use flatland_geom::Kernel;
-use flatland_light::{LightFit, LightParams, LightStop};
+use flatland_light::{LightEstimate, LightFit, LightParams, LightStop};
 use flatland_solve::{Errors, Mesh, Reference, Representation, Stop};
 use kernel_fit::{Fit, FitParams, FitSummary, LearnedKernel, REFERENCE_SEED};
 
@@ -136,6 +136,9 @@ pub struct LightAccount {
     /// Its estimate of the relative L2 error of the solved `B − E` (against the exact kernel on
     /// the same elements).
     pub estimated_error: Option<f64>,
+    /// That estimate with what it covers, and the mesh's own error as a function added where
+    /// the lit scene has it ([`Recipes::light`](crate::Recipes::light) adds it).
+    pub estimate: Option<LightEstimate>,
     /// Rounds run.
     pub rounds: usize,
     /// Probes placed (exact views swept: its cells).
@@ -239,6 +242,7 @@ impl Recipes {
         })?;
         let account = LightAccount {
             estimated_error: fit.estimated_error(),
+            estimate: fit.error_estimate(),
             rounds: fit.history().len(),
             probes: fit.cells().len(),
             stopped,

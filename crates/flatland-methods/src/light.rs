@@ -95,9 +95,22 @@ impl Recipes {
             bytes: built.rep.memory_bytes(),
             build_s: built.build_s,
             note: built.note,
-            account: built.account,
+            account: with_mesh_error(built.account, lit),
         })
     }
+}
+
+/// The light-driven learner's estimate with the lit scene's mesh error as a function added,
+/// when the lit scene estimated it on the learner's mesh: then it covers B as a function.
+fn with_mesh_error(account: Account, lit: &LitScene) -> Account {
+    let (Account::Light(light), Some(mesh)) = (&account, lit.estimate()) else {
+        return account;
+    };
+    let mut light = *light;
+    light.estimate = light
+        .estimate
+        .map(|e| e.with_discretization(mesh).unwrap_or(e));
+    Account::Light(light)
 }
 
 /// A solution of a representation that was not built here.

@@ -12,6 +12,16 @@ pub enum PictureError {
         /// The grid's side.
         res: usize,
     },
+    /// Values per element that are not one per element of the mesh drawn.
+    #[error("{what}: {values} values for a mesh of {elements} elements (expected one per element)")]
+    PerElement {
+        /// What was given, e.g. "B along the elements".
+        what: &'static str,
+        /// How many were given.
+        values: usize,
+        /// The mesh's elements.
+        elements: usize,
+    },
     /// A picture would be wider or taller than an image can be.
     #[error("{what} too large: {side} pixels a side (at most {})", u32::MAX)]
     TooLarge {
@@ -34,6 +44,23 @@ pub enum PictureError {
 }
 
 impl PictureError {
+    /// Refuses `values` values of `what` for a mesh of `elements`, unless one per element.
+    pub(crate) fn per_element(
+        what: &'static str,
+        values: usize,
+        elements: usize,
+    ) -> Result<(), PictureError> {
+        if values == elements {
+            Ok(())
+        } else {
+            Err(PictureError::PerElement {
+                what,
+                values,
+                elements,
+            })
+        }
+    }
+
     /// A drawing error of `what` (for `map_err`).
     pub(crate) fn draw<E: std::fmt::Display>(what: &'static str) -> impl Fn(E) -> PictureError {
         move |e| PictureError::Draw {

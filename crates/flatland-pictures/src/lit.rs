@@ -1,7 +1,9 @@
-//! The picture of `flatland solve`: the scene lit by a solved radiosity (each element in the
-//! colour of its B, emitters and point lights marked, a colour bar) beside B(s) against the
-//! exact solution; and the lit scene alone ([`panel_png`]), one picture per position of
-//! `flatland relight`.
+//! The picture of `flatland solve`: the scene lit by a solved radiosity (each element coloured
+//! by B as it runs along it, emitters and point lights marked, a colour bar) beside B(s)
+//! against the exact solution; and the lit scene alone ([`panel_png`]), one picture per
+//! position of `flatland relight`. B along an element is what the caller gives: the final
+//! gather where it has one (`FinalGather::along`), else the line through the element
+//! midpoints (`flatland_solve::line_along`) — never a flat step.
 
 use flatland_geom::{PointLight, Role, Scene};
 use flatland_solve::{ExactReference, Mesh};
@@ -22,6 +24,9 @@ pub struct Picture<'a> {
     pub mesh: &'a Mesh,
     /// The solved B per element of `mesh`.
     pub b: &'a [f64],
+    /// B at the start, middle and end of every element of `mesh`
+    /// ([`ALONG`](flatland_solve::ALONG)).
+    pub along: &'a [[f64; 3]],
     /// The exact solution B(s) is drawn against.
     pub reference: &'a ExactReference,
     /// The relative L2 error of the reflected part, for the title.
@@ -47,6 +52,9 @@ pub struct Panel<'a> {
     pub mesh: &'a Mesh,
     /// B per element of `mesh`.
     pub b: &'a [f64],
+    /// B at the start, middle and end of every element of `mesh`
+    /// ([`ALONG`](flatland_solve::ALONG)).
+    pub along: &'a [[f64; 3]],
     /// The point lights, each marked where it stands.
     pub lights: &'a [PointLight],
     /// The top of the colour scale ([`crate::colormap::radiosity_top`] of this B, or one kept
@@ -62,9 +70,11 @@ pub fn lit_scene_png(p: &Picture<'_>) -> Result<Vec<u8>, PictureError> {
         caption: format!("{}: lit by the {} kernel", p.label, p.kernel),
         mesh: p.mesh,
         b: p.b,
+        along: p.along,
         lights: p.mesh.lights(),
         top: crate::colormap::radiosity_top(p.mesh, p.b),
     };
+    check_panel(&panel)?;
     let mut rgb = vec![255u8; (WIDTH * HEIGHT * 3) as usize];
     {
         let root = BitMapBackend::with_buffer(&mut rgb, (WIDTH, HEIGHT)).into_drawing_area();
@@ -79,6 +89,7 @@ pub fn lit_scene_png(p: &Picture<'_>) -> Result<Vec<u8>, PictureError> {
 
 /// The lit scene alone ([`Panel`]), PNG-encoded.
 pub fn panel_png(panel: &Panel<'_>) -> Result<Vec<u8>, PictureError> {
+    check_panel(panel)?;
     register_font();
     let mut rgb = vec![255u8; (SCENE_WIDTH * HEIGHT * 3) as usize];
     {
@@ -88,6 +99,12 @@ pub fn panel_png(panel: &Panel<'_>) -> Result<Vec<u8>, PictureError> {
             .map_err(PictureError::draw("the lit scene's picture"))?;
     }
     encode_png(&rgb, SCENE_WIDTH, HEIGHT)
+}
+
+/// Refuses a panel whose B or B along the elements is not one per element of its mesh.
+fn check_panel(p: &Panel<'_>) -> Result<(), PictureError> {
+    PictureError::per_element("B", p.b.len(), p.mesh.len())?;
+    PictureError::per_element("B along the elements", p.along.len(), p.mesh.len())
 }
 
 type Area<'a> = DrawingArea<BitMapBackend<'a>, plotters::coord::Shift>;
@@ -117,11 +134,19 @@ fn draw_scene(area: &Area<'_>, p: &Panel<'_>) -> DrawResult {
             RGBColor(140, 140, 140).stroke_width(3),
         ))?;
     }
-    for (e, &b) in p.mesh.elements().iter().zip(p.b) {
-        chart.draw_series(LineSeries::new(
-            [(e.a.x, e.a.y), (e.b.x, e.b.y)],
-            inferno(b / top).stroke_width(8),
-        ))?;
+    // Each element in pieces of a few pixels, each in the colour of B at its middle.
+    let pixels_per_unit = f64::from(plot.dim_in_pixel().0) / span;
+    for (e, along) in p.mesh.elements().iter().zip(p.along) {
+        let pieces = ((e.length * pixels_per_unit / 3.0).ceil() as usize).clamp(1, 16);
+        for k in 0..pieces {
+            let (u0, u1) = (k as f64 / pieces as f64, (k + 1) as f64 / pieces as f64);
+            let (a, b) = (e.a + (e.b - e.a) * u0, e.a + (e.b - e.a) * u1);
+            let value = along_at(along, 0.5 * (u0 + u1));
+            chart.draw_series(LineSeries::new(
+                [(a.x, a.y), (b.x, b.y)],
+                inferno(value / top).stroke_width(8),
+            ))?;
+        }
     }
     // Emitters: a sun on the front side of each, with its emission.
     for edge in p.mesh.edges().iter().filter(|e| e.emission > 0.0) {
@@ -145,6 +170,16 @@ fn draw_scene(area: &Area<'_>, p: &Panel<'_>) -> DrawResult {
         chart.draw_series([Cross::new(at, 11, BLACK.stroke_width(1))])?;
     }
     draw_colour_bar(&bar, top)
+}
+
+/// B at fraction `u` of an element from its values at the start, middle and end: the line
+/// through them.
+fn along_at(along: &[f64; 3], u: f64) -> f64 {
+    if u <= 0.5 {
+        along[0] + (along[1] - along[0]) * 2.0 * u
+    } else {
+        along[1] + (along[2] - along[1]) * (2.0 * u - 1.0)
+    }
 }
 
 /// The lit scene's colour bar: 0 at the bottom, `top` (the brightest non-emitter) at the top.
@@ -216,7 +251,8 @@ fn curve_range(p: &Picture<'_>) -> (f64, f64) {
     (y_min, y_max)
 }
 
-/// B(s): the solution as steps, the exact reference as a line, emitters shaded, edges marked.
+/// B(s): the solution as it runs along each element, the exact reference as a line through
+/// its fine elements, emitters shaded, edges marked.
 fn draw_curves(area: &Area<'_>, p: &Picture<'_>) -> DrawResult {
     let fine = p.reference.mesh();
     let exact = &p.reference.solution().radiosity;
@@ -266,16 +302,21 @@ fn draw_curves(area: &Area<'_>, p: &Picture<'_>) -> DrawResult {
     }
     let solution = RGBColor(220, 80, 30);
     for edge in p.mesh.edges() {
-        // Steps, joined within an edge.
-        let steps: Vec<(f64, f64)> = edge
+        // B along each element, joined within an edge.
+        let along: Vec<(f64, f64)> = edge
             .elements
             .clone()
             .flat_map(|i| {
                 let e = &p.mesh.elements()[i];
-                [(e.s[0], clip(p.b[i])), (e.s[1], clip(p.b[i]))]
+                let [start, middle, end] = p.along[i];
+                [
+                    (e.s[0], clip(start)),
+                    (e.s_mid, clip(middle)),
+                    (e.s[1], clip(end)),
+                ]
             })
             .collect();
-        chart.draw_series(LineSeries::new(steps, solution.stroke_width(2)))?;
+        chart.draw_series(LineSeries::new(along, solution.stroke_width(2)))?;
     }
     for edge in p.mesh.edges().iter().filter(|e| e.emission > 0.0) {
         let range = edge.elements.clone();
@@ -353,6 +394,7 @@ mod tests {
             kernel: "exact",
             mesh: &mesh,
             b: &b,
+            along: &flatland_solve::line_along(&mesh, &b),
             reference: &reference,
             rel_l2_reflected: 0.0,
         })
@@ -371,7 +413,7 @@ mod tests {
         assert_eq!(at(x, y0 + rows - 1), inferno(0.0));
         let right =
             |colour: [u8; 3]| (SCENE_WIDTH..WIDTH).any(|x| (0..HEIGHT).any(|y| at(x, y) == colour));
-        assert!(right([220, 80, 30]), "the solution's steps");
+        assert!(right([220, 80, 30]), "the solution's curve");
         assert!(right([0, 0, 0]), "the exact curve");
     }
 
@@ -381,6 +423,7 @@ mod tests {
         let kernel = Kernel::new(flatland_geom::bundled::scene("fig3").unwrap());
         let mesh = Mesh::new(&kernel, 64).unwrap();
         let b = vec![0.5; mesh.len()];
+        let along = vec![[0.5; 3]; mesh.len()];
         let (lo, hi) = kernel.scene().bounds();
         let lights = [PointLight::new((lo + hi) * 0.5, 1.0)];
         let panel = |lights| Panel {
@@ -388,6 +431,7 @@ mod tests {
             caption: "fig3".into(),
             mesh: &mesh,
             b: &b,
+            along: &along,
             lights,
             top: 1.0,
         };

@@ -1,5 +1,6 @@
-//! The lit plan as a drawing: each element a stroked segment in the colour of its B (its value
-//! as `data-b`), blockers grey, point lights and emitters marked, a colour bar — written by
+//! The lit plan as a drawing: each element a stroked segment coloured by B as it runs along it
+//! (a gradient through B at its start, middle and end: the final gather's where the caller has
+//! one, else the line through the element midpoints; its value as `data-b`), blockers grey, point lights and emitters marked, a colour bar — written by
 //! `flatland_svg::lit_svg`, coloured here by the one colour map and scale rule of every picture
 //! and of the viewer. It opens in any browser and over the user's own drawing; its PNG is the
 //! same SVG rendered.
@@ -76,15 +77,20 @@ impl ColourScale for PlanColours {
     }
 }
 
-/// `scene` lit by `b` (one radiosity per element of `mesh`, a mesh of `scene`), titled `title`.
+/// `scene` lit by `b` (one radiosity per element of `mesh`, a mesh of `scene`), each element
+/// drawn by `along` (B at its start, middle and end: [`FinalGather::along`] or
+/// [`line_along`]), titled `title`.
 ///
 /// # Panics
-/// If `b` does not have one value per element of `mesh` (a caller's bug: a solution is always
-/// of its own mesh).
+/// If `b` or `along` does not have one value per element of `mesh` (a caller's bug: a
+/// solution is always of its own mesh).
+///
+/// [`FinalGather::along`]: flatland_solve::FinalGather::along
+/// [`line_along`]: flatland_solve::line_along
 #[must_use]
-pub fn lit_plan(scene: &Scene, mesh: &Mesh, b: &[f64], title: &str) -> LitSvg {
+pub fn lit_plan(scene: &Scene, mesh: &Mesh, b: &[f64], along: &[[f64; 3]], title: &str) -> LitSvg {
     let colours = PlanColours::new(mesh, b);
-    lit_plan_by(scene, mesh, b, mesh.lights(), title, &colours)
+    lit_plan_by(scene, mesh, b, along, mesh.lights(), title, &colours)
 }
 
 /// [`lit_plan`] lit by `lights` (which may not be the mesh's own: a moving light) and coloured
@@ -97,20 +103,24 @@ pub fn lit_plan_by(
     scene: &Scene,
     mesh: &Mesh,
     b: &[f64],
+    along: &[[f64; 3]],
     lights: &[PointLight],
     title: &str,
     colours: &PlanColours,
 ) -> LitSvg {
     assert_eq!(b.len(), mesh.len(), "one radiosity per element");
+    assert_eq!(along.len(), mesh.len(), "B along every element");
     let segments: Vec<LitSegment> = mesh
         .elements()
         .iter()
         .zip(b)
-        .map(|(element, &value)| LitSegment {
+        .zip(along)
+        .map(|((element, &value), &along)| LitSegment {
             edge: element.edge,
             a: element.a,
             b: element.b,
             value,
+            along,
             emission: mesh.edge_of(element.mesh_edge).emission,
         })
         .collect();
@@ -136,7 +146,7 @@ mod tests {
     use std::sync::Arc;
 
     use flatland_geom::Kernel;
-    use flatland_solve::{ExactReference, SolveParams};
+    use flatland_solve::{ExactReference, SolveParams, line_along};
 
     fn solved(name: &str) -> (Arc<Kernel>, Mesh, Vec<f64>) {
         let kernel = Arc::new(Kernel::new(flatland_geom::bundled::scene(name).unwrap()));
@@ -149,7 +159,7 @@ mod tests {
     #[test]
     fn every_element_is_a_segment_in_its_colour_carrying_its_value() {
         let (kernel, mesh, b) = solved("maze");
-        let svg = lit_plan(kernel.scene(), &mesh, &b, "maze");
+        let svg = lit_plan(kernel.scene(), &mesh, &b, &line_along(&mesh, &b), "maze");
         let text = svg.svg();
         assert_eq!(text.matches("data-b=").count(), mesh.len());
         let colours = PlanColours::new(&mesh, &b);
@@ -169,7 +179,7 @@ mod tests {
     #[test]
     fn the_png_is_the_svg_rendered() {
         let (kernel, mesh, b) = solved("fig3");
-        let svg = lit_plan(kernel.scene(), &mesh, &b, "fig3");
+        let svg = lit_plan(kernel.scene(), &mesh, &b, &line_along(&mesh, &b), "fig3");
         let png = svg.png().unwrap();
         assert!(png.starts_with(b"\x89PNG"));
         let image = image::load_from_memory(&png).unwrap();

@@ -147,6 +147,19 @@ impl FinalGather {
             .collect())
     }
 
+    /// B at the start, middle and end of every element (just inside its ends), gathered from
+    /// `b`: how B runs along each element, as pictures draw it ([`ALONG`] of each).
+    pub fn along(&self, b: &[f64], stop: &Stop) -> Result<Vec<[f64; 3]>, SolveError> {
+        let points: Vec<f64> = self
+            .mesh
+            .elements()
+            .iter()
+            .flat_map(|e| ALONG.map(|x| e.s[0] + (e.s[1] - e.s[0]) * x))
+            .collect();
+        let values = self.at(b, &points, stop)?;
+        Ok(values.chunks(3).map(|v| [v[0], v[1], v[2]]).collect())
+    }
+
     /// The mean of the gathered B over each element (its integral divided by its length), by
     /// three-point Gauss–Legendre on `panels` (≥ 1) equal parts of it: `3 · panels` gathers
     /// per element, one fewer for an odd count (the middle node is the element's own value).
@@ -256,6 +269,49 @@ fn piece_at(pieces: std::ops::Range<usize>, u: f64) -> EdgeId {
     EdgeId::new(pieces.start + ((u * count as f64) as usize).min(count - 1))
 }
 
+/// Values per element of `mesh` (one per element) read at surface parameter `s` as the line
+/// through the element midpoints along its surface edge: between the two midpoints around `s`,
+/// continued from the nearest two in the half elements at the edge's ends (an edge of one
+/// element: its value), clamped at 0. What a solution without a gather of its own gives
+/// between its collocation points, drawn and scored so instead of as steps.
+#[must_use]
+pub fn midpoint_line(mesh: &Mesh, b: &[f64], s: f64) -> f64 {
+    let elements = mesh.elements();
+    let i = mesh.element_at(s);
+    let on_edge = |j: usize| {
+        elements
+            .get(j)
+            .filter(|e| e.mesh_edge == elements[i].mesh_edge)
+    };
+    let before = i.checked_sub(1).filter(|&j| on_edge(j).is_some());
+    let after = Some(i + 1).filter(|&j| on_edge(j).is_some());
+    let neighbour = if s < elements[i].s_mid {
+        before.or(after)
+    } else {
+        after.or(before)
+    };
+    let Some(j) = neighbour else {
+        return b[i].max(0.0);
+    };
+    let (mi, mj) = (elements[i].s_mid, elements[j].s_mid);
+    (b[i] + (b[j] - b[i]) * (s - mi) / (mj - mi)).max(0.0)
+}
+
+/// Where along an element pictures take B: just inside its start, its middle, just inside its
+/// end (an end itself belongs to the next element, maybe on another edge).
+pub const ALONG: [f64; 3] = [1e-6, 0.5, 1.0 - 1e-6];
+
+/// Values per element of `mesh` read as the line through their midpoints
+/// ([`midpoint_line`]) at [`ALONG`] of every element: B along each element as pictures draw
+/// a solution without a gather of its own.
+#[must_use]
+pub fn line_along(mesh: &Mesh, b: &[f64]) -> Vec<[f64; 3]> {
+    mesh.elements()
+        .iter()
+        .map(|e| ALONG.map(|x| midpoint_line(mesh, b, e.s[0] + (e.s[1] - e.s[0]) * x)))
+        .collect()
+}
+
 /// Points along the surfaces at which functions of the surface point are compared: `n`
 /// evenly spaced inside every element of a mesh, each weighted by its share of the element's
 /// length, with the emission there. The relative L2 error of `B − E` as a function is measured
@@ -297,13 +353,26 @@ impl SamplePoints {
         self.s.iter().map(|&s| b[mesh.element_at(s)]).collect()
     }
 
+    /// Values per element of `mesh` read at these points as the line through their
+    /// midpoints ([`midpoint_line`]).
+    #[must_use]
+    pub fn line(&self, mesh: &Mesh, b: &[f64]) -> Vec<f64> {
+        self.s.iter().map(|&s| midpoint_line(mesh, b, s)).collect()
+    }
+
     /// The relative L2 difference of `B − E` between two functions sampled at these points:
     /// `sqrt(Σ w (a − x)² / Σ w (x − E)²)`, `x` the one taken as exact; the absolute RMS
     /// where `x − E` is 0 everywhere, so the number is always finite.
     #[must_use]
     pub fn relative_l2_reflected(&self, approx: &[f64], exact: &[f64]) -> f64 {
+        self.relative_l2(approx, exact, true)
+    }
+
+    /// The relative L2 difference of B, or of `B − E` when `reflected`.
+    pub(crate) fn relative_l2(&self, approx: &[f64], exact: &[f64], reflected: bool) -> f64 {
         assert_eq!(approx.len(), self.s.len(), "one value per sample point");
         assert_eq!(exact.len(), self.s.len(), "one value per sample point");
+        let emitted = if reflected { 1.0 } else { 0.0 };
         let (mut num, mut den, mut total) = (0.0, 0.0, 0.0);
         for (((a, x), e), w) in approx
             .iter()
@@ -312,7 +381,7 @@ impl SamplePoints {
             .zip(&self.weights)
         {
             num += w * (a - x) * (a - x);
-            den += w * (x - e) * (x - e);
+            den += w * (x - emitted * e) * (x - emitted * e);
             total += w;
         }
         if den > 0.0 {
@@ -333,6 +402,26 @@ mod tests {
     use flatland_geom::Scene;
     use flatland_testkit::assert_close;
     use rand::RngExt;
+
+    /// Values linear in the parameter along each edge are read back exactly, between the
+    /// midpoints and past them to the edge's ends, and never below 0.
+    #[test]
+    fn the_midpoint_line_is_exact_for_a_line_and_stays_on_its_edge() {
+        let kernel = Kernel::new(l_room(0.5));
+        let mesh = Mesh::new(&kernel, 60).unwrap();
+        let line = |s: f64| 3.0 - 10.0 * s;
+        let b: Vec<f64> = mesh.elements().iter().map(|e| line(e.s_mid)).collect();
+        let points = SamplePoints::evenly(&mesh, 7);
+        for (&s, read) in points.s.iter().zip(points.line(&mesh, &b)) {
+            assert_close!(read, line(s).max(0.0), 1e-12);
+        }
+        // Edge by edge: the value at an element never borrows from another edge's.
+        let per_edge: Vec<f64> = mesh.elements().iter().map(|e| e.mesh_edge as f64).collect();
+        for &s in &points.s {
+            let edge = mesh.elements()[mesh.element_at(s)].mesh_edge as f64;
+            assert_close!(midpoint_line(&mesh, &per_edge, s), edge, 1e-12);
+        }
+    }
 
     /// The exact solve of `scene` on `elements` by the sweep, and its gather.
     fn solved(scene: Scene, elements: usize) -> (Kernel, FinalGather, Vec<f64>) {

@@ -65,14 +65,13 @@
 //! tolerance (1 % by default, [`ToleranceParams`]), and [`SamplePoints`] measures two functions
 //! against each other.
 //!
-//! **Errors of B at the collocation points.** [`ExactReference`] solves the exact kernel on a
-//! fine mesh once and gives the exact B at any mesh's collocation points (by the equation
-//! itself: `E + ρ ∫ G V B` with the fine B, the Nyström interpolation). [`solve_errors`] then
-//! measures a solution's relative L2 error (element lengths as weights), of B and of the
-//! reflected part `B − E`. [`solve_against`] does both for one representation: what a view or
-//! a benchmark row needs. [`Discretization::of`] and [`elements_for_error`] are
-//! the older estimate, at the collocation points only ([`DEFAULT_ERROR_BOUND`], 1 % of
-//! `B − E` there), blind to B between them.
+//! **Scoring a lighting.** [`ExactReference`] solves the exact kernel on a fine mesh once and
+//! gives the exact B at any surface point (by the equation itself: `E + ρ ∫ G V B` with the
+//! fine B, the Nyström interpolation). A [`LitScene`] scores every lighting as a function
+//! against it ([`FunctionReference`]: the reference gathered once at 8 points per element; a
+//! solution read by its own gather where it has one, else as the line through its element
+//! midpoints, [`midpoint_line`]). [`solve_errors`] and [`solve_against`] compare two B on the
+//! same elements at their collocation points only.
 //!
 //! ```
 //! use flatland_geom::{Kernel, bundled};
@@ -125,6 +124,7 @@ mod quadrature;
 mod reference;
 mod relight;
 mod represent;
+mod score;
 mod settings;
 mod solve;
 mod sparse;
@@ -144,19 +144,16 @@ pub use adapt::{
     solve_to_tolerance,
 };
 pub use discretization::{
-    DEFAULT_ERROR_BOUND, Discretization, ErrorEstimate, FUNCTION_SAFETY, FunctionEstimate,
-    FunctionSolve, SAFETY_FACTOR, elements_for_error, gauss_refinement,
+    DEFAULT_ERROR_BOUND, FUNCTION_SAFETY, FunctionEstimate, FunctionSolve, gauss_refinement,
 };
 pub use error::SolveError;
 pub use exact::{
     ExactMethod, SWEEP_FROM_EDGES, check_scene, exact_block_means, exact_operator, receiver, sender,
 };
-pub use field::{FieldSample, FinalGather, SamplePoints};
+pub use field::{ALONG, FieldSample, FinalGather, SamplePoints, line_along, midpoint_line};
 pub use frame::InputFrame;
 pub use lights::{DirectLight, LightBuffers, LitSurfaces};
-pub use lit::{
-    Elements, Estimate, LitFunction, LitParams, LitScene, ReferenceMesh, check_elements,
-};
+pub use lit::{Elements, LitFunction, LitParams, LitScene, ReferenceMesh, check_elements};
 pub use mesh::{
     DEFAULT_ELEMENTS, Element, MAX_ELEMENTS, MAX_MESH_ELEMENTS, MIN_PER_EDGE, Mesh, MeshEdge,
 };
@@ -171,6 +168,7 @@ pub use relight::{ColdSolve, MoveCost, RelightParams, Relighter, Relit, WarmStar
 pub use represent::{
     Representation, check_fingerprint, check_lights, inverse_source_weights, quadrature_operator,
 };
+pub use score::{FunctionReference, SCORE_POINTS_PER_ELEMENT};
 pub use settings::{SolveParams, Stop, never};
 pub use solve::{
     Comparison, ExactReference, Solution, SolveErrors, solve, solve_against, solve_errors,

@@ -4,17 +4,18 @@
 //! all light a scene through it. By default the mesh is chosen for a tolerance on B as a
 //! function ([`solve_to_tolerance`]): the exact solve answers B at any surface point by its
 //! final gather, its estimate covers B between the collocation points, and the reference is
-//! the finer solve of that estimate (or, for the bench, one four times finer still).
+//! the finer solve of that estimate (or, for the bench, one four times finer still). Every
+//! lighting is scored against the reference as a function ([`FunctionReference`], gathered
+//! once): the exact solve by its gather, any other by the line through its midpoints.
 
 use std::sync::Arc;
 
 use flatland_geom::Kernel;
 
 use crate::{
-    Comparison, DEFAULT_ERROR_BOUND, Discretization, ErrorEstimate, ExactMethod, ExactReference,
-    FinalGather, FunctionEstimate, FunctionSolve, Mesh, RefinementRound, Representation, Solution,
-    SolveError, SolveErrors, SolveParams, Stop, ToleranceParams, ToleranceSolve,
-    elements_for_error, solve_against, solve_errors, solve_to_tolerance,
+    Comparison, DEFAULT_ERROR_BOUND, ExactMethod, ExactReference, FinalGather, FunctionEstimate,
+    FunctionReference, FunctionSolve, Mesh, RefinementRound, Representation, Solution, SolveError,
+    SolveErrors, SolveParams, Stop, ToleranceParams, ToleranceSolve, solve, solve_to_tolerance,
 };
 
 /// How many elements the lit scene's mesh has.
@@ -23,55 +24,8 @@ pub enum Elements {
     /// A mesh refined where the error of B as a function is until its estimate is at most
     /// this ([`solve_to_tolerance`]; the default, at 1 %).
     ToTolerance(f64),
-    /// The fewest of the doubling from the scene's minimum whose estimated error of `B − E`
-    /// at the collocation points is at most this ([`elements_for_error`]).
-    ForError(f64),
     /// Exactly this many, spread evenly, with the estimate of B as a function.
     Exactly(usize),
-}
-
-/// A lit scene's estimated discretization error, and what it covers.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Estimate {
-    /// Of B as a function along the surfaces (the final gather at any point), from the solve
-    /// on the Gauss refinement ([`FunctionSolve`]).
-    Function(FunctionEstimate),
-    /// Of B at the collocation points only, from a solve on twice the elements
-    /// ([`elements_for_error`]).
-    Collocation(ErrorEstimate),
-}
-
-impl Estimate {
-    /// The estimated relative L2 error of `B − E`.
-    #[must_use]
-    pub fn estimate(&self) -> f64 {
-        match self {
-            Estimate::Function(e) => e.estimate,
-            Estimate::Collocation(e) => e.estimate,
-        }
-    }
-
-    /// Elements of the finer solve it was made from.
-    #[must_use]
-    pub fn finer_elements(&self) -> usize {
-        match self {
-            Estimate::Function(e) => e.finer_elements,
-            Estimate::Collocation(e) => e.finer_elements,
-        }
-    }
-
-    /// What it covers, in words.
-    #[must_use]
-    pub fn covers(&self) -> String {
-        match self {
-            Estimate::Function(e) => e.covers(),
-            Estimate::Collocation(e) => format!(
-                "the relative L2 error of B − E at the {} collocation points only (element \
-                 midpoints), estimated from a solve on {} elements; blind to B between them",
-                e.elements, e.finer_elements
-            ),
-        }
-    }
 }
 
 /// B as a function on the lit scene's mesh: the final gather of its exact solve, and the
@@ -127,16 +81,14 @@ impl LitParams {
     pub fn check(&self, kernel: &Kernel) -> Result<(), SolveError> {
         self.solve.validate()?;
         match self.elements {
-            Elements::ForError(bound) | Elements::ToTolerance(bound)
-                if !(bound > 0.0 && bound < 1.0) =>
-            {
+            Elements::ToTolerance(bound) if !(bound > 0.0 && bound < 1.0) => {
                 return Err(SolveError::InvalidParameter {
                     name: "error bound",
                     value: bound.to_string(),
                     valid: "in (0, 1)",
                 });
             }
-            Elements::ForError(_) | Elements::ToTolerance(_) => {}
+            Elements::ToTolerance(_) => {}
             Elements::Exactly(n) => check_elements(kernel, n)?,
         }
         if let ReferenceMesh::Elements(n) = self.reference {
@@ -159,13 +111,18 @@ pub struct LitScene {
     mesh: Mesh,
     /// The exact solve on `mesh` and its estimated error, when they were made
     /// ([`LitScene::new`]; [`LitScene::scoring`] makes neither).
-    exact: Option<(ExactReference, Estimate)>,
-    /// B as a function, when the estimate was of it.
+    exact: Option<(ExactReference, FunctionEstimate)>,
+    /// B as a function, when the exact solve was made.
     function: Option<LitFunction>,
     reference: ExactReference,
     /// The reference's B at `mesh`'s collocation points, the lights' direct light as each
     /// element's mean ([`ExactReference::collocated_on`]).
     reference_on_mesh: Vec<f64>,
+    /// The reference as a function at the scoring points of `mesh`: what every lighting is
+    /// scored against.
+    scoring: FunctionReference,
+    /// The exact solve on `mesh` read by its final gather and scored, when both were made.
+    exact_errors: Option<SolveErrors>,
     solved: Vec<usize>,
 }
 
@@ -180,10 +137,6 @@ impl LitScene {
     ) -> Result<LitScene, SolveError> {
         params.check(&kernel)?;
         match params.elements {
-            Elements::ForError(bound) => {
-                let found = elements_for_error(&kernel, bound, &params.solve, stop)?;
-                LitScene::of_doubling(kernel, params, found, stop)
-            }
             Elements::ToTolerance(tolerance) => {
                 let asked = ToleranceParams {
                     tolerance,
@@ -244,60 +197,20 @@ impl LitScene {
             }
         };
         let reference_on_mesh = reference.collocated_on(&mesh, stop)?;
+        let scoring = FunctionReference::new(&reference, &mesh, stop)?;
+        let exact_errors =
+            Some(scoring.gathered_errors(&gather, &coarse.solution().radiosity, stop)?);
         Ok(LitScene {
             kernel,
             mesh,
-            exact: Some((coarse, Estimate::Function(estimate))),
+            scoring,
+            exact_errors,
+            exact: Some((coarse, estimate)),
             function: Some(LitFunction {
                 gather,
                 element_means,
                 rounds,
             }),
-            reference,
-            reference_on_mesh,
-            solved,
-        })
-    }
-
-    /// The lit scene of the doubling to a bound at the collocation points.
-    fn of_doubling(
-        kernel: Arc<Kernel>,
-        params: &LitParams,
-        found: Discretization,
-        stop: &Stop,
-    ) -> Result<LitScene, SolveError> {
-        let Discretization {
-            coarse,
-            finer,
-            finer_on_coarse,
-            estimate,
-            mut solved,
-        } = found;
-        let mesh = coarse.mesh().clone();
-        let reference = match params.reference {
-            ReferenceMesh::FourTimes => {
-                ReferenceMesh::Elements(ExactReference::default_elements_for(&kernel, mesh.len()))
-            }
-            other => other,
-        };
-        let (reference, reference_on_mesh) = match reference {
-            ReferenceMesh::Elements(n) if n != finer.mesh().len() => {
-                let reference = if n == mesh.len() {
-                    coarse.clone()
-                } else {
-                    solved.push(n);
-                    ExactReference::new(&kernel, n, &params.solve, stop)?
-                };
-                let on_mesh = reference.collocated_on(&mesh, stop)?;
-                (reference, on_mesh)
-            }
-            _ => (finer, finer_on_coarse),
-        };
-        Ok(LitScene {
-            kernel,
-            mesh,
-            exact: Some((coarse, Estimate::Collocation(estimate))),
-            function: None,
             reference,
             reference_on_mesh,
             solved,
@@ -318,9 +231,12 @@ impl LitScene {
         let mesh = Mesh::new(&kernel, elements)?;
         let reference = ExactReference::new(&kernel, reference_elements, params, stop)?;
         let reference_on_mesh = reference.collocated_on(&mesh, stop)?;
+        let scoring = FunctionReference::new(&reference, &mesh, stop)?;
         Ok(LitScene {
             kernel,
             mesh,
+            scoring,
+            exact_errors: None,
             exact: None,
             function: None,
             reference,
@@ -347,14 +263,14 @@ impl LitScene {
         self.exact.as_ref().map(|(e, _)| e)
     }
 
-    /// The exact solve's estimated discretization error, when it was made.
+    /// The exact solve's estimated error of B − E as a function, when it was made.
     #[must_use]
-    pub fn estimate(&self) -> Option<&Estimate> {
+    pub fn estimate(&self) -> Option<&FunctionEstimate> {
         self.exact.as_ref().map(|(_, e)| e)
     }
 
-    /// B as a function on the mesh (the exact solve's final gather), when the estimate was
-    /// of it.
+    /// B as a function on the mesh (the exact solve's final gather), when the exact solve was
+    /// made.
     #[must_use]
     pub fn function(&self) -> Option<&LitFunction> {
         self.function.as_ref()
@@ -366,7 +282,8 @@ impl LitScene {
         &self.reference
     }
 
-    /// The reference's B at the mesh's collocation points.
+    /// The reference's B at the mesh's collocation points (for colour scales and curves; scores
+    /// are measured as functions, [`LitScene::function_reference`]).
     #[must_use]
     pub fn reference_on_mesh(&self) -> &[f64] {
         &self.reference_on_mesh
@@ -378,43 +295,74 @@ impl LitScene {
         &self.solved
     }
 
-    /// Solves the scene with `rep` on the mesh and scores the solution against the reference.
-    pub fn score(&self, rep: &dyn Representation, stop: &Stop) -> Result<Comparison, SolveError> {
-        solve_against(
-            rep,
-            &self.mesh,
-            &self.reference_on_mesh,
-            &SolveParams::default(),
-            stop,
-        )
+    /// The reference as a function at the mesh's scoring points, what every score is
+    /// measured against.
+    #[must_use]
+    pub fn function_reference(&self) -> &FunctionReference {
+        &self.scoring
     }
 
-    /// The exact solve on the mesh scored against the reference, without solving again.
+    /// Solves the scene with `rep` on the mesh and scores the solution as a function against
+    /// the reference ([`LitScene::scored`]).
+    pub fn score(&self, rep: &dyn Representation, stop: &Stop) -> Result<Comparison, SolveError> {
+        let solution = solve(rep, &self.mesh, &SolveParams::default(), stop)?;
+        Ok(self.scored(solution))
+    }
+
+    /// The exact solve on the mesh scored against the reference as a function, read by its
+    /// own final gather (what `flatland solve` measures), without solving again.
     #[must_use]
     pub fn exact_scored(&self) -> Option<Comparison> {
-        self.exact().map(|e| self.scored(e.solution().clone()))
+        let solution = self.exact()?.solution().clone();
+        let errors = self.exact_errors?;
+        Some(Comparison { solution, errors })
     }
 
-    /// `solution`, a radiosity on the mesh, scored against the reference.
+    /// `solution`, a radiosity on the mesh, scored against the reference as a function:
+    /// read as the line through its midpoints, with the lights' direct light at each point
+    /// ([`FunctionReference::read`]), at the scoring points.
     #[must_use]
     pub fn scored(&self, solution: Solution) -> Comparison {
-        let errors = solve_errors(&self.mesh, &solution.radiosity, &self.reference_on_mesh);
+        let errors = self.scoring.errors(&solution.radiosity);
         Comparison { solution, errors }
     }
 
     /// The errors of `b`, a radiosity on `mesh` (any mesh of the scene), against the
-    /// reference.
+    /// reference as a function: on the lit scene's own mesh at its scoring points, on
+    /// another at that mesh's (one view of the reference per point, made for this call).
     pub fn errors_on(
         &self,
         mesh: &Mesh,
         b: &[f64],
         stop: &Stop,
     ) -> Result<SolveErrors, SolveError> {
-        if mesh.len() == self.mesh.len() {
-            return Ok(solve_errors(mesh, b, &self.reference_on_mesh));
+        if self.is_own(mesh) {
+            return Ok(self.scoring.errors(b));
         }
-        let exact = self.reference.collocated_on(mesh, stop)?;
-        Ok(solve_errors(mesh, b, &exact))
+        Ok(FunctionReference::new(&self.reference, mesh, stop)?.errors(b))
+    }
+
+    /// The errors of `b`, an exact solve on `mesh` (any mesh of the scene), read by its own
+    /// final gather, against the reference as a function: how an exact solve on another
+    /// mesh is scored like the lit scene's own.
+    pub fn gathered_errors_on(
+        &self,
+        mesh: &Mesh,
+        b: &[f64],
+        stop: &Stop,
+    ) -> Result<SolveErrors, SolveError> {
+        let gather = FinalGather::new(&self.kernel, mesh)?;
+        let scoring = if self.is_own(mesh) {
+            std::borrow::Cow::Borrowed(&self.scoring)
+        } else {
+            std::borrow::Cow::Owned(FunctionReference::new(&self.reference, mesh, stop)?)
+        };
+        scoring.gathered_errors(&gather, b, stop)
+    }
+
+    /// Whether `mesh` is the lit scene's own (the same scene and elements).
+    fn is_own(&self, mesh: &Mesh) -> bool {
+        mesh.fingerprint() == self.mesh.fingerprint() && mesh.elements() == self.mesh.elements()
     }
 }
 
@@ -452,11 +400,7 @@ mod tests {
             assert_eq!(counts.len(), lit.solved().len(), "{:?}", lit.solved());
             let n = lit.mesh().len();
             assert!(lit.solved().contains(&n) && lit.solved().contains(&(3 * n)));
-            assert!(
-                matches!(lit.estimate(), Some(Estimate::Function(e)) if e.elements == n),
-                "{:?}",
-                lit.estimate()
-            );
+            assert_eq!(lit.estimate().unwrap().elements, n);
             let function = lit.function().unwrap();
             assert_eq!(function.element_means.len(), n);
             assert_eq!(function.rounds.last().unwrap().elements, n);
@@ -473,11 +417,18 @@ mod tests {
             {
                 assert!((a - b).abs() <= 1e-9 * b.abs().max(1e-12), "{a} vs {b}");
             }
-            let (a, b) = (
-                reused.errors.rel_l2_reflected,
-                again.errors.rel_l2_reflected,
-            );
+            // Scored as a function: the exact solve by its gather, as a re-solve read by a
+            // gather of its own would be; read as a line through its midpoints (what a
+            // representation without a gather is read as), it is worse.
+            let gathered = lit
+                .gathered_errors_on(lit.mesh(), &again.solution.radiosity, &never)
+                .unwrap();
+            let (a, b) = (reused.errors.rel_l2_reflected, gathered.rel_l2_reflected);
             assert!((a - b).abs() <= 1e-6 * b.max(1e-12), "{a} vs {b}");
+            assert!(
+                again.errors.rel_l2_reflected > a,
+                "{again:?} against {reused:?}"
+            );
         }
     }
 
@@ -508,18 +459,6 @@ mod tests {
         assert_eq!(lit.solved(), [256, 768, 1024]);
         let fine = lit.reference().mesh();
         assert_eq!(fine.elements()[4 * 7].s[0], lit.mesh().elements()[7].s[0]);
-        // The doubling at the collocation points is still there, its estimate saying so.
-        let doubling = LitParams {
-            elements: Elements::ForError(DEFAULT_ERROR_BOUND),
-            reference: ReferenceMesh::Finer,
-            ..LitParams::default()
-        };
-        let lit = LitScene::new(Arc::clone(lit.kernel()), &doubling, &never).unwrap();
-        assert_eq!(lit.solved(), [512, 1024]);
-        let estimate = lit.estimate().unwrap();
-        assert!(matches!(estimate, Estimate::Collocation(_)));
-        assert!(estimate.covers().contains("collocation points only"));
-        assert!(lit.function().is_none());
     }
 
     #[test]
@@ -527,7 +466,7 @@ mod tests {
         let kernel = Arc::new(Kernel::new(bundled("fig3")));
         for params in [
             LitParams {
-                elements: Elements::ForError(0.0),
+                elements: Elements::ToTolerance(0.0),
                 ..LitParams::default()
             },
             LitParams {

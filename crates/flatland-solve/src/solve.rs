@@ -419,6 +419,22 @@ impl ExactReference {
         self.gather_at(&receivers, stop)
     }
 
+    /// The lights' reflected direct light `ρ H` at the surface parameters `points` (the
+    /// irradiance at the point itself, sharp at shadow edges): 0 everywhere without lights.
+    pub(crate) fn direct_at(&self, points: &[f64]) -> Vec<f64> {
+        let Some(lit) = &self.lit else {
+            return vec![0.0; points.len()];
+        };
+        points
+            .iter()
+            .map(|&s| {
+                let r = crate::field::locate(&self.mesh, s);
+                self.mesh.edges()[r.edge].reflectance
+                    * lit.irradiance_at(&self.mesh, r.edge, r.point)
+            })
+            .collect()
+    }
+
     /// `E + ρ (H + Σ_j B_j ∫_{fine element j} G V)` at each receiver.
     fn gather_at(&self, receivers: &[Receiver], stop: &Stop) -> Result<Vec<f64>, SolveError> {
         let b = &self.solution.radiosity;
@@ -481,7 +497,8 @@ impl ExactReference {
 pub struct Comparison {
     /// The solution with the representation.
     pub solution: Solution,
-    /// Its errors against the exact B on the same elements.
+    /// Its errors against the exact B: as a function along the surfaces when a
+    /// [`LitScene`](crate::LitScene) scored it, on the same elements from [`solve_against`].
     pub errors: SolveErrors,
 }
 

@@ -53,15 +53,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mesh = flatland_solve::Mesh::new(&kernel, elements)?;
     let params = flatland_solve::SolveParams::default();
     let b = flatland_solve::solve(&kernel, &mesh, &params, &flatland_solve::never)?.radiosity;
+    // B along each element: the line through the element midpoints.
+    let along = flatland_solve::line_along(&mesh, &b);
     let segments: Vec<LitSegment> = mesh
         .elements()
         .iter()
         .zip(&b)
-        .map(|(e, &value)| LitSegment {
+        .zip(&along)
+        .map(|((e, &value), &along)| LitSegment {
             edge: e.edge,
             a: e.a,
             b: e.b,
             value,
+            along,
             emission: kernel.scene().edge(e.edge).emission,
         })
         .collect();

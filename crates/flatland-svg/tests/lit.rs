@@ -58,6 +58,7 @@ fn floor_plan() -> (Vec<LitSegment>, Vec<(DVec2, DVec2)>) {
             a: e.a,
             b: e.b,
             value,
+            along: [value; 3],
             emission: kernel.scene().edge(e.edge).emission,
         })
         .collect();
@@ -150,6 +151,7 @@ fn lights_are_marked_and_text_is_escaped() {
         a: DVec2::new(0.0, 0.0),
         b: DVec2::new(1.0, 0.0),
         value: 0.5,
+        along: [0.5; 3],
         emission: 0.0,
     }];
     let picture = lit_svg(&LitPlan {
@@ -176,4 +178,74 @@ fn lights_are_marked_and_text_is_escaped() {
         colours: &Ramp { top: 1.0 },
     });
     assert!(empty.png().is_ok());
+}
+
+/// A segment whose B runs from 0 to the top is drawn as it runs: dark at its start, bright at
+/// its end, the middle between; a segment of one colour writes no gradient.
+#[test]
+fn a_segment_is_drawn_as_b_runs_along_it() {
+    let segment = |a: DVec2, b: DVec2, along: [f64; 3]| LitSegment {
+        edge: flatland_geom::EdgeId::new(0),
+        a,
+        b,
+        value: along[1],
+        along,
+        emission: 0.0,
+    };
+    let colours = Ramp { top: 1.0 };
+    // Horizontal and vertical: a gradient by bounding box would vanish on either.
+    let segments = [
+        segment(DVec2::new(0.0, 0.0), DVec2::new(1.0, 0.0), [0.0, 0.5, 1.0]),
+        segment(DVec2::new(1.0, 0.0), DVec2::new(1.0, 1.0), [1.0, 0.5, 0.0]),
+        segment(DVec2::new(1.0, 1.0), DVec2::new(0.0, 1.0), [0.3; 3]),
+    ];
+    let picture = lit_svg(&LitPlan {
+        title: "a ramp",
+        segments: &segments,
+        blockers: &[],
+        lights: &[],
+        colours: &colours,
+    });
+    let svg = picture.svg();
+    assert_eq!(
+        svg.matches("gradientUnits=\"userSpaceOnUse\"").count(),
+        2,
+        "{svg}"
+    );
+    let png = resvg::tiny_skia::Pixmap::decode_png(&picture.png().unwrap()).unwrap();
+    for s in &segments {
+        let (pa, pb) = (picture.to_pixel(s.a), picture.to_pixel(s.b));
+        let d = (pb - pa).normalize();
+        for (x, want) in [(0.1, 0.1), (0.5, 0.5), (0.9, 0.9)] {
+            let value = if s.along[0] == s.along[2] {
+                s.along[0]
+            } else {
+                s.along[0] + (s.along[2] - s.along[0]) * want
+            };
+            let at = pa + (pb - pa) * x + DVec2::new(-d.y, d.x) * -2.0;
+            let pixel = png.pixel(at.x as u32, at.y as u32).unwrap();
+            let got = [pixel.red(), pixel.green(), pixel.blue()];
+            let want = colours.colour(value);
+            let off = (0..3).map(|c| got[c].abs_diff(want[c])).max().unwrap();
+            assert!(off <= 8, "{s:?} at {x}: pixel {got:?}, colour {want:?}");
+        }
+    }
+    // A segment of under three pixels is drawn in its middle colour: no gradient to write.
+    let mut with_a_speck = segments.to_vec();
+    with_a_speck.push(segment(
+        DVec2::new(0.5, 0.5),
+        DVec2::new(0.501, 0.5),
+        [0.0, 0.5, 1.0],
+    ));
+    let picture = lit_svg(&LitPlan {
+        title: "a ramp and a speck",
+        segments: &with_a_speck,
+        blockers: &[],
+        lights: &[],
+        colours: &colours,
+    });
+    let svg = picture.svg();
+    assert_eq!(svg.matches("gradientUnits=\"userSpaceOnUse\"").count(), 2);
+    let [r, g, b] = colours.colour(0.5);
+    assert!(svg.contains(&format!("stroke=\"#{r:02x}{g:02x}{b:02x}\" stroke-width")));
 }

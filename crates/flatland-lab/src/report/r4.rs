@@ -68,7 +68,7 @@ fn mean_of(rows: &[&TimedRow], f: impl Fn(&TimedRow) -> Option<f64>) -> Option<f
 pub fn table(rows: &[TimedRow], defined: Defined) -> String {
     let mut out = String::from(
         "| budget | method | basis fns | rel. L2 grid | rel. L2 held out (min–max) | rel. L1 grid \
-         | solved B − E | rays | build s | bytes / basis fn |\n\
+         | B − E as a function | rays | build s | bytes / basis fn |\n\
          |---:|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
     let zeta = |value: Option<f64>, ok: bool| match value {

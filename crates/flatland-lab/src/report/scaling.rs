@@ -87,7 +87,7 @@ fn mb(bytes: Option<u64>) -> String {
 pub fn markdown(all: &Scaling) -> String {
     let mut md = String::new();
     md.push_str(
-        "| scene | edges | elements | method | time s | peak MB | rays | B − E error | note |\n\
+        "| scene | edges | elements | method | time s | peak MB | rays | B − E error as a function | note |\n\
          |---|---|---|---|---|---|---|---|---|\n",
     );
     for (i, scene) in all.scenes.iter().enumerate() {

@@ -8,7 +8,7 @@ use std::borrow::Cow;
 use flatland_methods::{Account, Lit};
 use flatland_pictures::PictureError;
 use flatland_solve::{
-    Estimate, FinalGather, LitScene, SolveError, Stop, radiosity_csv, samples_csv,
+    FinalGather, LitScene, SolveError, Stop, line_along, radiosity_csv, samples_csv,
 };
 
 use crate::memory::peak_bytes;
@@ -52,17 +52,31 @@ impl Solution<'_> {
         Ok(samples_csv(&gather.samples(b, n, stop)?))
     }
 
-    /// The lit plan as SVG (`flatland_pictures::plan`).
+    /// B along every element as the pictures draw it: the exact kernel's by its final gather
+    /// (at the start, middle and end of each element: three views per element), another
+    /// kernel's as the line through its element midpoints.
+    pub fn along(&self, stop: &Stop) -> Result<Vec<[f64; 3]>, SolveError> {
+        let b = &self.lighting.comparison.solution.radiosity;
+        match self.lit.function() {
+            Some(function) if self.exact => function.gather.along(b, stop),
+            _ => Ok(line_along(self.lit.mesh(), b)),
+        }
+    }
+
+    /// The lit plan as SVG (`flatland_pictures::plan`), each element drawn by `along`
+    /// ([`Self::along`]).
     #[must_use]
-    pub fn svg(&self) -> String {
+    pub fn svg(&self, along: &[[f64; 3]]) -> String {
         let title = format!("{} lit by the {} kernel", self.label, self.kernel);
         let (scene, mesh) = (self.lit.kernel().scene(), self.lit.mesh());
-        let plan = flatland_pictures::plan::lit_plan(scene, mesh, self.element_values(), &title);
+        let values = self.element_values();
+        let plan = flatland_pictures::plan::lit_plan(scene, mesh, values, along, &title);
         plan.svg().to_owned()
     }
 
-    /// The lit scene beside B(s) against the exact solution, as PNG.
-    pub fn png(&self) -> Result<Vec<u8>, PictureError> {
+    /// The lit scene beside B(s) against the exact solution, as PNG, each element drawn by
+    /// `along` ([`Self::along`]).
+    pub fn png(&self, along: &[[f64; 3]]) -> Result<Vec<u8>, PictureError> {
         let c = &self.lighting.comparison;
         flatland_pictures::lit::lit_scene_png(&flatland_pictures::lit::Picture {
             scene: self.lit.kernel().scene(),
@@ -70,6 +84,7 @@ impl Solution<'_> {
             kernel: self.kernel,
             mesh: self.lit.mesh(),
             b: &c.solution.radiosity,
+            along,
             reference: self.lit.reference(),
             rel_l2_reflected: c.errors.rel_l2_reflected,
         })
@@ -94,8 +109,8 @@ impl Solution<'_> {
             "peak_memory_bytes": peak_bytes(),
             "build_s": l.build_s,
             "reference_elements": lit.reference().mesh().len(),
-            "discretization_error_estimate": lit.estimate().map(|e| e.estimate()),
-            "error_estimate": lit.estimate().map(|e| e.estimate()),
+            "discretization_error_estimate": lit.estimate().map(|e| e.estimate),
+            "error_estimate": lit.estimate().map(|e| e.estimate),
             "error_estimate_covers": lit.estimate().map(|e| e.covers()),
         });
         if let Some(f) = lit.function() {
@@ -106,6 +121,8 @@ impl Solution<'_> {
         }
         if let Account::Light(a) = &l.account {
             json["estimated_rel_l2_reflected"] = a.estimated_error.unwrap_or(f64::INFINITY).into();
+            json["learner_error_estimate"] = a.estimate.map(|e| e.estimate()).into();
+            json["learner_error_estimate_covers"] = a.estimate.map(|e| e.covers()).into();
             json["rounds"] = a.rounds.into();
             json["probes"] = a.probes.into();
             json["stopped"] = a.stopped.name().into();
@@ -125,14 +142,10 @@ impl Solution<'_> {
         let (n, reference) = (lit.mesh().len(), lit.reference().mesh().len());
         rows.push(("elements", format!("{n} (exact reference: {reference})")));
         if let Some(e) = lit.estimate() {
-            let estimate = e.estimate();
-            let covers = match e {
-                Estimate::Function(_) => {
-                    "of B − E as a function along the surfaces, between the collocation points too"
-                }
-                Estimate::Collocation(_) => "of B − E at the collocation points only",
-            };
-            let finer = e.finer_elements();
+            let estimate = e.estimate;
+            let covers = "of B − E as a function along the surfaces, between the collocation \
+                          points too";
+            let finer = e.finer_elements;
             let text = format!("≈ {estimate:.1e} ({covers}; from a solve on {finer} elements)");
             rows.push(("discretization error", text));
             if let Some(f) = lit.function() {
@@ -154,6 +167,15 @@ impl Solution<'_> {
                  {probes} probes, stopped: {why})"
             );
             rows.push(("  estimated by the learner", text));
+            if let Some(e) = a.estimate.filter(|e| e.discretization.is_some()) {
+                let text = format!(
+                    "{:.5}   (its values read by the exact final gather, as --samples \
+                     writes them: the learner's plus the mesh's; the error above reads them as \
+                     a line through the midpoints)",
+                    e.estimate()
+                );
+                rows.push(("  with the mesh's error", text));
+            }
         }
         let (iterations, residual) = (s.iterations, s.residual);
         rows.push((

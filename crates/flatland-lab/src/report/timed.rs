@@ -235,7 +235,7 @@ pub(crate) fn series(rows: &[TimedRow], x: XAxis, y: fn(&TimedRow) -> Option<f64
 pub fn table(rows: &[TimedRow]) -> String {
     let mut out = String::from(
         "| method | setting | basis fns | build s | solve s | total s | bytes | ζ held out \
-         | solved B − E | estimated | note |\n\
+         | B − E as a function | estimated | note |\n\
          |---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|\n",
     );
     let text = |v: Option<f64>| v.map_or("–".to_owned(), |v| format!("{v:.4}"));

@@ -165,7 +165,10 @@ pub fn summary(doc: &mut String, real: &Real) -> Result<()> {
     writeln!(
         doc,
         "The measure is the lit scene: the relative L2 error of the solved reflected radiosity \
-         B − E against the exact reference at the mesh's midpoints, reached within a time \
+         B − E as a function along the surfaces against the exact reference's final gather, \
+         at 8 points per element (the exact solve read by its own gather, every other method \
+         as the line through its element midpoints, the lamps' direct light at each point), \
+         reached within a time \
          (build + solve), each method swept over its own knob until a row takes over {} s: the \
          light-driven learner (`light`) by its tolerance, the exact kernel's own solve by elements, hierarchical radiosity by links, \
          the Monte Carlo light tracer by photons. The mesh and the reference are `flatland \
@@ -329,7 +332,7 @@ pub fn sections(doc: &mut String, real: &Real) -> Result<()> {
         doc,
         "`flatland bench --scaling`: each method with its default arguments on generated floor \
          plans and halls; time to the lit scene, the heap's peak while it ran, rays, and the \
-         error of B − E against the exact reference of `flatland solve`. A method whose time, \
+         error of B − E as a function against the exact reference of `flatland solve`. A method whose time, \
          extrapolated from the smaller scenes, is over the time budget is skipped there (HR's \
          initial linking grows with the square of the edges).\n"
     )?;

@@ -82,7 +82,9 @@ fn intro(doc: &mut String, f: &Findings) -> Result<()> {
          points where shown). Relative L2 is the paper's measure; relative L1 is finite even \
          where ζ is not square-integrable (at corners where an emitter meets a surface) and is \
          the share of misdirected light. \"Solved B − E\" is the relative L2 error of the \
-         reflected radiosity solved with a representation against the exact kernel's solution: \
+         reflected radiosity solved with a representation against the exact kernel's solution, \
+         as functions along the surfaces (8 points per element; the solution read as the line \
+         through its element midpoints): \
          what the kernel's error means for a lit scene. Times are wall-clock on a shared machine \
          and noisy: compare ratios within one table.\n",
         if f.quick { " --quick" } else { "" },

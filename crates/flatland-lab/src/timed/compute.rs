@@ -211,8 +211,8 @@ impl Context<'_> {
         Ok(row)
     }
 
-    /// The exact kernel solved on `elements` elements, measured against the reference
-    /// (interpolated by the equation itself onto its collocation points).
+    /// The exact kernel solved on `elements` elements, read by its final gather and measured
+    /// as a function against the reference.
     pub fn exact(&self, elements: usize) -> Result<TimedRow> {
         let kernel = self.kernel.as_ref();
         let mesh = Mesh::new(kernel, elements)?;
@@ -222,7 +222,7 @@ impl Context<'_> {
         let solution = solve_operator(op.as_ref(), &mesh, &SolveParams::default(), self.stop)?;
         let errors = self
             .scorer
-            .errors_on(&mesh, &solution.radiosity, self.stop)?;
+            .gathered_errors_on(&mesh, &solution.radiosity, self.stop)?;
         let mut row = TimedRow::new(Method::Exact, Setting::Elements(elements), 1);
         row.basis_functions = Some(mesh.len());
         row.build_s = build_s;

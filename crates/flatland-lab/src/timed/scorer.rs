@@ -116,9 +116,10 @@ impl Scorer {
         Ok((c.errors, started.elapsed().as_secs_f64()))
     }
 
-    /// The errors of `b`, a radiosity on `mesh` (any mesh of the scene), against the reference.
-    pub fn errors_on(&self, mesh: &Mesh, b: &[f64], stop: &Stop) -> Result<SolveErrors> {
-        Ok(self.lit.errors_on(mesh, b, stop)?)
+    /// The errors of `b`, an exact solve on `mesh`, read by its own final gather, against the
+    /// reference as a function.
+    pub fn gathered_errors_on(&self, mesh: &Mesh, b: &[f64], stop: &Stop) -> Result<SolveErrors> {
+        Ok(self.lit.gathered_errors_on(mesh, b, stop)?)
     }
 }
 

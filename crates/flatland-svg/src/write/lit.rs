@@ -1,5 +1,6 @@
-//! The lit plan as SVG: each element a stroked segment in the colour of its B (its value in
-//! `data-b`), drawn on its front side so both faces of a thin wall show; blockers grey;
+//! The lit plan as SVG: each element a stroked segment coloured by its B as it runs along it
+//! (a gradient through B at its start, middle and end; its mean in `data-b`), drawn on its
+//! front side so both faces of a thin wall show; blockers grey;
 //! emitters and point lights marked; a colour bar and a title. [`LitSvg::png`] renders it with
 //! resvg, so the PNG is the same picture.
 //!
@@ -36,8 +37,11 @@ pub struct LitSegment {
     pub a: DVec2,
     /// End.
     pub b: DVec2,
-    /// Its radiosity B.
+    /// Its radiosity B (its mean, written as `data-b`).
     pub value: f64,
+    /// B as it runs along it: at its start, middle and end, drawn as a gradient through the
+    /// three colours (one colour when they are the same).
+    pub along: [f64; 3],
     /// Its emission E (emitters are marked).
     pub emission: f64,
 }
@@ -64,6 +68,8 @@ const TITLE: f64 = 40.0;
 const PANEL: f64 = 150.0;
 /// An element's stroke, in pixels.
 const STROKE: f64 = 4.0;
+/// The shortest segment, in pixels, drawn as a gradient: below it one colour shows the same.
+const MIN_GRADIENT_PIXELS: f64 = 3.0;
 
 /// A written lit plan and where plan points land in it.
 #[derive(Clone, Debug)]
@@ -185,7 +191,7 @@ fn write_plan(out: &mut String, plan: &LitPlan<'_>, picture: &LitSvg) {
             0.75 * width
         );
     }
-    for seg in plan.segments {
+    for (k, seg) in plan.segments.iter().enumerate() {
         let d = seg.b - seg.a;
         // A piece of no length or not finite has no front to draw on.
         if d.length().is_nan() || d.length() <= 0.0 || !seg.a.is_finite() || !seg.b.is_finite() {
@@ -212,22 +218,51 @@ fn write_plan(out: &mut String, plan: &LitPlan<'_>, picture: &LitSvg) {
                 width + 2.0 / s
             );
         }
+        let stroke = write_stroke(out, plan.colours, seg, k, d.length() * s);
         let _ = writeln!(
             out,
-            "<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" transform=\"translate({} {})\" stroke=\"{}\" stroke-width=\"{width}\" data-b=\"{}\" data-edge=\"{}\"{class}/>",
+            "<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" transform=\"translate({} {})\" stroke=\"{stroke}\" stroke-width=\"{width}\" data-b=\"{}\" data-edge=\"{}\"{class}/>",
             seg.a.x,
             seg.a.y,
             seg.b.x,
             seg.b.y,
             shift.x,
             shift.y,
-            hex(plan.colours.colour(seg.value)),
             seg.value,
             seg.edge.index()
         );
     }
     out.push_str("</g>\n");
     write_marks(out, plan, picture);
+}
+
+/// The stroke of segment `k`, `pixels` long: its one colour when B along it stays in one or
+/// it is too short for a gradient to show (which keeps a plan of 10⁴ edges, mostly elements
+/// of a pixel or two, the size of its flat drawing), else a gradient through its three
+/// colours along it, written to `out` (in the segment's own user space, so it follows the
+/// segment whatever its direction; a bounding-box gradient would vanish on a horizontal or
+/// vertical line, whose box has no height or width).
+fn write_stroke(
+    out: &mut String,
+    colours: &dyn ColourScale,
+    seg: &LitSegment,
+    k: usize,
+    pixels: f64,
+) -> String {
+    let [start, middle, end] = seg.along.map(|v| hex(colours.colour(v)));
+    if (start == middle && middle == end) || pixels < MIN_GRADIENT_PIXELS {
+        return middle;
+    }
+    let _ = writeln!(
+        out,
+        "<linearGradient id=\"b{k}\" gradientUnits=\"userSpaceOnUse\" x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\"><stop offset=\"0\" stop-color=\"{start}\"/><stop offset=\".5\" stop-color=\"{middle}\"/><stop offset=\"1\" stop-color=\"{end}\"/></linearGradient>",
+        // Single precision is plenty for where a gradient runs, and a third shorter.
+        seg.a.x as f32,
+        seg.a.y as f32,
+        seg.b.x as f32,
+        seg.b.y as f32
+    );
+    format!("url(#b{k})")
 }
 
 /// The emitters' and point lights' marks, in pixels so they keep their size.
