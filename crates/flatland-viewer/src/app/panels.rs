@@ -106,6 +106,7 @@ impl ViewerApp {
         kernel_frame.scale = Some(textures.scale);
         if let Some((_, scale)) = m2 {
             kernel_frame.scale = Some(scale);
+            kernel_frame.quantity = "M₂";
         }
         let progress = shown.moment.as_ref().map(|m| m.status.growth.progress);
         let rounds = matches!(progress, Some(Progress::Rounds { .. }));

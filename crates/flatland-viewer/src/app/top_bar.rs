@@ -139,7 +139,9 @@ impl ViewerApp {
 }
 
 /// The light-driven learner's numbers: its rounds and probes, its own estimate of the error of
-/// `B − E` and the error measured against the exact solve.
+/// `B − E` and the error measured against the exact solve, each saying what it covers: the
+/// estimate is of its kernel against the exact one on its own elements; the measure is of its
+/// B read as a function against the exact solve on a finer mesh, so it holds the mesh's error too.
 fn light_stats(rounds: u64, estimated: Option<f64>, probes: usize, lit: Option<&Lit>) -> String {
     let mut parts = vec![
         Learner::Light.title().to_string(),
@@ -147,11 +149,21 @@ fn light_stats(rounds: u64, estimated: Option<f64>, probes: usize, lit: Option<&
         format!("probes {probes}"),
     ];
     if let Some(e) = estimated {
-        parts.push(format!("estimated B−E {}", error_text(e, true)));
+        let on = lit.map_or_else(
+            || "its mesh".to_string(),
+            |l| format!("its {} el.", l.setup.lit.mesh().len()),
+        );
+        parts.push(format!(
+            "estimated B−E {} (its kernel vs exact on {on})",
+            error_text(e, true)
+        ));
     }
     if let Some(l) = lit {
         let err = error_text(l.solve.errors.rel_l2_reflected, true);
-        parts.push(format!("measured B−E {err}"));
+        let finer = l.setup.lit.reference().mesh().len();
+        parts.push(format!(
+            "measured B−E {err} (as a function vs exact on {finer} el.: with the mesh's error)"
+        ));
     }
     parts.join("  ")
 }

@@ -32,6 +32,8 @@ pub struct PlotFrame {
     pub big: bool,
     /// The colour scale, for the colour bar of a big frame.
     pub scale: Option<Scale>,
+    /// What the colour bar measures: `ζ`, or `M₂` when the transport's kernel is shown.
+    pub quantity: &'static str,
 }
 
 impl PlotFrame {
@@ -53,6 +55,7 @@ impl PlotFrame {
             plot: Rect::from_min_size(avail.min, Vec2::splat(side)),
             big,
             scale: None,
+            quantity: "ζ",
         }
     }
 
@@ -316,7 +319,7 @@ fn scale_bar(painter: &Painter, frame: &PlotFrame, scale: Scale, text: Color32) 
     painter.text(
         bar.center_top() - vec2(0.0, 2.0),
         Align2::CENTER_BOTTOM,
-        "ζ",
+        frame.quantity,
         FontId::proportional(12.0),
         text,
     );
