@@ -27,7 +27,9 @@ use crate::background::Priority;
 mod one_moving;
 pub mod transport;
 
-pub use transport::{BlockLog, M2_RES, MovingLight, TransportPhase, TransportStatus, m2_grid};
+pub use transport::{
+    BlockLog, M2_RES, M2Grid, MovingLight, TransportPhase, TransportStatus, m2_grid,
+};
 
 /// How often the idle thread looks whether a transport's build ended.
 pub const POLL: Duration = Duration::from_millis(50);

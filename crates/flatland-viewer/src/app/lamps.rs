@@ -10,7 +10,7 @@ use flatland_geom::{DVec2, Kernel, PointLight, WalkParams, in_a_room};
 use flatland_pictures::colormap::Scale;
 
 use super::ViewerApp;
-use crate::relit::{Answer, RelitFrame, RelitHandle, RelitState, TransportPhase};
+use crate::relit::{Answer, M2Grid, RelitFrame, RelitHandle, RelitState, TransportPhase};
 use crate::views::{BlocksTexture, EdgesTexture, LampsOut};
 use crate::worker::World;
 
@@ -54,7 +54,7 @@ pub(super) struct Lamps {
     /// The learned transport's blocks over the kernel plot.
     pub(super) blocks: BlocksTexture,
     /// The learned `M₂(s, t)` shown in the kernel plot: its world, grid, texture and scale.
-    pub(super) m2: Option<(u64, Arc<Vec<f64>>, egui::TextureHandle, Scale)>,
+    pub(super) m2: Option<(u64, M2Grid, egui::TextureHandle, Scale)>,
 }
 
 impl Lamps {

@@ -172,14 +172,16 @@ impl ViewerApp {
         else {
             return None;
         };
+        // Made by the build's thread after the transport answers: none to show until then.
+        let values = m2.get()?;
         let kept = self
             .lamps
             .m2
             .as_ref()
             .filter(|(w, grid, ..)| *w == world && Arc::ptr_eq(grid, m2));
         if kept.is_none() {
-            let scale = flatland_pictures::colormap::Scale::fit(m2, true);
-            let image = crate::colormap::grid_image(m2, M2_RES, scale);
+            let scale = flatland_pictures::colormap::Scale::fit(values, true);
+            let image = crate::colormap::grid_image(values, M2_RES, scale);
             let texture = ctx.load_texture("learned M2", image, egui::TextureOptions::NEAREST);
             self.lamps.m2 = Some((world, Arc::clone(m2), texture, scale));
         }

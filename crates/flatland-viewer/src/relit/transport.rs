@@ -7,7 +7,7 @@
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, TryRecvError, channel};
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, OnceLock};
 
 use flatland_geom::{Kernel, PointLight};
 use flatland_solve::{Mesh, RelightParams, Relighter, Stop};
@@ -80,6 +80,11 @@ pub fn m2_grid(transport: &Transport, mesh: &Mesh) -> Vec<f64> {
     grid
 }
 
+/// The learned `M₂(s, t)` on its grid ([`m2_grid`]), filled by the build's thread after the
+/// transport already answers moves: at 10⁴ edges the grid visits tens of millions of entries,
+/// seconds at the lowest priority, which the moving light must not wait for.
+pub type M2Grid = Arc<OnceLock<Vec<f64>>>;
+
 /// Where the learned transport of the scene is.
 #[derive(Clone, Debug)]
 pub enum TransportPhase {
@@ -94,8 +99,8 @@ pub enum TransportPhase {
         bytes: usize,
         /// Seconds of its build.
         build_s: f64,
-        /// The learned `M₂(s, t)` ([`m2_grid`]).
-        m2: Arc<Vec<f64>>,
+        /// The learned `M₂(s, t)` ([`m2_grid`]), once made.
+        m2: M2Grid,
     },
     /// The build failed: why.
     Failed(String),
@@ -117,9 +122,10 @@ enum Slot {
     Off,
     Building {
         cancel: Arc<AtomicBool>,
-        done: Receiver<Result<(TransportRelighter, Vec<f64>), TransportError>>,
+        done: Receiver<Result<TransportRelighter, TransportError>>,
+        m2: M2Grid,
     },
-    Ready(Box<TransportRelighter>, Arc<Vec<f64>>),
+    Ready(Box<TransportRelighter>, M2Grid),
     Failed(String),
 }
 
@@ -164,6 +170,8 @@ impl MovingLight {
         let cancel = Arc::new(AtomicBool::new(false));
         let cancelled = Arc::clone(&cancel);
         let (send, done) = channel();
+        let m2 = M2Grid::default();
+        let filled = Arc::clone(&m2);
         std::thread::Builder::new()
             .name("flatland-transport".into())
             .spawn(move || {
@@ -172,16 +180,25 @@ impl MovingLight {
                 let watch = |block| blocks.push(block);
                 let params = TransportParams::default();
                 let (mesh, rows) = (copy.mesh(), copy.rows());
-                let built = Transport::build_watched(&kernel, mesh, rows, &params, &stop, &watch)
-                    .and_then(|t| {
-                        let m2 = m2_grid(&t, copy.mesh());
-                        Ok((TransportRelighter::new(&kernel, copy, t, &stop)?, m2))
-                    });
-                // The receiver is gone when the scene changed meanwhile: nothing to do.
-                let _ = send.send(built);
+                let transport =
+                    match Transport::build_watched(&kernel, mesh, rows, &params, &stop, &watch) {
+                        Ok(t) => t,
+                        Err(e) => {
+                            // The receiver is gone when the scene changed meanwhile.
+                            let _ = send.send(Err(e));
+                            return;
+                        }
+                    };
+                // The relighter answers first; the grid (for the M₂ plot) is made after.
+                let (kept, mesh) = (transport.clone(), copy.mesh().clone());
+                let relighter = TransportRelighter::new(&kernel, copy, transport, &stop);
+                if send.send(relighter).is_err() || stop() {
+                    return;
+                }
+                let _ = filled.set(m2_grid(&kept, &mesh));
             })
             .expect("spawning the transport's thread");
-        self.slot = Slot::Building { cancel, done };
+        self.slot = Slot::Building { cancel, done, m2 };
         Ok(())
     }
 }
@@ -248,13 +265,13 @@ impl Relight for MovingLight {
     }
 
     fn poll(&mut self) -> bool {
-        let Slot::Building { done, .. } = &self.slot else {
+        let Slot::Building { done, m2, .. } = &self.slot else {
             return false;
         };
         match done.try_recv() {
             Err(TryRecvError::Empty) => return false,
-            Ok(Ok((transport, m2))) => {
-                self.slot = Slot::Ready(Box::new(transport), Arc::new(m2));
+            Ok(Ok(transport)) => {
+                self.slot = Slot::Ready(Box::new(transport), Arc::clone(m2));
             }
             Ok(Err(e)) => self.slot = Slot::Failed(e.to_string()),
             Err(TryRecvError::Disconnected) => {
@@ -354,6 +371,9 @@ mod tests {
             panic!("{:?}", status.phase)
         };
         assert!(bytes > 0 && estimate.lights > 0);
+        // The grid follows the relighter: wait for it (no timeout: the build's thread
+        // fills it next).
+        let m2 = m2.wait();
         assert_eq!(m2.len(), M2_RES * M2_RES);
         assert!(m2.iter().any(|&v| v > 0.0));
         let mut exact = ExactRelight::make(&kernel, &flatland_solve::never).unwrap();
