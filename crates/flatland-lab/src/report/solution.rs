@@ -186,10 +186,9 @@ impl Solution<'_> {
         let text = format!("{wall:.3} s (operator {assembly:.3} s, linear solve {solve:.3} s)");
         rows.push(("wall time", text));
         rows.push(("building the kernel", format!("{:.3} s", l.build_s)));
-        let mb = l.bytes as f64 / 1e6;
         rows.push((
             "kernel's memory",
-            format!("{mb:.1} MB (the representation)"),
+            format!("{} (the representation)", kernel_bytes_text(l.bytes)),
         ));
         if let Some(peak) = peak_bytes() {
             let mb = peak as f64 / 1e6;
@@ -199,5 +198,28 @@ impl Solution<'_> {
         for (key, value) in rows {
             println!("  {key:<26} {value}");
         }
+    }
+}
+
+/// A representation's bytes in units that show them: a network of a few hundred cells is tens
+/// of kilobytes, which "0.0 MB" hid.
+fn kernel_bytes_text(bytes: usize) -> String {
+    let bytes = bytes as f64;
+    if bytes < 1e5 {
+        format!("{:.1} KB", bytes / 1e3)
+    } else {
+        format!("{:.1} MB", bytes / 1e6)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn small_kernels_show_their_kilobytes() {
+        assert_eq!(kernel_bytes_text(0), "0.0 KB");
+        assert_eq!(kernel_bytes_text(31_200), "31.2 KB");
+        assert_eq!(kernel_bytes_text(2_500_000), "2.5 MB");
     }
 }

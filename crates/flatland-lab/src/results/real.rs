@@ -240,7 +240,7 @@ fn verdicts(real: &Real) -> Vec<String> {
             s.relit.iter().find(|r| r.method == Method::Exact),
         ) {
             lines.push(format!(
-                "{}, relighting ({} lightings): default {:.2} s (mean error {:.4}), exact \
+                "{}, relighting ({} lightings): light {:.2} s (mean error {:.4}), exact \
                  {:.2} s ({:.4}){}.",
                 s.name,
                 crate::timed::relight::LIGHTINGS,
