@@ -356,11 +356,11 @@ fn r1(doc: &mut String, f: &Findings) -> Result<()> {
         doc,
         "\nThe panels of `flatland figure --preset paper` and `flatland figure` (the paper's \
          Fig. 3: geometry, kernel, cells, approximation, error; all five in \
-         `docs/results/figure-paper/` and `docs/results/figure-default/`). The paper's network \
+         `docs/results/figure-paper/` and `docs/results/figure-visibility/`). The paper's network \
          spreads its Gaussians over ζ; the visibility network's cells live only on the surface \
          pairs whose visibility varies, each inside one visibility face:\n\n\
          ![paper's cells](docs/results/figure-paper/c_cells.png)\n\
-         ![default cells](docs/results/figure-default/c_cells.png)\n"
+         ![visibility network's cells](docs/results/figure-visibility/c_cells.png)\n"
     )?;
     Ok(())
 }
