@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use crate::Columns;
 use crate::free::free_points;
 use crate::local::{Block, Workspace};
-use crate::{ErrorEstimate, Move, QueryBuffers, TransportError, lit_source};
+use crate::{ErrorEstimate, Move, QueryBuffers, Stop, TransportError, lit_source};
 
 /// Clearance a validation light keeps from every edge, as a fraction of the free way it was
 /// drawn on (see `free_points`).
@@ -37,12 +37,13 @@ pub(crate) fn validation_lights(
 const VALIDATION_STREAM: u64 = 0x7a11_d47e;
 
 /// `later(move, buffers)` accumulates a form's `M₂ B₀` (unclamped) in `buffers`; measured on
-/// `lights`, one at a time.
+/// `lights`, one at a time, `stop` polled per light.
 pub(crate) fn estimate(
     kernel: &Kernel,
     mesh: &Mesh,
     columns: &Columns,
     lights: &[PointLight],
+    stop: &Stop,
     later: &(dyn Fn(Move<'_>, &mut QueryBuffers) + Sync),
 ) -> Result<ErrorEstimate, TransportError> {
     let direct = DirectLight::new(kernel, mesh)?;
@@ -55,6 +56,9 @@ pub(crate) fn estimate(
                 (Workspace::new(mesh.len()), buffers)
             },
             |(work, (view, query)), light| {
+                if stop() {
+                    return Err(TransportError::Interrupted);
+                }
                 let lights = std::slice::from_ref(light);
                 let lit = lit_source(&direct, mesh, lights, view);
                 let parts = Parts::solved(work, columns, &lit, mesh.len(), EXACT_SOLVE)?;

@@ -199,7 +199,7 @@ impl CellNetwork {
             samples: samples.targets.len(),
         };
         let lights = validation_lights(kernel, mesh, params.validation_lights, params.seed);
-        built.estimate = estimate(kernel, mesh, &columns, &lights, &|m, buffers| {
+        built.estimate = estimate(kernel, mesh, &columns, &lights, stop, &|m, buffers| {
             built.accumulate(m.lit, buffers);
         })?;
         built.setup_s = started.elapsed().as_secs_f64();

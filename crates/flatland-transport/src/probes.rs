@@ -183,7 +183,7 @@ impl LightProbes {
             setup_s: 0.0,
         };
         let lights = validation_lights(kernel, mesh, params.validation_lights, params.seed);
-        built.estimate = estimate(kernel, mesh, &columns, &lights, &|m, buffers| {
+        built.estimate = estimate(kernel, mesh, &columns, &lights, stop, &|m, buffers| {
             built.accumulate(m.lights, buffers);
         })?;
         built.setup_s = started.elapsed().as_secs_f64();

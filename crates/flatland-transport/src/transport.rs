@@ -96,32 +96,101 @@ impl Transport {
         stop: &Stop,
         watch: &Watch<'_>,
     ) -> Result<Transport, TransportError> {
+        let started = Instant::now();
+        let columns = Columns::of(operator);
+        let mut built =
+            Transport::blocks_of(kernel, mesh, operator, &columns, params, stop, watch)?;
+        built.estimate_with(kernel, mesh, &columns, stop)?;
+        built.setup_s = started.elapsed().as_secs_f64();
+        Ok(built)
+    }
+
+    /// [`Transport::build_watched`] without its error estimate, which takes a few exact solves
+    /// of its own: the model answers at once and [`Transport::estimated_error`] reads no
+    /// lights (`lights == 0`) until [`Transport::validate`] measures it. For a viewer, whose
+    /// moving light should not wait for the validation.
+    pub fn build_unvalidated(
+        kernel: &Kernel,
+        mesh: &Mesh,
+        operator: &SparseOperator,
+        params: &TransportParams,
+        stop: &Stop,
+        watch: &Watch<'_>,
+    ) -> Result<Transport, TransportError> {
+        let columns = Columns::of(operator);
+        Transport::blocks_of(kernel, mesh, operator, &columns, params, stop, watch)
+    }
+
+    /// Measures the model's error estimate on its `validation_lights` (as
+    /// [`Transport::build`] does), `stop` polled per light; its seconds are added to the
+    /// set-up's. `kernel`, `mesh` and `operator` must be the ones it was built on.
+    pub fn validate(
+        &mut self,
+        kernel: &Kernel,
+        mesh: &Mesh,
+        operator: &SparseOperator,
+        stop: &Stop,
+    ) -> Result<(), TransportError> {
+        self.check_mesh(mesh)?;
+        TransportError::check_inputs(kernel, mesh, operator)?;
+        let started = Instant::now();
+        self.estimate_with(kernel, mesh, &Columns::of(operator), stop)?;
+        self.setup_s += started.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// The clusters and their compressed blocks, the estimate not yet measured.
+    fn blocks_of(
+        kernel: &Kernel,
+        mesh: &Mesh,
+        operator: &SparseOperator,
+        columns: &Columns,
+        params: &TransportParams,
+        stop: &Stop,
+        watch: &Watch<'_>,
+    ) -> Result<Transport, TransportError> {
         params.check()?;
         TransportError::check_inputs(kernel, mesh, operator)?;
         let started = Instant::now();
-        let columns = Columns::of(operator);
         let clusters = Clusters::spatial(mesh, params.cluster_elements);
         let tolerance = BlockTolerance {
             block: params.tolerance,
             solve: params.solve_tolerance,
         };
-        let blocks = build_blocks(&columns, &clusters, tolerance, stop, watch)?;
+        let blocks = build_blocks(columns, &clusters, tolerance, stop, watch)?;
         let mut form = LowRank { clusters, blocks };
         if let Some(budget) = params.budget {
             form.fit_budget(budget);
         }
-        let lights = validation_lights(kernel, mesh, params.validation_lights, params.seed);
-        let estimate = estimate(kernel, mesh, &columns, &lights, &|m, buffers| {
-            form.accumulate(m.lit, buffers);
-        })?;
         Ok(Transport {
             params: *params,
             identity: MeshIdentity::of(mesh),
             form,
-            estimate,
+            estimate: ErrorEstimate::default(),
             setup_s: started.elapsed().as_secs_f64(),
             loaded_s: None,
         })
+    }
+
+    /// The estimate on the validation lights of `self.params`.
+    fn estimate_with(
+        &mut self,
+        kernel: &Kernel,
+        mesh: &Mesh,
+        columns: &Columns,
+        stop: &Stop,
+    ) -> Result<(), TransportError> {
+        let lights = validation_lights(
+            kernel,
+            mesh,
+            self.params.validation_lights,
+            self.params.seed,
+        );
+        let form = &self.form;
+        self.estimate = estimate(kernel, mesh, columns, &lights, stop, &|m, buffers| {
+            form.accumulate(m.lit, buffers);
+        })?;
+        Ok(())
     }
 
     /// Adds `M₂ B₀` to `out` (length N) for B₀ given by its non-zero entries `(element,
@@ -164,7 +233,8 @@ impl Transport {
         Ok(out)
     }
 
-    /// The model's own error estimate, from lights it drew itself.
+    /// The model's own error estimate, from lights it drew itself (none, `lights == 0`, for a
+    /// model from [`Transport::build_unvalidated`] not yet validated).
     #[must_use]
     pub fn estimated_error(&self) -> ErrorEstimate {
         self.estimate
@@ -194,10 +264,16 @@ impl Transport {
         &self.params
     }
 
-    /// How many times [`Transport::build`] polls its stop while it builds the blocks (once per
-    /// cluster): a caller may count the polls as progress.
+    /// How many times [`Transport::build`] polls its stop: once per block (cluster), then once
+    /// per validation light of its estimate. A caller may count the polls as progress.
     #[must_use]
     pub fn set_up_steps(mesh: &Mesh, params: &TransportParams) -> usize {
+        Transport::blocks_to_build(mesh, params) + params.validation_lights
+    }
+
+    /// The blocks a build on `mesh` makes: one per cluster of elements.
+    #[must_use]
+    pub fn blocks_to_build(mesh: &Mesh, params: &TransportParams) -> usize {
         Clusters::spatial(mesh, params.cluster_elements)
             .members
             .len()
@@ -381,6 +457,38 @@ mod tests {
         assert!(estimate.later_mean <= 2.0 * transport.params().tolerance);
     }
 
+    /// Built without its estimate, the model is the whole build's and answers the same; once
+    /// validated its estimate is the build's too. Validating on another mesh is refused and a
+    /// stop is obeyed.
+    #[test]
+    fn a_model_validated_later_is_the_one_built_at_once() {
+        let (kernel, mesh, k) = plan(150, 5);
+        let params = TransportParams::default();
+        let whole = Transport::build(&kernel, &mesh, &k, &params, &never).unwrap();
+        let mut early =
+            Transport::build_unvalidated(&kernel, &mesh, &k, &params, &never, &|_| {}).unwrap();
+        assert_eq!(early.form, whole.form);
+        assert_eq!(early.estimated_error().lights, 0);
+        let b0: Vec<f64> = (0..mesh.len()).map(|i| (i % 7) as f64 / 7.0).collect();
+        assert_eq!(
+            early.later_bounces(&b0).unwrap(),
+            whole.later_bounces(&b0).unwrap()
+        );
+        let stopped = || true;
+        assert!(matches!(
+            early.validate(&kernel, &mesh, &k, &stopped),
+            Err(TransportError::Interrupted)
+        ));
+        let (other_kernel, other_mesh, other_k) = plan(150, 6);
+        assert!(matches!(
+            early.validate(&other_kernel, &other_mesh, &other_k, &never),
+            Err(TransportError::ModelMismatch { .. })
+        ));
+        early.validate(&kernel, &mesh, &k, &never).unwrap();
+        assert_eq!(early.estimated_error(), whole.estimated_error());
+        assert!(early.estimated_error().lights > 0);
+    }
+
     #[test]
     fn the_sparse_and_dense_queries_agree_and_bad_input_is_refused() {
         let (kernel, mesh, k) = plan(150, 3);
@@ -445,7 +553,7 @@ mod tests {
         seen.sort_by_key(|f| f.cluster);
         let stored = transport.footprints();
         assert_eq!(seen, stored, "no budget: what was watched is what is kept");
-        assert_eq!(stored.len(), Transport::set_up_steps(&mesh, &params));
+        assert_eq!(stored.len(), Transport::blocks_to_build(&mesh, &params));
         // Every element sends from exactly one block; each block's runs are its rows.
         let mut sends = vec![0; mesh.len()];
         for (f, block) in stored.iter().zip(&transport.form.blocks) {

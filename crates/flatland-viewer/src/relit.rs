@@ -9,7 +9,7 @@
 //! re-solve until the learned transport of the later bounces ([`transport`]) is built on a
 //! thread of its own, then with the transport (or the exact one, as the user chooses). While
 //! it is idle and a build is under way the thread looks every [`POLL`] for the build's end, to
-//! switch at once. Per scene the thread also walks the free space ([`flatland_geom::walk`])
+//! switch at once; a move looks first too. Per scene the thread also walks the free space ([`flatland_geom::walk`])
 //! once, for the light that wanders by itself on first launch.
 
 use std::collections::VecDeque;
@@ -473,6 +473,11 @@ impl RelitThread {
             return;
         };
         c.last = Some((lights.to_vec(), overtaken));
+        // A build that ended is taken here too: a light moved every frame keeps the thread
+        // from ever idling [`POLL`] long, and the move would go on by the exact re-solve.
+        if c.relight.pending() {
+            c.relight.poll();
+        }
         let started = Instant::now();
         let state = match c.relight.relight(lights, &flatland_solve::never) {
             Ok(moved) => {

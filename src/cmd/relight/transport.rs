@@ -66,14 +66,18 @@ pub fn mover(
     TransportMover::new(kernel, copy, transport, &interrupt::requested)
 }
 
-/// The transport of `exact`'s mesh and operator, a bar over its clusters.
+/// The transport of `exact`'s mesh and operator, a bar over its clusters and validation lights.
 fn build(kernel: &Kernel, exact: &Relighter) -> Result<Transport> {
     let params = TransportParams::default();
     let steps = Transport::set_up_steps(exact.mesh(), &params) as u64;
-    let bar = super::super::progress_bar(steps, "clusters of the learned transport");
+    let bar = super::super::progress_bar(
+        steps,
+        "the learned transport's blocks, then its validation lights",
+    );
     let polled = AtomicU64::new(0);
     let ticking = bar.clone();
-    // The build polls its stop once per cluster: the bar counts the polls.
+    // The build polls its stop once per cluster, then once per validation light: the bar
+    // counts the polls.
     let stop = move || {
         let polls = polled.fetch_add(1, Ordering::Relaxed) + 1;
         ticking.set_position(polls.min(steps));

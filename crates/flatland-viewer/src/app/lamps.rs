@@ -99,11 +99,20 @@ pub(super) fn answer_name(answer: Answer) -> &'static str {
 pub(super) fn relit_quality(frame: &RelitFrame) -> String {
     match (frame.residual, frame.transport.as_ref().map(|t| &t.phase)) {
         (Some(r), _) => format!("residual {r:.0e}"),
-        (None, Some(TransportPhase::Ready { estimate, .. })) => format!(
+        (
+            None,
+            Some(TransportPhase::Ready {
+                estimate: Some(estimate),
+                ..
+            }),
+        ) => format!(
             "est. error of B {:.1} % (max {:.1} %)",
             100.0 * estimate.b_mean,
             100.0 * estimate.b_max
         ),
+        (None, Some(TransportPhase::Ready { estimate: None, .. })) => {
+            "error of B being estimated".to_owned()
+        }
         (None, _) => String::new(),
     }
 }
@@ -125,11 +134,14 @@ pub(super) fn transport_note(frame: &RelitFrame) -> String {
             build_s,
             ..
         } => format!(
-            "transport: {} blocks, {:.1} MB, built in {:.1} s, est. on {} lights",
+            "transport: {} blocks, {:.1} MB, built in {:.1} s, {}",
             t.clusters,
             *bytes as f64 / 1e6,
             build_s,
-            estimate.lights
+            estimate.map_or("its estimate being measured".to_owned(), |e| format!(
+                "est. on {} lights",
+                e.lights
+            ))
         ),
         TransportPhase::Failed(why) => format!("transport failed: {why}"),
     }

@@ -3,7 +3,9 @@
 //! direct light and first bounce, the transport's later bounces) is built, then with the
 //! transport. The transport is built on a thread of its own, at the lowest priority, from the
 //! exact relighter's operator, so the light never freezes while it builds; its blocks are
-//! published as they are made ([`BlockLog`]) for the kernel plot.
+//! published as they are made ([`BlockLog`]) for the kernel plot. It answers as soon as its
+//! blocks are made: its error estimate ([`Validation`]) and the grid of its `M₂(s, t)` for the
+//! plot ([`M2Grid`]) are made after, by the same thread, and shown when they are ready.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, TryRecvError, channel};
@@ -85,19 +87,25 @@ pub fn m2_grid(transport: &Transport, mesh: &Mesh) -> Vec<f64> {
 /// seconds at the lowest priority, which the moving light must not wait for.
 pub type M2Grid = Arc<OnceLock<Vec<f64>>>;
 
+/// The transport's own error estimate, measured after it answers: a few exact solves of its
+/// validation lights, which at the lowest priority beside the window's rasterizer took most of
+/// a minute on a 10⁴-edge plan, and which the moving light must not wait for either.
+pub type Validation = Arc<OnceLock<ErrorEstimate>>;
+
 /// Where the learned transport of the scene is.
 #[derive(Clone, Debug)]
 pub enum TransportPhase {
     /// Being built; the exact re-solve answers meanwhile.
     Building,
-    /// Built: its own error estimate (relative L2 of B on its validation lights), its bytes
-    /// and the seconds its build took (the exact operator it reads was built before).
+    /// Built: its own error estimate (relative L2 of B on its validation lights) once
+    /// measured, its bytes and the seconds its blocks took (the exact operator it reads was
+    /// built before).
     Ready {
-        /// The estimate.
-        estimate: ErrorEstimate,
+        /// The estimate, once measured ([`Validation`]).
+        estimate: Option<ErrorEstimate>,
         /// Bytes of the transport alone.
         bytes: usize,
-        /// Seconds of its build.
+        /// Seconds its blocks took.
         build_s: f64,
         /// The learned `M₂(s, t)` ([`m2_grid`]), once made.
         m2: M2Grid,
@@ -123,9 +131,9 @@ enum Slot {
     Building {
         cancel: Arc<AtomicBool>,
         done: Receiver<Result<TransportRelighter, TransportError>>,
-        m2: M2Grid,
+        later: (Validation, M2Grid),
     },
-    Ready(Box<TransportRelighter>, M2Grid),
+    Ready(Box<TransportRelighter>, (Validation, M2Grid)),
     Failed(String),
 }
 
@@ -149,7 +157,7 @@ impl MovingLight {
     pub fn make(kernel: &Arc<Kernel>, stop: &Stop) -> Result<Box<dyn Relight>, TransportError> {
         let mesh = Mesh::new(kernel, Mesh::default_elements(kernel.scene()))?;
         let exact = Relighter::new(kernel, &mesh, RelightParams::default(), stop)?;
-        let clusters = Transport::set_up_steps(&mesh, &TransportParams::default());
+        let clusters = Transport::blocks_to_build(&mesh, &TransportParams::default());
         Ok(Box::new(MovingLight {
             exact,
             kernel: Arc::clone(kernel),
@@ -170,8 +178,8 @@ impl MovingLight {
         let cancel = Arc::new(AtomicBool::new(false));
         let cancelled = Arc::clone(&cancel);
         let (send, done) = channel();
-        let m2 = M2Grid::default();
-        let filled = Arc::clone(&m2);
+        let later = (Validation::default(), M2Grid::default());
+        let (validated, filled) = (Arc::clone(&later.0), Arc::clone(&later.1));
         std::thread::Builder::new()
             .name("flatland-transport".into())
             .spawn(move || {
@@ -179,26 +187,37 @@ impl MovingLight {
                 let stop = move || cancelled.load(Ordering::Acquire);
                 let watch = |block| blocks.push(block);
                 let params = TransportParams::default();
-                let (mesh, rows) = (copy.mesh(), copy.rows());
-                let transport =
-                    match Transport::build_watched(&kernel, mesh, rows, &params, &stop, &watch) {
-                        Ok(t) => t,
-                        Err(e) => {
-                            // The receiver is gone when the scene changed meanwhile.
-                            let _ = send.send(Err(e));
-                            return;
-                        }
-                    };
-                // The relighter answers first; the grid (for the M₂ plot) is made after.
-                let (kept, mesh) = (transport.clone(), copy.mesh().clone());
-                let relighter = TransportRelighter::new(&kernel, copy, transport, &stop);
-                if send.send(relighter).is_err() || stop() {
+                let (mesh, rows) = (copy.mesh().clone(), copy.rows().clone());
+                let built =
+                    Transport::build_unvalidated(&kernel, &mesh, &rows, &params, &stop, &watch);
+                let mut transport = match built {
+                    Ok(t) => t,
+                    Err(e) => {
+                        // The receiver is gone when the scene changed meanwhile.
+                        let _ = send.send(Err(e));
+                        return;
+                    }
+                };
+                // The relighter answers first; the estimate and the grid (for the M₂ plot)
+                // are made after, on a copy of its blocks.
+                let answering = TransportRelighter::new(&kernel, copy, transport.clone(), &stop);
+                if send.send(answering).is_err() || stop() {
                     return;
                 }
-                let _ = filled.set(m2_grid(&kept, &mesh));
+                if transport.validate(&kernel, &mesh, &rows, &stop).is_ok() {
+                    let _ = validated.set(transport.estimated_error());
+                }
+                drop(rows);
+                if !stop() {
+                    let _ = filled.set(m2_grid(&transport, &mesh));
+                }
             })
             .expect("spawning the transport's thread");
-        self.slot = Slot::Building { cancel, done, m2 };
+        self.slot = Slot::Building {
+            cancel,
+            done,
+            later,
+        };
         Ok(())
     }
 }
@@ -265,13 +284,14 @@ impl Relight for MovingLight {
     }
 
     fn poll(&mut self) -> bool {
-        let Slot::Building { done, m2, .. } = &self.slot else {
+        let Slot::Building { done, later, .. } = &self.slot else {
             return false;
         };
         match done.try_recv() {
             Err(TryRecvError::Empty) => return false,
             Ok(Ok(transport)) => {
-                self.slot = Slot::Ready(Box::new(transport), Arc::clone(m2));
+                let later = (Arc::clone(&later.0), Arc::clone(&later.1));
+                self.slot = Slot::Ready(Box::new(transport), later);
             }
             Ok(Err(e)) => self.slot = Slot::Failed(e.to_string()),
             Err(TryRecvError::Disconnected) => {
@@ -289,8 +309,8 @@ impl Relight for MovingLight {
         let phase = match &self.slot {
             Slot::Off => return None,
             Slot::Building { .. } => TransportPhase::Building,
-            Slot::Ready(t, m2) => TransportPhase::Ready {
-                estimate: t.transport().estimated_error(),
+            Slot::Ready(t, (estimate, m2)) => TransportPhase::Ready {
+                estimate: estimate.get().copied(),
                 bytes: t.transport().bytes(),
                 build_s: t.transport().build_s(),
                 m2: Arc::clone(m2),
@@ -361,21 +381,28 @@ mod tests {
         assert_eq!(frame.lights, lights);
         assert!(frame.residual.is_none());
         let status = frame.transport.clone().expect("the transport's status");
-        let TransportPhase::Ready {
-            estimate,
-            bytes,
-            ref m2,
-            ..
-        } = status.phase
-        else {
+        let TransportPhase::Ready { bytes, ref m2, .. } = status.phase else {
             panic!("{:?}", status.phase)
         };
-        assert!(bytes > 0 && estimate.lights > 0);
-        // The grid follows the relighter: wait for it (no timeout: the build's thread
-        // fills it next).
+        assert!(bytes > 0);
+        // The estimate and then the grid follow the relighter: wait for the grid (no
+        // timeout: the build's thread makes both next), then the next move's status holds
+        // the estimate.
         let m2 = m2.wait();
         assert_eq!(m2.len(), M2_RES * M2_RES);
         assert!(m2.iter().any(|&v| v > 0.0));
+        let lights = vec![PointLight::new(walk[walk.len() / 3], 6.0)];
+        handle.move_lights(lights.clone());
+        let frame = frame_by(&handle, Answer::Transport);
+        assert_eq!(frame.lights, lights);
+        let Some(TransportPhase::Ready {
+            estimate: Some(estimate),
+            ..
+        }) = frame.transport.as_ref().map(|t| t.phase.clone())
+        else {
+            panic!("no estimate after the grid: {:?}", frame.transport)
+        };
+        assert!(estimate.lights > 0);
         let mut exact = ExactRelight::make(&kernel, &flatland_solve::never).unwrap();
         let solved = exact.relight(&lights, &flatland_solve::never).unwrap();
         let error = relative(&frame.mesh, &frame.b, solved.radiosity);
