@@ -436,6 +436,33 @@ impl Mesh {
             .collect()
     }
 
+    /// This mesh under another emission, `emission` one value per mesh edge
+    /// ([`Mesh::edges`]): the same scene relit. It keeps its scene's fingerprint, lights and
+    /// direct light, so the exact operator and the final gather of the scene's kernel apply to
+    /// it (neither depends on emission but through the mesh's own). Errors: a length other
+    /// than the edge count, a value negative or not finite.
+    pub fn with_edge_emission(&self, emission: &[f64]) -> Result<Mesh, SolveError> {
+        if emission.len() != self.edges.len() {
+            return Err(SolveError::InvalidParameter {
+                name: "emission",
+                value: format!("{} values", emission.len()),
+                valid: "one per mesh edge",
+            });
+        }
+        if let Some(bad) = emission.iter().find(|e| !(e.is_finite() && **e >= 0.0)) {
+            return Err(SolveError::InvalidParameter {
+                name: "emission",
+                value: bad.to_string(),
+                valid: "finite and at least 0",
+            });
+        }
+        let mut relit = self.clone();
+        for (edge, &e) in relit.edges.iter_mut().zip(emission) {
+            edge.emission = e;
+        }
+        Ok(relit)
+    }
+
     /// The point lights of the scene the mesh was made for (what [`Mesh::fingerprint`] leaves
     /// out).
     #[must_use]
@@ -678,6 +705,43 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_relit_mesh_emits_as_asked_and_keeps_its_scene() {
+        let kernel = Kernel::new(bundled("floorplan"));
+        let mesh = Mesh::new(&kernel, 400).unwrap();
+        let glow: Vec<f64> = (0..mesh.edges().len()).map(|m| (m % 3) as f64).collect();
+        let relit = mesh.with_edge_emission(&glow).unwrap();
+        assert_eq!(relit.fingerprint(), mesh.fingerprint());
+        assert_eq!(relit.len(), mesh.len());
+        let (e, before) = (relit.emission(), mesh.emission());
+        for i in 0..mesh.len() {
+            let edge = relit.edge_of(i);
+            let lamps =
+                mesh.edge_of(i).reflectance * mesh.direct_irradiance().get(i).unwrap_or(&0.0);
+            assert_eq!(
+                edge.emission,
+                glow[mesh
+                    .edges()
+                    .iter()
+                    .position(|m| m.elements.contains(&i))
+                    .unwrap()]
+            );
+            // The lamps' direct light is kept: only E changed.
+            assert_close!(
+                e[i] - edge.emission,
+                before[i] - mesh.edge_of(i).emission,
+                1e-12
+            );
+            assert_close!(e[i], edge.emission + lamps, 1e-12);
+        }
+        let short = mesh.with_edge_emission(&glow[1..]).unwrap_err().to_string();
+        assert!(short.contains("one per mesh edge"), "{short}");
+        let mut negative = glow.clone();
+        negative[2] = -1.0;
+        let message = mesh.with_edge_emission(&negative).unwrap_err().to_string();
+        assert!(message.contains("at least 0"), "{message}");
     }
 
     #[test]

@@ -74,8 +74,8 @@ pub fn relight_summary(rows: &[RelightRow]) -> String {
     for s in summaries(rows) {
         let _ = writeln!(
             out,
-            "relighting, {lightings} lightings: {} {:.3} s in all, B − E error at the element \
-             midpoints mean {:.4}, max {:.4} ({})",
+            "relighting, {lightings} lightings: {} {:.3} s in all, B − E error mean {:.4}, max \
+             {:.4} ({})",
             s.method.name(),
             s.total_s,
             s.mean_error,

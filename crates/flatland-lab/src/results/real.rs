@@ -240,8 +240,8 @@ fn verdicts(real: &Real) -> Vec<String> {
             s.relit.iter().find(|r| r.method == Method::Exact),
         ) {
             lines.push(format!(
-                "{}, relighting ({} lightings, B − E scored at the element midpoints only, not as a \
-                 function): light {:.2} s (mean error {:.4}), exact {:.2} s ({:.4}){}.",
+                "{}, relighting ({} lightings, each scored as a function): light {:.2} s (mean \
+                 error {:.4}), exact {:.2} s ({:.4}){}.",
                 s.name,
                 crate::timed::relight::LIGHTINGS,
                 d.total_s,
