@@ -73,7 +73,7 @@ impl Transport {
     /// sweep's, [`flatland_solve::sweep_operator`]): clusters of elements, each cluster's block
     /// of `M₂` by local solves, compressed to `params.tolerance` (and `params.budget`), then
     /// its own error estimate from `params.validation_lights` lights. `stop` is polled per
-    /// cluster. Errors: parameters out of range, an operator of another size, light that does
+    /// cluster, then per validation light. Errors: parameters out of range, an operator of another size, light that does
     /// not die out.
     pub fn build(
         kernel: &Kernel,
