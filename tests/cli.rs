@@ -156,7 +156,24 @@ fn check_rejects_missing_files_and_unknown_formats() {
     let out = flatland(&["check", "--scene", "no/such/scene.ron"]);
     assert_one_line_error(&out, &["no/such/scene.ron"]);
     let out = flatland(&["check", "--scene", "Cargo.toml"]);
-    assert_one_line_error(&out, &["Cargo.toml", "unknown scene format"]);
+    assert_one_line_error(
+        &out,
+        &["Cargo.toml", "unknown scene format", ".svg", "floorplan"],
+    );
+}
+
+#[test]
+fn a_bundled_scene_is_named_as_the_viewer_names_it() {
+    let out = flatland(&["check", "--scene", "floorplan"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("floorplan (bundled)"), "{text}");
+    let out = flatland(&["check", "--scene", "floorplan-2"]);
+    assert_one_line_error(&out, &["floorplan-2"]);
 }
 
 #[test]

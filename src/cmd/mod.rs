@@ -25,8 +25,9 @@ pub mod view;
 /// The scene a command works on: a file, or the bundled default, optionally subdivided.
 #[derive(clap::Args, Debug, Clone)]
 pub struct SceneArgs {
-    /// Scene file: .ron, .json, or an .svg drawing (imported: docs/SVG.md). Default: the
-    /// bundled `fig3` scene.
+    /// Scene file: .ron, .json, or an .svg drawing (imported: docs/SVG.md), or a bundled
+    /// scene's name (fig3, box, maze, corners, floorplan, hall). Default: the bundled
+    /// `fig3` scene.
     #[arg(long, value_name = "FILE")]
     pub scene: Option<PathBuf>,
     /// An SVG scene's curves become segments no farther than this from them, in drawing units
@@ -48,13 +49,28 @@ impl SceneArgs {
     pub fn load(&self) -> Result<(Scene, String)> {
         let (scene, mut label) = match &self.scene {
             Some(path) if is_svg(path) => (self.import(path)?, path.display().to_string()),
+            Some(path) if let Some(name) = bundled_name(path) => (
+                flatland_geom::bundled::scene(name)?,
+                format!("{name} (bundled)"),
+            ),
             Some(path) => {
                 anyhow::ensure!(
                     self.flatten.is_none() && self.unit.is_none(),
                     "--flatten and --unit apply to SVG drawings, and {} is not one",
                     path.display()
                 );
-                (Scene::load(path)?, path.display().to_string())
+                let scene = match Scene::load(path) {
+                    Err(flatland_geom::GeomError::Format { .. }) => anyhow::bail!(
+                        "{}: unknown scene format: --scene takes a .ron, .json or .svg file, or a \
+                         bundled scene's name ({})",
+                        path.display(),
+                        flatland_geom::bundled::names()
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                    loaded => loaded?,
+                };
+                (scene, path.display().to_string())
             }
             None => (
                 flatland_geom::bundled::scene(flatland_geom::bundled::DEFAULT)
@@ -122,6 +138,15 @@ pub fn scene_file(path: &Path) -> Result<Scene> {
 }
 
 /// Whether `path` names an SVG drawing (by its extension, in any case).
+/// The bundled scene `path` names: a bare name (no extension, no such file) that is one.
+fn bundled_name(path: &Path) -> Option<&'static str> {
+    if path.extension().is_some() || path.exists() {
+        return None;
+    }
+    let name = path.to_str()?;
+    flatland_geom::bundled::names().find(|&n| n == name)
+}
+
 pub fn is_svg(path: &Path) -> bool {
     path.extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("svg"))
