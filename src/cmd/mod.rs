@@ -137,7 +137,6 @@ pub fn scene_file(path: &Path) -> Result<Scene> {
     Ok(args.load()?.0)
 }
 
-/// Whether `path` names an SVG drawing (by its extension, in any case).
 /// The bundled scene `path` names: a bare name (no extension, no such file) that is one.
 fn bundled_name(path: &Path) -> Option<&'static str> {
     if path.extension().is_some() || path.exists() {
@@ -147,6 +146,7 @@ fn bundled_name(path: &Path) -> Option<&'static str> {
     flatland_geom::bundled::names().find(|&n| n == name)
 }
 
+/// Whether `path` names an SVG drawing (by its extension, in any case).
 pub fn is_svg(path: &Path) -> bool {
     path.extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("svg"))

@@ -88,7 +88,24 @@ impl TransportError {
         operator: &flatland_solve::SparseOperator,
     ) -> Result<(), TransportError> {
         use flatland_solve::TransferOperator as _;
+        TransportError::check_size(kernel, mesh, operator.len())
+    }
+
+    /// [`TransportError::check_inputs`] for the operator by columns.
+    pub(crate) fn check_columns(
+        kernel: &flatland_geom::Kernel,
+        mesh: &flatland_solve::Mesh,
+        columns: &crate::Columns,
+    ) -> Result<(), TransportError> {
+        TransportError::check_size(kernel, mesh, columns.len())
+    }
+
+    fn check_size(
+        kernel: &flatland_geom::Kernel,
+        mesh: &flatland_solve::Mesh,
+        operator_len: usize,
+    ) -> Result<(), TransportError> {
         flatland_solve::check_scene(kernel, mesh)?;
-        TransportError::check_length("the operator", operator.len(), mesh.len())
+        TransportError::check_length("the operator", operator_len, mesh.len())
     }
 }

@@ -73,8 +73,8 @@ impl Transport {
     /// sweep's, [`flatland_solve::sweep_operator`]): clusters of elements, each cluster's block
     /// of `M₂` by local solves, compressed to `params.tolerance` (and `params.budget`), then
     /// its own error estimate from `params.validation_lights` lights. `stop` is polled per
-    /// cluster, then per validation light. Errors: parameters out of range, an operator of another size, light that does
-    /// not die out.
+    /// cluster, then per validation light. Errors: parameters out of range, an operator of
+    /// another size, light that does not die out.
     pub fn build(
         kernel: &Kernel,
         mesh: &Mesh,
@@ -96,61 +96,31 @@ impl Transport {
         stop: &Stop,
         watch: &Watch<'_>,
     ) -> Result<Transport, TransportError> {
+        params.check()?;
+        TransportError::check_inputs(kernel, mesh, operator)?;
         let started = Instant::now();
         let columns = Columns::of(operator);
-        let mut built =
-            Transport::blocks_of(kernel, mesh, operator, &columns, params, stop, watch)?;
-        built.estimate_with(kernel, mesh, &columns, stop)?;
+        let mut built = Transport::build_unvalidated(kernel, mesh, &columns, params, stop, watch)?;
+        built.validate(kernel, mesh, &columns, stop)?;
         built.setup_s = started.elapsed().as_secs_f64();
         Ok(built)
     }
 
-    /// [`Transport::build_watched`] without its error estimate, which takes a few exact solves
-    /// of its own: the model answers at once and [`Transport::estimated_error`] reads no
-    /// lights (`lights == 0`) until [`Transport::validate`] measures it. For a viewer, whose
-    /// moving light should not wait for the validation.
+    /// [`Transport::build_watched`] from the operator by columns, without its error estimate,
+    /// which takes a few exact solves of its own: the model answers at once and
+    /// [`Transport::estimated_error`] reads no lights (`lights == 0`) until
+    /// [`Transport::validate`] measures it. For a viewer, whose moving light should not wait
+    /// for the validation.
     pub fn build_unvalidated(
         kernel: &Kernel,
         mesh: &Mesh,
-        operator: &SparseOperator,
-        params: &TransportParams,
-        stop: &Stop,
-        watch: &Watch<'_>,
-    ) -> Result<Transport, TransportError> {
-        let columns = Columns::of(operator);
-        Transport::blocks_of(kernel, mesh, operator, &columns, params, stop, watch)
-    }
-
-    /// Measures the model's error estimate on its `validation_lights` (as
-    /// [`Transport::build`] does), `stop` polled per light; its seconds are added to the
-    /// set-up's. `kernel`, `mesh` and `operator` must be the ones it was built on.
-    pub fn validate(
-        &mut self,
-        kernel: &Kernel,
-        mesh: &Mesh,
-        operator: &SparseOperator,
-        stop: &Stop,
-    ) -> Result<(), TransportError> {
-        self.check_mesh(mesh)?;
-        TransportError::check_inputs(kernel, mesh, operator)?;
-        let started = Instant::now();
-        self.estimate_with(kernel, mesh, &Columns::of(operator), stop)?;
-        self.setup_s += started.elapsed().as_secs_f64();
-        Ok(())
-    }
-
-    /// The clusters and their compressed blocks, the estimate not yet measured.
-    fn blocks_of(
-        kernel: &Kernel,
-        mesh: &Mesh,
-        operator: &SparseOperator,
         columns: &Columns,
         params: &TransportParams,
         stop: &Stop,
         watch: &Watch<'_>,
     ) -> Result<Transport, TransportError> {
         params.check()?;
-        TransportError::check_inputs(kernel, mesh, operator)?;
+        TransportError::check_columns(kernel, mesh, columns)?;
         let started = Instant::now();
         let clusters = Clusters::spatial(mesh, params.cluster_elements);
         let tolerance = BlockTolerance {
@@ -172,24 +142,26 @@ impl Transport {
         })
     }
 
-    /// The estimate on the validation lights of `self.params`.
-    fn estimate_with(
+    /// Measures the model's error estimate on its `validation_lights` (as
+    /// [`Transport::build`] does), `stop` polled per light; its seconds are added to the
+    /// set-up's. `kernel`, `mesh` and `columns` must be the ones it was built from.
+    pub fn validate(
         &mut self,
         kernel: &Kernel,
         mesh: &Mesh,
         columns: &Columns,
         stop: &Stop,
     ) -> Result<(), TransportError> {
-        let lights = validation_lights(
-            kernel,
-            mesh,
-            self.params.validation_lights,
-            self.params.seed,
-        );
+        self.check_mesh(mesh)?;
+        TransportError::check_columns(kernel, mesh, columns)?;
+        let started = Instant::now();
+        let params = &self.params;
+        let lights = validation_lights(kernel, mesh, params.validation_lights, params.seed);
         let form = &self.form;
         self.estimate = estimate(kernel, mesh, columns, &lights, stop, &|m, buffers| {
             form.accumulate(m.lit, buffers);
         })?;
+        self.setup_s += started.elapsed().as_secs_f64();
         Ok(())
     }
 
@@ -465,8 +437,10 @@ mod tests {
         let (kernel, mesh, k) = plan(150, 5);
         let params = TransportParams::default();
         let whole = Transport::build(&kernel, &mesh, &k, &params, &never).unwrap();
+        let columns = Columns::of(&k);
         let mut early =
-            Transport::build_unvalidated(&kernel, &mesh, &k, &params, &never, &|_| {}).unwrap();
+            Transport::build_unvalidated(&kernel, &mesh, &columns, &params, &never, &|_| {})
+                .unwrap();
         assert_eq!(early.form, whole.form);
         assert_eq!(early.estimated_error().lights, 0);
         let b0: Vec<f64> = (0..mesh.len()).map(|i| (i % 7) as f64 / 7.0).collect();
@@ -476,15 +450,15 @@ mod tests {
         );
         let stopped = || true;
         assert!(matches!(
-            early.validate(&kernel, &mesh, &k, &stopped),
+            early.validate(&kernel, &mesh, &columns, &stopped),
             Err(TransportError::Interrupted)
         ));
         let (other_kernel, other_mesh, other_k) = plan(150, 6);
         assert!(matches!(
-            early.validate(&other_kernel, &other_mesh, &other_k, &never),
+            early.validate(&other_kernel, &other_mesh, &Columns::of(&other_k), &never),
             Err(TransportError::ModelMismatch { .. })
         ));
-        early.validate(&kernel, &mesh, &k, &never).unwrap();
+        early.validate(&kernel, &mesh, &columns, &never).unwrap();
         assert_eq!(early.estimated_error(), whole.estimated_error());
         assert!(early.estimated_error().lights > 0);
     }

@@ -9,8 +9,8 @@
 //! re-solve until the learned transport of the later bounces ([`transport`]) is built on a
 //! thread of its own, then with the transport (or the exact one, as the user chooses). While
 //! it is idle and a build is under way the thread looks every [`POLL`] for the build's end, to
-//! switch at once; a move looks first too. Per scene the thread also walks the free space ([`flatland_geom::walk`])
-//! once, for the light that wanders by itself on first launch.
+//! switch at once; a move looks first too. Per scene the thread also walks the free space
+//! ([`flatland_geom::walk`]) once, for the light that wanders by itself on first launch.
 
 use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, Ordering};

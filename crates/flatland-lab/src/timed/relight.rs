@@ -106,8 +106,8 @@ fn relit_scene(scene: &Scene, mesh: &Mesh, lighting: &Lighting) -> Result<Scene>
     Ok(scene)
 }
 
-/// Per override, its emission and the scene edges (pieces) of its mesh edge.
-fn overridden(mesh: &Mesh, lighting: &Lighting) -> Vec<(f64, Vec<usize>)> {
+/// Per override, its mesh edge (the one holding the overridden scene edge) and its emission.
+fn overrides_by_mesh_edge(mesh: &Mesh, lighting: &Lighting) -> Vec<(usize, f64)> {
     let mesh_edge_of: HashMap<usize, usize> = mesh
         .edges()
         .iter()
@@ -117,10 +117,15 @@ fn overridden(mesh: &Mesh, lighting: &Lighting) -> Vec<(f64, Vec<usize>)> {
     lighting
         .overrides()
         .iter()
-        .filter_map(|&(edge, emission)| {
-            let m = *mesh_edge_of.get(&edge.index())?;
-            Some((emission, mesh.edges()[m].pieces.clone().collect()))
-        })
+        .filter_map(|&(edge, emission)| Some((*mesh_edge_of.get(&edge.index())?, emission)))
+        .collect()
+}
+
+/// Per override, its emission and the scene edges (pieces) of its mesh edge.
+fn overridden(mesh: &Mesh, lighting: &Lighting) -> Vec<(f64, Vec<usize>)> {
+    overrides_by_mesh_edge(mesh, lighting)
+        .into_iter()
+        .map(|(m, emission)| (emission, mesh.edges()[m].pieces.clone().collect()))
         .collect()
 }
 
@@ -128,16 +133,8 @@ fn overridden(mesh: &Mesh, lighting: &Lighting) -> Vec<(f64, Vec<usize>)> {
 /// direct light unchanged).
 pub fn relit_mesh(mesh: &Mesh, lighting: &Lighting) -> Result<Mesh> {
     let mut emission: Vec<f64> = mesh.edges().iter().map(|e| e.emission).collect();
-    let first_pieces: HashMap<usize, usize> = mesh
-        .edges()
-        .iter()
-        .enumerate()
-        .flat_map(|(m, e)| e.pieces.clone().map(move |p| (p, m)))
-        .collect();
-    for &(edge, e) in lighting.overrides() {
-        if let Some(&m) = first_pieces.get(&edge.index()) {
-            emission[m] = e;
-        }
+    for (m, e) in overrides_by_mesh_edge(mesh, lighting) {
+        emission[m] = e;
     }
     Ok(mesh.with_edge_emission(&emission)?)
 }
@@ -577,8 +574,8 @@ mod tests {
         )
         .unwrap();
         let (op, _) = exact_operator_of(&kernel, mesh, &never).unwrap();
-        let tree = crate::timed::TimedPlan::new(vec![Method::Exact]);
-        let cx = Context::new(&kernel, &scorer, &tree, &never);
+        let plan = crate::timed::TimedPlan::new(vec![Method::Exact]);
+        let cx = Context::new(&kernel, &scorer, &plan, &never);
         for (relit, reference) in relits[1..].iter().zip(&exact) {
             assert_eq!(reference.mesh().len(), mesh.len());
             // The glowing wall glows in the reference's mesh, not in the scene's.

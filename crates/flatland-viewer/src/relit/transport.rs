@@ -14,7 +14,8 @@ use std::sync::{Arc, Mutex, OnceLock};
 use flatland_geom::{Kernel, PointLight};
 use flatland_solve::{Mesh, RelightParams, Relighter, Stop};
 use flatland_transport::{
-    BlockFootprint, ErrorEstimate, Transport, TransportError, TransportParams, TransportRelighter,
+    BlockFootprint, Columns, ErrorEstimate, Transport, TransportError, TransportParams,
+    TransportRelighter,
 };
 
 use super::one_moving::OneMoving;
@@ -87,9 +88,8 @@ pub fn m2_grid(transport: &Transport, mesh: &Mesh) -> Vec<f64> {
 /// seconds at the lowest priority, which the moving light must not wait for.
 pub type M2Grid = Arc<OnceLock<Vec<f64>>>;
 
-/// The transport's own error estimate, measured after it answers: a few exact solves of its
-/// validation lights, which at the lowest priority beside the window's rasterizer took most of
-/// a minute on a 10⁴-edge plan, and which the moving light must not wait for either.
+/// The transport's own error estimate, measured after it answers: an exact solve per
+/// validation light (32), work the moving light need not wait for.
 pub type Validation = Arc<OnceLock<ErrorEstimate>>;
 
 /// Where the learned transport of the scene is.
@@ -187,9 +187,10 @@ impl MovingLight {
                 let stop = move || cancelled.load(Ordering::Acquire);
                 let watch = |block| blocks.push(block);
                 let params = TransportParams::default();
-                let (mesh, rows) = (copy.mesh().clone(), copy.rows().clone());
+                // The operator by columns serves the blocks and then the estimate.
+                let (mesh, columns) = (copy.mesh().clone(), Columns::of(copy.rows()));
                 let built =
-                    Transport::build_unvalidated(&kernel, &mesh, &rows, &params, &stop, &watch);
+                    Transport::build_unvalidated(&kernel, &mesh, &columns, &params, &stop, &watch);
                 let mut transport = match built {
                     Ok(t) => t,
                     Err(e) => {
@@ -204,10 +205,10 @@ impl MovingLight {
                 if send.send(answering).is_err() || stop() {
                     return;
                 }
-                if transport.validate(&kernel, &mesh, &rows, &stop).is_ok() {
+                if transport.validate(&kernel, &mesh, &columns, &stop).is_ok() {
                     let _ = validated.set(transport.estimated_error());
                 }
-                drop(rows);
+                drop(columns);
                 if !stop() {
                     let _ = filled.set(m2_grid(&transport, &mesh));
                 }
